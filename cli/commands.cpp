@@ -1,0 +1,318 @@
+// The `pdyn` commands.
+#include "commands.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <nlohmann/json.hpp>
+#include <ostream>
+
+#include "registry.hpp"
+#include "runner.hpp"
+#include "scene.hpp"
+#include "text.hpp"
+
+namespace pdyn::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Common {
+  std::vector<std::string> plugin_path;
+  std::vector<std::string> sets;
+  bool quiet = false;
+};
+
+void add_plugin_path_option(CLI::App* app, Common& c) {
+  app->add_option("--plugin-path", c.plugin_path,
+                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
+                  "(repeatable)");
+}
+
+PluginRegistry discover(const Common& c) {
+  std::vector<fs::path> extra(c.plugin_path.begin(), c.plugin_path.end());
+  PluginRegistry registry;
+  registry.discover(PluginRegistry::search_path(extra));
+  return registry;
+}
+
+void warn_faults(const PluginRegistry& registry, std::ostream& err) {
+  for (const auto& f : registry.faults()) {
+    err << fmt::format("pdyn: warning: {}: plugin '{}' skipped: {}\n", f.library.string(),
+                       f.plugin, f.message);
+  }
+}
+
+// ---- run / validate ----
+
+struct RunArgs {
+  std::string scene;
+  std::optional<std::int64_t> steps;
+  std::optional<double> duration;
+};
+
+Scene load(const RunArgs& a, const Common& c, const PluginRegistry& registry) {
+  std::vector<Override> overrides;
+  for (const auto& s : c.sets) overrides.push_back(parse_override(s));
+  // --steps and --duration replace the scene's choice between the two.
+  if (a.steps) {
+    overrides.push_back({"simulation.duration", "~"});
+    overrides.push_back({"simulation.steps", std::to_string(*a.steps)});
+  } else if (a.duration) {
+    overrides.push_back({"simulation.steps", "~"});
+    overrides.push_back({"simulation.duration", fmt::format("{:.17g}", *a.duration)});
+  }
+  return load_scene(a.scene, registry, overrides);
+}
+
+int report(const std::exception_ptr& error, std::ostream& err) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const SceneError& e) {
+    for (const auto& d : e.diagnostics()) err << d.text() << "\n";
+    return kBadInput;
+  } catch (const PluginError& e) {
+    err << e.what() << "\n";
+    return kPluginFault;
+  } catch (const std::exception& e) {
+    err << "pdyn: " << e.what() << "\n";
+    return kFailure;
+  }
+}
+
+int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err) {
+  const PluginRegistry registry = discover(c);
+  if (!c.quiet) warn_faults(registry, err);
+  try {
+    Scene scene = load(a, c, registry);
+    if (!c.quiet) {
+      out << fmt::format("{}: ok: {} particles, {} force objects, {} colliders, solver {}, "
+                         "{} steps of {} s\n",
+                         a.scene, scene.system->size(), scene.system->force_objects().size(),
+                         scene.system->collider_objects().size(), scene.solver_name, scene.steps,
+                         scene.dt);
+    }
+    return kOk;
+  } catch (...) {
+    return report(std::current_exception(), err);
+  }
+}
+
+int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err,
+            bool terminal) {
+  const PluginRegistry registry = discover(c);
+  if (!c.quiet) warn_faults(registry, err);
+  try {
+    Scene scene = load(a, c, registry);
+    RunOptions options;
+    options.progress = terminal && !c.quiet;
+    options.log = &err;
+    const auto start = std::chrono::steady_clock::now();
+    const RunResult r = run_scene(scene, options);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (r.exit_code != 0) {
+      err << "pdyn: " << r.message << "\n";
+      return kNonFinite;
+    }
+    if (!c.quiet) {
+      out << fmt::format("pdyn: {} steps of {} particles with {} to t = {} s in {:.3g} s\n",
+                         r.steps_done, scene.system->size(), scene.solver_name, r.time, wall);
+      if (!scene.output.path.empty()) {
+        out << fmt::format("pdyn: frames written to {}\n", fs::absolute(scene.output.path).string());
+      }
+      if (!scene.output.energy.empty()) {
+        out << fmt::format("pdyn: energy written to {}\n",
+                           fs::absolute(scene.output.energy).string());
+      }
+    }
+    return kOk;
+  } catch (...) {
+    return report(std::current_exception(), err);
+  }
+}
+
+// ---- plugins ----
+
+std::string range_text(const ParamSpec& s) {
+  std::string r;
+  if (s.min) r += fmt::format("{}{}", s.min_exclusive ? ">" : ">=", *s.min);
+  if (s.max) r += fmt::format("{}<={}", r.empty() ? "" : ", ", *s.max);
+  if (s.nonzero) r += r.empty() ? "nonzero" : ", nonzero";
+  return r;
+}
+
+nlohmann::json to_json(const PluginRecord& r) {
+  const PluginDescriptor& d = *r.descriptor;
+  nlohmann::json j{{"kind", kind_name(d.kind)}, {"name", d.name},
+                   {"version", d.version},      {"description", d.description},
+                   {"library", r.library.string()}};
+  if (d.kind == PluginKind::Solver) {
+    j["order"] = d.solver_traits.order;
+    j["symplectic"] = d.solver_traits.symplectic;
+  }
+  if (d.kind == PluginKind::Force) {
+    j["internal"] = d.force_traits.internal;
+    j["dissipative"] = d.force_traits.dissipative;
+  }
+  auto params = nlohmann::json::array();
+  for (const auto& p : d.params) {
+    nlohmann::json pj{{"name", p.name}, {"type", type_name(p.type)}, {"unit", p.unit},
+                      {"doc", p.doc},   {"required", p.required}};
+    if (p.fallback) pj["default"] = format_value(*p.fallback);
+    if (p.min) pj[p.min_exclusive ? "exclusive_minimum" : "minimum"] = *p.min;
+    if (p.max) pj["maximum"] = *p.max;
+    if (p.nonzero) pj["nonzero"] = true;
+    params.push_back(pj);
+  }
+  j["params"] = params;
+  return j;
+}
+
+std::string traits_text(const PluginDescriptor& d) {
+  std::vector<std::string> t;
+  if (d.kind == PluginKind::Solver) {
+    if (d.solver_traits.order > 0) t.push_back(fmt::format("order {}", d.solver_traits.order));
+    if (d.solver_traits.symplectic) t.push_back("symplectic");
+  } else if (d.kind == PluginKind::Force) {
+    if (d.force_traits.internal) t.push_back("internal");
+    if (d.force_traits.dissipative) t.push_back("dissipative");
+  }
+  return join(t);
+}
+
+int cmd_plugins(const Common& c, bool json, std::ostream& out) {
+  const PluginRegistry registry = discover(c);
+  if (json) {
+    nlohmann::json j;
+    j["plugins"] = nlohmann::json::array();
+    for (const auto& r : registry.plugins()) j["plugins"].push_back(to_json(r));
+    j["faults"] = nlohmann::json::array();
+    for (const auto& f : registry.faults()) {
+      j["faults"].push_back(
+          {{"library", f.library.string()}, {"plugin", f.plugin}, {"message", f.message}});
+    }
+    j["searched"] = nlohmann::json::array();
+    for (const auto& s : registry.searched()) j["searched"].push_back(s.string());
+    out << j.dump(2) << "\n";
+    return kOk;
+  }
+  out << fmt::format("{:<9} {:<12} {:<8} {:<16} {}\n", "KIND", "NAME", "VERSION", "TRAITS",
+                     "DESCRIPTION");
+  for (PluginKind kind : {PluginKind::Force, PluginKind::Solver, PluginKind::Collider}) {
+    for (const auto& r : registry.plugins()) {
+      const PluginDescriptor& d = *r.descriptor;
+      if (d.kind != kind) continue;
+      out << fmt::format("{:<9} {:<12} {:<8} {:<16} {}\n", kind_name(d.kind), d.name, d.version,
+                         traits_text(d), d.description);
+    }
+  }
+  out << "\nfrom:\n";
+  for (const auto& s : registry.searched()) out << "  " << s.string() << "\n";
+  for (const auto& f : registry.faults()) {
+    out << fmt::format("\nerror: {}: plugin '{}': {}\n", f.library.string(), f.plugin, f.message);
+  }
+  return kOk;
+}
+
+int cmd_describe(const Common& c, const std::string& name, std::ostream& out, std::ostream& err) {
+  const PluginRegistry registry = discover(c);
+  const PluginRecord* r = registry.find_any(name);
+  if (!r) {
+    try {
+      registry.require_healthy(name);
+    } catch (const PluginError& e) {
+      err << e.what() << "\n";
+      return kPluginFault;
+    }
+    std::vector<std::string> all;
+    for (const auto& p : registry.plugins()) all.push_back(p.descriptor->name);
+    const std::string guess = closest_match(name, all);
+    err << fmt::format("pdyn: no plugin named '{}' ({}expected one of: {})\n", name,
+                       guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess), join(all));
+    return kBadInput;
+  }
+  const PluginDescriptor& d = *r->descriptor;
+  out << fmt::format("{} {} {}\n  {}\n  library: {}\n", kind_name(d.kind), d.name, d.version,
+                     d.description, r->library.string());
+  if (const auto t = traits_text(d); !t.empty()) out << "  traits: " << t << "\n";
+  if (d.params.empty()) {
+    out << "  no parameters\n";
+    return kOk;
+  }
+  out << fmt::format("\n  {:<12} {:<14} {:<18} {:<10} {:<12} {}\n", "KEY", "TYPE", "DEFAULT",
+                     "UNIT", "RANGE", "MEANING");
+  for (const auto& p : d.params) {
+    const std::string def = p.fallback ? format_value(*p.fallback)
+                                       : (p.required ? "(required)" : "(optional)");
+    out << fmt::format("  {:<12} {:<14} {:<18} {:<10} {:<12} {}\n", p.name, type_name(p.type), def,
+                       p.unit.empty() ? "-" : p.unit, range_text(p), p.doc);
+  }
+  return kOk;
+}
+
+}  // namespace
+
+int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
+                bool terminal) {
+  CLI::App app{"pdyn: plugin-based particle dynamics (Witkin's particle systems)", "pdyn"};
+  app.require_subcommand(1);
+  Common common;
+  RunArgs run_args;
+
+  auto scene_options = [&](CLI::App* sub) {
+    sub->add_option("scene", run_args.scene, "scene file (YAML)")->required();
+    sub->add_option("--set", common.sets,
+                    "override a scene value: KEY.PATH=VALUE, e.g. simulation.dt=0.0005 or "
+                    "forces[0].g=[0,0,-1.62] (repeatable)");
+    add_plugin_path_option(sub, common);
+    sub->add_flag("--quiet,-q", common.quiet, "print only errors");
+  };
+  CLI::App* run = app.add_subcommand("run", "run a scene");
+  scene_options(run);
+  auto* steps = run->add_option("--steps", run_args.steps, "number of steps (replaces the scene's)")
+                    ->check(CLI::NonNegativeNumber);
+  run->add_option("--duration", run_args.duration, "simulated time in s (replaces the scene's)")
+      ->check(CLI::NonNegativeNumber)
+      ->excludes(steps);
+
+  CLI::App* validate = app.add_subcommand("validate", "check a scene without simulating");
+  scene_options(validate);
+
+  CLI::App* plugins = app.add_subcommand("plugins", "list the plugins found");
+  bool json = false;
+  plugins->add_flag("--json", json, "machine-readable listing");
+  add_plugin_path_option(plugins, common);
+  std::string describe_name;
+  CLI::App* describe_cmd = plugins->add_subcommand("describe", "show one plugin's parameters");
+  describe_cmd->add_option("name", describe_name, "plugin name")->required();
+  add_plugin_path_option(describe_cmd, common);
+
+  std::vector<std::string> reversed(args.rbegin(), args.rend());
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    out << app.help();
+    return kOk;
+  } catch (const CLI::CallForAllHelp&) {
+    out << app.help("", CLI::AppFormatMode::All);
+    return kOk;
+  } catch (const CLI::ParseError& e) {
+    err << "pdyn: " << e.what() << " (see pdyn --help)\n";
+    return kBadInput;
+  }
+  try {
+    if (run->parsed()) return cmd_run(run_args, common, out, err, terminal);
+    if (validate->parsed()) return cmd_validate(run_args, common, out, err);
+    if (describe_cmd->parsed()) return cmd_describe(common, describe_name, out, err);
+    if (plugins->parsed()) return cmd_plugins(common, json, out);
+  } catch (...) {
+    return report(std::current_exception(), err);
+  }
+  return kBadInput;
+}
+
+}  // namespace pdyn::cli

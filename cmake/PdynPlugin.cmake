@@ -1,0 +1,33 @@
+# pdyn_add_plugin(NAME KIND force|solver|collider SOURCES file.cpp ...)
+#
+# Builds one loadable pdyn plugin: a MODULE library named pdyn_<kind>_<name>.so
+# (no "lib" prefix) with hidden symbols except the two entry points that
+# PDYN_PLUGIN exports, placed where the registry looks for plugins, and
+# installed beside the shipped ones.
+function(pdyn_add_plugin name)
+  cmake_parse_arguments(PARSE_ARGV 1 ARG "" "KIND;OUTPUT_DIRECTORY" "SOURCES")
+  if(NOT ARG_KIND MATCHES "^(force|solver|collider)$")
+    message(FATAL_ERROR "pdyn_add_plugin(${name}): KIND must be force, solver or collider")
+  endif()
+  if(NOT name MATCHES "^[a-z0-9_]+$")
+    message(FATAL_ERROR "pdyn_add_plugin(${name}): the name must match [a-z0-9_]+")
+  endif()
+  if(NOT ARG_OUTPUT_DIRECTORY)
+    set(ARG_OUTPUT_DIRECTORY "${PDYN_PLUGIN_OUTPUT_DIR}")
+  endif()
+  add_library(${name} MODULE ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE pdyn::kernel)
+  set_target_properties(${name} PROPERTIES
+    PREFIX ""
+    OUTPUT_NAME "pdyn_${ARG_KIND}_${name}"
+    LIBRARY_OUTPUT_DIRECTORY "${ARG_OUTPUT_DIRECTORY}"
+    CXX_VISIBILITY_PRESET hidden
+    VISIBILITY_INLINES_HIDDEN ON
+    INSTALL_RPATH "$ORIGIN/../..")
+  if(PDYN_WARNINGS)
+    target_compile_options(${name} PRIVATE ${PDYN_WARNINGS})
+  endif()
+  if(PDYN_PLUGIN_INSTALL_DIR)
+    install(TARGETS ${name} LIBRARY DESTINATION "${PDYN_PLUGIN_INSTALL_DIR}")
+  endif()
+endfunction()

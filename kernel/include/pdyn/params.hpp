@@ -1,0 +1,104 @@
+// pdyn/params.hpp — typed plugin parameters and their specifications.
+//
+// A plugin declares its parameters once, in its descriptor; the scene loader
+// checks a scene's values against that declaration (type, range, required,
+// unknown keys, particle indices in range) and hands the factory a Params of
+// already-checked values. Plugin code never parses YAML.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "pdyn/types.hpp"
+
+namespace pdyn {
+
+enum class ParamType {
+  Real,          ///< a number
+  Integer,       ///< a whole number
+  Boolean,       ///< true or false
+  String,        ///< a string
+  Vector,        ///< [x, y, z]
+  RealList,      ///< [a, b, ...]
+  VectorList,    ///< [[x, y, z], ...]
+  IndexList,     ///< [i, j, ...] particle indices, checked against N
+  IndexPairs,    ///< [[i, j], ...] particle indices, checked against N
+  IndexTriples,  ///< [[i, j, k], ...] particle indices, checked against N
+};
+
+using ParamValue = std::variant<double, std::int64_t, bool, std::string, Vec3, std::vector<double>,
+                                std::vector<Vec3>, std::vector<Index>, std::vector<IndexPair>,
+                                std::vector<IndexTriple>>;
+
+/// How one parameter is spelled, typed, bounded and documented.
+struct ParamSpec {
+  std::string name;                   ///< YAML key, [a-z0-9_]+
+  ParamType type = ParamType::Real;
+  std::optional<ParamValue> fallback; ///< default value; none: required or optional
+  bool required = false;              ///< must appear in the scene
+  std::string unit;                   ///< SI unit ("N/m"), empty if dimensionless
+  std::string doc;                    ///< one line for `pdyn plugins describe`
+  std::optional<double> min, max;     ///< bounds on a number or on each element
+  bool min_exclusive = false;         ///< min is a strict bound (> instead of >=)
+  bool nonzero = false;               ///< for Vec3: the zero vector is refused
+
+  /// Fluent bounds: `param::real("ks", 1.0, "N/m", "...").at_least(0)`.
+  ParamSpec& at_least(double lo) { min = lo; min_exclusive = false; return *this; }
+  ParamSpec& greater_than(double lo) { min = lo; min_exclusive = true; return *this; }
+  ParamSpec& at_most(double hi) { max = hi; return *this; }
+  ParamSpec& not_zero() { nonzero = true; return *this; }
+};
+
+/// Short constructors for ParamSpec. A spec with a default is optional; one
+/// made with `required_*` must be given; `optional_*` has no default and the
+/// plugin asks Params::has().
+namespace param {
+ParamSpec real(std::string name, double fallback, std::string unit, std::string doc);
+ParamSpec required_real(std::string name, std::string unit, std::string doc);
+ParamSpec integer(std::string name, std::int64_t fallback, std::string doc);
+ParamSpec boolean(std::string name, bool fallback, std::string doc);
+ParamSpec string(std::string name, std::string fallback, std::string doc);
+ParamSpec vec3(std::string name, Vec3 fallback, std::string unit, std::string doc);
+ParamSpec required_vec3(std::string name, std::string unit, std::string doc);
+ParamSpec optional(std::string name, ParamType type, std::string unit, std::string doc);
+ParamSpec required(std::string name, ParamType type, std::string unit, std::string doc);
+}  // namespace param
+
+/// The checked values of one plugin instance's parameters.
+class Params {
+ public:
+  bool has(std::string_view name) const;
+  double real(std::string_view name) const;
+  std::int64_t integer(std::string_view name) const;
+  bool boolean(std::string_view name) const;
+  const std::string& string(std::string_view name) const;
+  Vec3 vec3(std::string_view name) const;
+  const std::vector<double>& reals(std::string_view name) const;
+  const std::vector<Vec3>& vec3s(std::string_view name) const;
+  const std::vector<Index>& indices(std::string_view name) const;
+  const std::vector<IndexPair>& pairs(std::string_view name) const;
+  const std::vector<IndexTriple>& triples(std::string_view name) const;
+
+  /// Host side: stores a checked value.
+  void set(std::string name, ParamValue value);
+  const std::map<std::string, ParamValue, std::less<>>& values() const noexcept { return values_; }
+
+ private:
+  const ParamValue& get(std::string_view name) const;
+  template <class T>
+  const T& as(std::string_view name) const;
+  std::map<std::string, ParamValue, std::less<>> values_;
+};
+
+/// "a number", "[x, y, z]", ... — how a scene spells a value of this type.
+const char* describe(ParamType type);
+/// "real", "vec3", ... — the type's short name in listings and schemas.
+const char* type_name(ParamType type);
+/// A value as YAML flow text ("[0, 0, -9.81]"), for listings and docs.
+std::string format_value(const ParamValue& value);
+
+}  // namespace pdyn

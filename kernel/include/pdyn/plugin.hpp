@@ -1,0 +1,102 @@
+// pdyn/plugin.hpp — declaring a plugin: its descriptor, factory and entry point.
+//
+// A plugin library holds exactly one plugin. It exports two C symbols, made
+// by PDYN_PLUGIN: the ABI version (read first, so a mismatched library is
+// refused before any of its C++ types are touched) and the descriptor. A
+// minimal force plugin:
+//
+//   #include <pdyn/plugin.hpp>
+//   class Wind final : public pdyn::Force { ... };
+//   static pdyn::PluginDescriptor describe() {
+//     pdyn::PluginDescriptor d;
+//     d.kind = pdyn::PluginKind::Force;
+//     d.name = "wind";
+//     d.version = "1.0.0";
+//     d.description = "uniform wind: f = k (w - v)";
+//     d.params = {pdyn::param::vec3("w", {1, 0, 0}, "m/s", "wind velocity")};
+//     d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext&) {
+//       return std::make_unique<Wind>(p.vec3("w"));
+//     };
+//     return d;
+//   }
+//   PDYN_PLUGIN(describe)
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pdyn/collider.hpp"
+#include "pdyn/error.hpp"
+#include "pdyn/force.hpp"
+#include "pdyn/params.hpp"
+#include "pdyn/particles.hpp"
+#include "pdyn/solver.hpp"
+#include "pdyn/version.hpp"
+
+namespace pdyn {
+
+enum class PluginKind { Force, Solver, Collider };
+
+/// "force", "solver" or "collider".
+const char* kind_name(PluginKind kind);
+
+/// What a factory may look at besides its parameters: the scene's initial
+/// particles (e.g. for rest lengths) and its named particle groups.
+struct SceneContext {
+  ParticleView particles;
+  const std::map<std::string, std::vector<Index>>* groups = nullptr;
+};
+
+/// Properties a force declares; the conformance kit checks each claim.
+struct ForceTraits {
+  /// Depends only on relative positions and velocities of the particles it
+  /// joins (springs): momentum and angular momentum are conserved.
+  bool internal = false;
+  /// Never does positive work: f . v <= 0 (drag).
+  bool dissipative = false;
+};
+
+/// Properties a solver declares; the conformance kit checks each claim.
+struct SolverTraits {
+  int order = 0;            ///< global order of accuracy (1 euler, 4 rk4), 0 if unknown
+  bool symplectic = false;  ///< preserves phase-space volume
+};
+
+using ForceFactory =
+    std::function<std::unique_ptr<Force>(const Params&, const SceneContext&)>;
+using SolverFactory =
+    std::function<std::unique_ptr<Solver>(const Params&, const SceneContext&)>;
+using ColliderFactory =
+    std::function<std::unique_ptr<Collider>(const Params&, const SceneContext&)>;
+
+/// Everything the host knows about a plugin before creating one.
+struct PluginDescriptor {
+  PluginKind kind = PluginKind::Force;
+  std::string name;         ///< the scene's `type:`, [a-z0-9_]+
+  std::string version;      ///< the plugin's own version, e.g. "1.0.0"
+  std::string description;  ///< one line, with the force law or method
+  std::vector<ParamSpec> params;
+  ForceTraits force_traits;
+  SolverTraits solver_traits;
+  ForceFactory create_force;        ///< set for kind Force
+  SolverFactory create_solver;      ///< set for kind Solver
+  ColliderFactory create_collider;  ///< set for kind Collider
+};
+
+}  // namespace pdyn
+
+#define PDYN_PLUGIN_EXPORT __attribute__((visibility("default")))
+
+/// Exports the plugin described by `describe_fn` (a function returning a
+/// pdyn::PluginDescriptor). Use once per plugin library, at namespace scope.
+#define PDYN_PLUGIN(describe_fn)                                                          \
+  extern "C" PDYN_PLUGIN_EXPORT std::uint32_t pdyn_plugin_abi_version() noexcept {       \
+    return PDYN_ABI_VERSION;                                                              \
+  }                                                                                       \
+  extern "C" PDYN_PLUGIN_EXPORT const ::pdyn::PluginDescriptor* pdyn_plugin_descriptor() { \
+    static const ::pdyn::PluginDescriptor descriptor = describe_fn();                     \
+    return &descriptor;                                                                   \
+  }

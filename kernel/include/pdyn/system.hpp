@@ -1,0 +1,128 @@
+// pdyn/system.hpp — the particle system: store, force loop and solver interface.
+//
+// This is Witkin's particle system seen by a solver (SIGGRAPH '97 notes,
+// "Solver Interface"): a phase-space state of dimension 6N that can be read
+// and written as one contiguous vector, a time, and a derivative evaluation
+// that clears the force accumulators, invokes every force object, applies
+// colliders' contact forces and gathers [v, f/m].
+//
+// State layout: [x_0 .. x_{N-1} | v_0 .. v_{N-1}], each a 3-vector. Positions
+// and velocities are stored in that one vector, so state() is the store itself
+// (no copy for get/set) while positions() and velocities() are 3 x N views of
+// its two halves for symplectic and implicit solvers.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pdyn/collider.hpp"
+#include "pdyn/force.hpp"
+#include "pdyn/particles.hpp"
+#include "pdyn/types.hpp"
+
+namespace pdyn {
+
+class System {
+ public:
+  System() = default;
+  System(const System&) = delete;
+  System& operator=(const System&) = delete;
+
+  // ---- assembly (done by the scene loader or a host program) ----
+
+  /// Replaces all particles. `x`, `v` are 3 x N (m, m/s), `mass` N (kg, > 0),
+  /// `fixed` N flags; a fixed particle's velocity is set to zero.
+  void set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::VectorXd& mass,
+                     const std::vector<std::uint8_t>& fixed);
+  /// Appends one particle and returns its index. O(N): for interactive use.
+  Index add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed = false);
+  /// Nails (or frees) particle i; nailing zeroes its velocity.
+  void set_fixed(Index i, bool fixed);
+  /// Adds a force object; `label` names it in messages (e.g. "spring (scene.yaml:12)").
+  void add_force(std::shared_ptr<Force> force, std::string label);
+  /// Adds a collider; `label` names it in messages.
+  void add_collider(std::shared_ptr<Collider> collider, std::string label);
+
+  // ---- Witkin's solver interface ----
+
+  /// Number of particles N.
+  Index size() const noexcept { return static_cast<Index>(mass_.size()); }
+  /// Dimension of the phase-space state: 6N.
+  Index dimension() const noexcept { return 6 * size(); }
+  /// The state itself, [x | v] (6N), writable in place: a solver may assign
+  /// a stage state to it directly instead of calling set_state.
+  Eigen::Map<Eigen::VectorXd> state() noexcept { return {state_.data(), state_.size()}; }
+  Eigen::Map<const Eigen::VectorXd> state() const noexcept {
+    return {state_.data(), state_.size()};
+  }
+  /// Copies the state into `y` (size 6N).
+  void get_state(Eigen::Ref<Eigen::VectorXd> y) const;
+  /// Copies `y` (size 6N) into the state.
+  void set_state(const Eigen::Ref<const Eigen::VectorXd>& y);
+  /// Simulated time, s.
+  double time() const noexcept { return time_; }
+  void set_time(double t) noexcept { time_ = t; }
+  /// Derivative evaluation at the current state and time: writes
+  /// dy/dt = [v | f/m] (6N) into `dydt`. Fixed particles get zero. Does not
+  /// allocate once the system is assembled.
+  void derivative(Eigen::Ref<Eigen::VectorXd> dydt);
+
+  // ---- split views, for symplectic and implicit solvers ----
+
+  /// Positions, m (3 x N view of the first half of state()).
+  Eigen::Map<Matrix3X> positions() noexcept { return {state_.data(), 3, size()}; }
+  Eigen::Map<const Matrix3X> positions() const noexcept { return {state_.data(), 3, size()}; }
+  /// Velocities, m/s (3 x N view of the second half of state()).
+  Eigen::Map<Matrix3X> velocities() noexcept { return {state_.data() + 3 * size(), 3, size()}; }
+  Eigen::Map<const Matrix3X> velocities() const noexcept {
+    return {state_.data() + 3 * size(), 3, size()};
+  }
+  /// Evaluates forces at the current state and returns the accelerations
+  /// f/m (m/s^2, 3 x N; zero for fixed particles). The reference stays valid
+  /// until the next call.
+  const Matrix3X& compute_accelerations();
+  /// Forces (N) of the last derivative or acceleration evaluation.
+  const Matrix3X& forces() const noexcept { return force_; }
+
+  // ---- particle properties and observables ----
+
+  const Eigen::VectorXd& masses() const noexcept { return mass_; }
+  const std::vector<std::uint8_t>& fixed() const noexcept { return fixed_; }
+  /// Read-only view of the current state, as forces see it.
+  ParticleView view() const noexcept;
+  /// Kinetic energy sum(m v^2 / 2), J.
+  double kinetic_energy() const;
+  /// Sum of the potential energies (J) that force objects report.
+  double potential_energy() const;
+  /// Runs every collider's collision response; the kernel's runner calls it
+  /// after each accepted step of length `h`.
+  void respond_to_collisions(double h);
+
+  struct ForceEntry {
+    std::shared_ptr<Force> force;
+    std::string label;
+  };
+  struct ColliderEntry {
+    std::shared_ptr<Collider> collider;
+    std::string label;
+  };
+  const std::vector<ForceEntry>& force_objects() const noexcept { return forces_; }
+  const std::vector<ColliderEntry>& collider_objects() const noexcept { return colliders_; }
+
+ private:
+  void evaluate_forces();
+  void update_inverse_mass();
+
+  Eigen::VectorXd state_;        // [x | v], 6N
+  Eigen::VectorXd mass_;         // N
+  Eigen::VectorXd inv_mass_;     // N, zero for fixed particles: gathers f/m with no branch
+  std::vector<std::uint8_t> fixed_;
+  Matrix3X force_;               // force accumulators, 3 x N
+  Matrix3X accel_;               // f/m for compute_accelerations()
+  double time_ = 0.0;
+  std::vector<ForceEntry> forces_;
+  std::vector<ColliderEntry> colliders_;
+};
+
+}  // namespace pdyn

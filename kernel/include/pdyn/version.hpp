@@ -1,0 +1,17 @@
+// pdyn/version.hpp — the plugin ABI version.
+#pragma once
+
+#include <cstdint>
+
+/// Version of the binary interface between the kernel and plugins. A plugin
+/// built against another version is refused before any of its code runs
+/// beyond the version query. Bump it whenever a public header changes a type
+/// layout or a virtual function.
+#define PDYN_ABI_VERSION 1u
+
+namespace pdyn {
+inline constexpr std::uint32_t kAbiVersion = PDYN_ABI_VERSION;
+/// The two symbols every plugin library exports (see PDYN_PLUGIN).
+inline constexpr const char* kAbiSymbol = "pdyn_plugin_abi_version";
+inline constexpr const char* kDescriptorSymbol = "pdyn_plugin_descriptor";
+}  // namespace pdyn

@@ -1,0 +1,235 @@
+// Plugin discovery and loading with Boost.DLL.
+//
+// Each library is opened with RTLD_NOW so that a missing symbol is reported
+// at discovery, with the library's path, rather than as a crash mid-run. The
+// ABI version is read through a plain C function before the C++ descriptor
+// is touched: a library built against another kernel may lay out
+// PluginDescriptor differently, so nothing else of it is trusted until the
+// versions agree.
+#include "registry.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <boost/dll/runtime_symbol_info.hpp>
+#include <boost/dll/shared_library.hpp>
+#include <cstdlib>
+#include <set>
+
+namespace pdyn {
+
+namespace fs = std::filesystem;
+
+bool is_valid_plugin_name(std::string_view name) {
+  return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
+
+namespace {
+
+// "pdyn_force_gravity.so" -> "gravity": what a faulty library probably provides.
+std::string name_from_file(const fs::path& file) {
+  std::string stem = file.stem().string();
+  for (const char* prefix : {"libpdyn_", "pdyn_"}) {
+    if (stem.rfind(prefix, 0) == 0) {
+      stem = stem.substr(std::char_traits<char>::length(prefix));
+      break;
+    }
+  }
+  for (const char* kind : {"force_", "solver_", "collider_"}) {
+    if (stem.rfind(kind, 0) == 0) return stem.substr(std::char_traits<char>::length(kind));
+  }
+  return stem;
+}
+
+// Checks what the host relies on before listing a plugin.
+std::string descriptor_problem(const PluginDescriptor& d) {
+  if (!is_valid_plugin_name(d.name)) {
+    return fmt::format("plugin name '{}' is not of the form [a-z0-9_]+", d.name);
+  }
+  const bool has_factory = (d.kind == PluginKind::Force && d.create_force) ||
+                           (d.kind == PluginKind::Solver && d.create_solver) ||
+                           (d.kind == PluginKind::Collider && d.create_collider);
+  if (!has_factory) return fmt::format("descriptor has no {} factory", kind_name(d.kind));
+  std::set<std::string> seen;
+  for (const auto& p : d.params) {
+    if (!is_valid_plugin_name(p.name) || p.name == "type") {
+      return fmt::format("parameter name '{}' is not allowed", p.name);
+    }
+    if (!seen.insert(p.name).second) return fmt::format("parameter '{}' declared twice", p.name);
+    // ParamType's enumerators are in the order of ParamValue's alternatives,
+    // so a default of the parameter's own type has the type's index.
+    if (p.fallback && p.fallback->index() != static_cast<std::size_t>(p.type)) {
+      return fmt::format("default of parameter '{}' is not {}", p.name, describe(p.type));
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+const char* kind_name(PluginKind kind) {
+  switch (kind) {
+    case PluginKind::Force: return "force";
+    case PluginKind::Solver: return "solver";
+    case PluginKind::Collider: return "collider";
+  }
+  return "?";
+}
+
+std::vector<fs::path> PluginRegistry::search_path(const std::vector<fs::path>& extra) {
+  std::vector<fs::path> candidates = extra;
+  if (const char* env = std::getenv("PDYN_PLUGIN_PATH")) {
+    std::string_view s(env);
+    while (!s.empty()) {
+      const auto colon = s.find(':');
+      const auto part = s.substr(0, colon);
+      if (!part.empty()) candidates.emplace_back(std::string(part));
+      if (colon == std::string_view::npos) break;
+      s.remove_prefix(colon + 1);
+    }
+  }
+  boost::dll::fs::error_code ec;
+  const fs::path program = boost::dll::program_location(ec);
+  if (!ec) candidates.push_back(program.parent_path() / PDYN_BIN_TO_PLUGINS);
+  const fs::path kernel = boost::dll::symbol_location_ptr(&is_valid_plugin_name, ec);
+  if (!ec) candidates.push_back(kernel.parent_path() / PDYN_LIB_TO_PLUGINS);
+
+  std::vector<fs::path> dirs;
+  std::set<fs::path> seen;
+  for (const auto& c : candidates) {
+    std::error_code fec;
+    const fs::path canon = fs::weakly_canonical(c, fec);
+    const fs::path key = fec ? c : canon;
+    if (seen.insert(key).second) dirs.push_back(key);
+  }
+  return dirs;
+}
+
+void PluginRegistry::fault(const fs::path& lib, std::string plugin, std::string message) {
+  faults_.push_back({lib, std::move(plugin), std::move(message)});
+}
+
+void PluginRegistry::discover(const std::vector<fs::path>& dirs) {
+  for (const auto& dir : dirs) {
+    std::error_code ec;
+    if (!fs::is_directory(dir, ec)) continue;
+    searched_.push_back(dir);
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(dir, ec)) {
+      if (entry.path().extension() == ".so") files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) load_library(f);
+  }
+}
+
+bool PluginRegistry::load_library(const fs::path& file) {
+  const std::string hint = name_from_file(file);
+  auto lib = std::make_shared<boost::dll::shared_library>();
+  try {
+    lib->load(file, boost::dll::load_mode::rtld_now | boost::dll::load_mode::rtld_local);
+  } catch (const std::exception& e) {
+    fault(file, hint, fmt::format("cannot load library: {}", e.what()));
+    return false;
+  }
+  if (!lib->has(kAbiSymbol) || !lib->has(kDescriptorSymbol)) {
+    fault(file, hint,
+          fmt::format("not a pdyn plugin: it does not export {}() and {}() (use PDYN_PLUGIN)",
+                      kAbiSymbol, kDescriptorSymbol));
+    return false;
+  }
+  const std::uint32_t abi = lib->get<std::uint32_t() noexcept>(kAbiSymbol)();
+  if (abi != kAbiVersion) {
+    fault(file, hint,
+          fmt::format("plugin ABI version {} does not match the kernel's ABI version {} "
+                      "(rebuild the plugin against this pdyn)",
+                      abi, kAbiVersion));
+    return false;
+  }
+  const PluginDescriptor* d = nullptr;
+  try {
+    d = lib->get<const PluginDescriptor*()>(kDescriptorSymbol)();
+  } catch (const std::exception& e) {
+    fault(file, hint, fmt::format("descriptor threw: {}", e.what()));
+    return false;
+  }
+  if (d == nullptr) {
+    fault(file, hint, "descriptor is null");
+    return false;
+  }
+  if (auto problem = descriptor_problem(*d); !problem.empty()) {
+    fault(file, is_valid_plugin_name(d->name) ? d->name : hint, problem);
+    return false;
+  }
+  if (const PluginRecord* other = find_any(d->name)) {
+    fault(file, d->name,
+          fmt::format("plugin '{}' is already provided by {}", d->name, other->library.string()));
+    return false;
+  }
+  plugins_.push_back({d, file, std::static_pointer_cast<void>(lib)});
+  return true;
+}
+
+const PluginRecord* PluginRegistry::find(PluginKind kind, std::string_view name) const {
+  for (const auto& r : plugins_) {
+    if (r.descriptor->kind == kind && r.descriptor->name == name) return &r;
+  }
+  return nullptr;
+}
+
+const PluginRecord* PluginRegistry::find_any(std::string_view name) const {
+  for (const auto& r : plugins_) {
+    if (r.descriptor->name == name) return &r;
+  }
+  return nullptr;
+}
+
+void PluginRegistry::require_healthy(std::string_view name) const {
+  for (const auto& f : faults_) {
+    if (f.plugin == name) {
+      throw PluginError(fmt::format("{}: plugin '{}': {}", f.library.string(), f.plugin,
+                                    f.message));
+    }
+  }
+}
+
+std::vector<std::string> PluginRegistry::names(PluginKind kind) const {
+  std::vector<std::string> out;
+  for (const auto& r : plugins_) {
+    if (r.descriptor->kind == kind) out.push_back(r.descriptor->name);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+namespace {
+// Wraps a plugin-made object so that it keeps its library loaded: the
+// deleter runs the object's destructor (code inside the library) and only
+// then releases the library handle.
+template <class T>
+std::shared_ptr<T> keep_loaded(std::unique_ptr<T> obj, const PluginRecord& r) {
+  if (!obj) {
+    throw PluginError(fmt::format("{}: plugin '{}': factory returned no object",
+                                  r.library.string(), r.descriptor->name));
+  }
+  std::shared_ptr<void> handle = r.handle;
+  return std::shared_ptr<T>(obj.release(), [handle](T* p) { delete p; });
+}
+}  // namespace
+
+std::shared_ptr<Force> PluginRegistry::create_force(const PluginRecord& r, const Params& p,
+                                                    const SceneContext& ctx) const {
+  return keep_loaded(r.descriptor->create_force(p, ctx), r);
+}
+std::shared_ptr<Solver> PluginRegistry::create_solver(const PluginRecord& r, const Params& p,
+                                                      const SceneContext& ctx) const {
+  return keep_loaded(r.descriptor->create_solver(p, ctx), r);
+}
+std::shared_ptr<Collider> PluginRegistry::create_collider(const PluginRecord& r, const Params& p,
+                                                          const SceneContext& ctx) const {
+  return keep_loaded(r.descriptor->create_collider(p, ctx), r);
+}
+
+}  // namespace pdyn

@@ -1,0 +1,83 @@
+// The plugin registry: finds plugin libraries, reads their descriptors and
+// creates plugin objects by (kind, name). Host-side; plugins never see it.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pdyn/plugin.hpp"
+
+namespace pdyn {
+
+/// A plugin library could not be used: exit status 3. The message names the
+/// library path and, where known, the plugin.
+class PluginError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// One plugin found on the search path.
+struct PluginRecord {
+  const PluginDescriptor* descriptor = nullptr;
+  std::filesystem::path library;
+  std::shared_ptr<void> handle;  // the loaded library; every created object holds a copy
+};
+
+/// A library on the search path that could not be used.
+struct PluginFault {
+  std::filesystem::path library;
+  std::string plugin;   // the plugin's name, or the name its file suggests
+  std::string message;  // one line: what is wrong
+};
+
+class PluginRegistry {
+ public:
+  /// The default search path, in order: `extra` (--plugin-path), the
+  /// directories in $PDYN_PLUGIN_PATH (':'-separated), then the plugin folder
+  /// beside the running program and beside the kernel library (build tree
+  /// and install tree alike). Duplicates and missing folders are dropped.
+  static std::vector<std::filesystem::path> search_path(
+      const std::vector<std::filesystem::path>& extra);
+
+  /// Loads every `*.so` in `dirs` (in order, files sorted by name) and
+  /// records its plugin, or a fault. Never throws for a bad library.
+  void discover(const std::vector<std::filesystem::path>& dirs);
+  /// Loads one library file; returns false and records a fault on failure.
+  bool load_library(const std::filesystem::path& file);
+
+  /// The plugin of that kind and name, or nullptr.
+  const PluginRecord* find(PluginKind kind, std::string_view name) const;
+  /// The plugin of that name, whatever its kind, or nullptr.
+  const PluginRecord* find_any(std::string_view name) const;
+  /// Throws PluginError if a fault concerns the plugin `name` (its library
+  /// failed to load, or two libraries provide it).
+  void require_healthy(std::string_view name) const;
+
+  const std::vector<PluginRecord>& plugins() const noexcept { return plugins_; }
+  const std::vector<PluginFault>& faults() const noexcept { return faults_; }
+  const std::vector<std::filesystem::path>& searched() const noexcept { return searched_; }
+  /// Sorted names of the plugins of one kind.
+  std::vector<std::string> names(PluginKind kind) const;
+
+  /// Create objects. They keep their library loaded for as long as they live.
+  std::shared_ptr<Force> create_force(const PluginRecord& r, const Params& p,
+                                      const SceneContext& ctx) const;
+  std::shared_ptr<Solver> create_solver(const PluginRecord& r, const Params& p,
+                                        const SceneContext& ctx) const;
+  std::shared_ptr<Collider> create_collider(const PluginRecord& r, const Params& p,
+                                            const SceneContext& ctx) const;
+
+ private:
+  void fault(const std::filesystem::path& lib, std::string plugin, std::string message);
+  std::vector<PluginRecord> plugins_;
+  std::vector<PluginFault> faults_;
+  std::vector<std::filesystem::path> searched_;
+};
+
+/// True for names of the form [a-z0-9_]+.
+bool is_valid_plugin_name(std::string_view name);
+
+}  // namespace pdyn

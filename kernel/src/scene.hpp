@@ -1,0 +1,70 @@
+// Scenes: a YAML file assembled into a ready-to-run system.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pdyn/system.hpp"
+#include "registry.hpp"
+
+namespace pdyn {
+
+/// One located problem: `location` is "FILE:LINE:COLUMN", "FILE" or
+/// "--set PATH=VALUE"; `message` is "what is wrong (what was expected)".
+struct Diagnostic {
+  std::string location;
+  std::string message;
+  std::string text() const { return location + ": " + message; }
+};
+
+/// The scene is invalid: exit status 2. what() holds every diagnostic, one
+/// per line.
+class SceneError : public Error {
+ public:
+  explicit SceneError(std::vector<Diagnostic> diagnostics);
+  const std::vector<Diagnostic>& diagnostics() const noexcept { return diagnostics_; }
+
+ private:
+  std::vector<Diagnostic> diagnostics_;
+};
+
+/// A `--set key.path=value` override: path like `forces[0].g`, value YAML.
+struct Override {
+  std::string path;
+  std::string value;
+};
+/// Parses "key.path=value"; throws SceneError if there is no '='.
+Override parse_override(const std::string& text);
+
+struct OutputSpec {
+  std::filesystem::path path;    ///< frames CSV; empty: no frames
+  std::filesystem::path energy;  ///< energy CSV; empty: none
+  std::int64_t every = 1;        ///< a frame every `every` steps; 0: first and final only
+};
+
+/// A loaded, validated scene, ready for the runner.
+struct Scene {
+  std::string file;
+  std::unique_ptr<System> system;
+  std::shared_ptr<Solver> solver;
+  std::string solver_name;
+  double dt = 0.0;           ///< step, s
+  std::int64_t steps = 0;    ///< number of steps
+  double end_time = 0.0;     ///< time after the last step, s (steps * dt, or the duration)
+  OutputSpec output;
+  std::map<std::string, std::vector<Index>> groups;
+};
+
+/// Reads, validates and assembles the scene in `file`, with `overrides`
+/// applied first. Throws SceneError (bad scene) or PluginError (a plugin
+/// the scene needs cannot be used).
+Scene load_scene(const std::filesystem::path& file, const PluginRegistry& registry,
+                 const std::vector<Override>& overrides = {});
+/// The same, from text; `file` only names it in messages.
+Scene load_scene_text(const std::string& text, const std::string& file,
+                      const PluginRegistry& registry, const std::vector<Override>& overrides = {});
+
+}  // namespace pdyn

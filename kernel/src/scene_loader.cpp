@@ -1,0 +1,963 @@
+// The scene loader: YAML text -> validated, assembled Scene.
+//
+// The whole file is checked before anything is simulated, and every problem
+// found is reported, each as `FILE:LINE:COLUMN: what is wrong (what was
+// expected)`. Built-in sections (simulation, particles, grid, output) are
+// described by the same ParamSpec lists that plugins use for their
+// parameters, so one reader checks types, ranges, required and unknown keys
+// everywhere.
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "scene.hpp"
+#include "text.hpp"
+
+namespace pdyn {
+
+namespace fs = std::filesystem;
+
+SceneError::SceneError(std::vector<Diagnostic> diagnostics)
+    : Error([&] {
+        std::string s;
+        for (std::size_t i = 0; i < diagnostics.size(); ++i) {
+          s += (i ? "\n" : "") + diagnostics[i].text();
+        }
+        return s;
+      }()),
+      diagnostics_(std::move(diagnostics)) {}
+
+Override parse_override(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw SceneError({{"--set " + text, "an override needs a key path and a value "
+                                        "(expected KEY.PATH=VALUE, e.g. simulation.dt=0.001)"}});
+  }
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// Specifications of the built-in sections.
+
+std::vector<ParamSpec> simulation_specs() {
+  return {
+      param::required_real("dt", "s", "time step").greater_than(0),
+      param::optional("steps", ParamType::Integer, "", "number of steps (or give duration)"),
+      param::optional("duration", ParamType::Real, "s", "simulated time (or give steps)"),
+  };
+}
+
+std::vector<ParamSpec> particle_specs() {
+  return {
+      param::required_vec3("position", "m", "initial position"),
+      param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity"),
+      param::required_real("mass", "kg", "mass").greater_than(0),
+      param::boolean("fixed", false, "nailed in place"),
+  };
+}
+
+std::vector<ParamSpec> grid_specs() {
+  ParamSpec nx = param::required("nx", ParamType::Integer, "", "particles along u");
+  ParamSpec ny = param::required("ny", ParamType::Integer, "", "particles along v");
+  nx.at_least(1);
+  ny.at_least(1);
+  return {
+      param::required_vec3("origin", "m", "position of particle (0, 0)"),
+      param::required_vec3("u", "m", "spacing vector along the first grid direction"),
+      param::required_vec3("v", "m", "spacing vector along the second grid direction"),
+      nx,
+      ny,
+      param::required_real("mass", "kg", "mass of each particle").greater_than(0),
+      param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity of every particle"),
+      param::optional("name", ParamType::String, "", "group name"),
+      param::optional("pin", ParamType::IndexPairs, "",
+                      "grid coordinates [i, j] of nailed particles; negative counts from the end"),
+  };
+}
+
+std::vector<ParamSpec> output_specs() {
+  ParamSpec every = param::integer("every", 1, "a frame every N steps; 0: first and final only");
+  every.at_least(0);
+  return {
+      param::optional("path", ParamType::String, "", "frames CSV: t,id,x,y,z,vx,vy,vz"),
+      every,
+      param::optional("energy", ParamType::String, "", "energy CSV: t,kinetic,potential,total"),
+  };
+}
+
+std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs) {
+  std::vector<std::string> names;
+  for (const auto& s : specs) names.push_back(s.name);
+  return names;
+}
+
+std::string fmt_num(double x) { return fmt::format("{}", x); }
+
+// "a number > 0 in s"
+std::string expectation(const ParamSpec& s) {
+  std::string e = describe(s.type);
+  if (s.min && s.max) {
+    e += fmt::format(" in [{}, {}]", fmt_num(*s.min), fmt_num(*s.max));
+  } else if (s.min) {
+    e += fmt::format(" {} {}", s.min_exclusive ? ">" : ">=", fmt_num(*s.min));
+  } else if (s.max) {
+    e += fmt::format(" <= {}", fmt_num(*s.max));
+  }
+  if (s.nonzero) e += ", not zero";
+  if (!s.unit.empty()) e += " in " + s.unit;
+  return e;
+}
+
+// A queued force or collider: created once all particles exist.
+struct PendingPlugin {
+  const PluginRecord* record;
+  Params params;
+  YAML::Node node;
+  std::string path;
+};
+
+class Loader {
+ public:
+  Loader(std::string file, const PluginRegistry& registry, std::vector<Override> overrides)
+      : file_(std::move(file)), registry_(registry), overrides_(std::move(overrides)) {}
+
+  Scene load(const std::string& text);
+
+ private:
+  // ---- diagnostics ----
+  std::string where(const YAML::Node& at, const std::string& path) const;
+  void error(const YAML::Node& at, const std::string& path, std::string message);
+  [[noreturn]] void fail();
+
+  // ---- generic readers ----
+  bool check_map(const YAML::Node& n, const std::string& path, const char* what);
+  void check_keys(const YAML::Node& map, const std::string& path,
+                  const std::vector<std::string>& allowed, const char* context);
+  std::optional<ParamValue> read_value(const YAML::Node& n, const std::string& path,
+                                       const ParamSpec& spec, Index n_particles);
+  std::optional<double> read_number(const YAML::Node& n, const std::string& path,
+                                    const ParamSpec& spec);
+  std::optional<std::int64_t> read_integer(const YAML::Node& n, const std::string& path,
+                                           const ParamSpec& spec);
+  std::optional<Index> read_index(const YAML::Node& n, const std::string& path, Index n_particles);
+  std::optional<Vec3> read_vec3(const YAML::Node& n, const std::string& path,
+                                const ParamSpec& spec);
+  template <std::size_t K>
+  std::optional<std::vector<std::array<Index, K>>> read_tuples(const YAML::Node& n,
+                                                               const std::string& path,
+                                                               Index n_particles);
+  /// Reads the keys of `map` described by `specs`; `extra` keys are allowed
+  /// and left to the caller. Index-typed values are checked against
+  /// n_particles when it is >= 0.
+  std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
+                                    const std::vector<ParamSpec>& specs,
+                                    const std::vector<std::string>& extra, Index n_particles,
+                                    const char* context);
+
+  // ---- sections ----
+  void apply_overrides(YAML::Node& root);
+  void read_simulation(const YAML::Node& n, Scene& scene);
+  void read_particles(const YAML::Node& n);
+  void read_grid(const YAML::Node& n, const std::string& path);
+  const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path,
+                                  PluginKind kind);
+  void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
+                        std::vector<PendingPlugin>& out);
+  std::optional<Params> read_plugin_params(const YAML::Node& item, const std::string& path,
+                                           const PluginRecord& rec,
+                                           const std::vector<std::string>& generated);
+  void read_output(const YAML::Node& n, Scene& scene);
+  template <class Create>
+  auto create(const PendingPlugin& p, Create&& create_fn) -> decltype(create_fn());
+
+  std::string file_;
+  const PluginRegistry& registry_;
+  std::vector<Override> overrides_;
+  std::vector<Diagnostic> diags_;
+
+  // particles as read
+  std::vector<Vec3> x_, v_;
+  std::vector<double> m_;
+  std::vector<std::uint8_t> fixed_;
+  std::map<std::string, std::vector<Index>> groups_;
+  std::vector<PendingPlugin> builder_forces_;  // springs made by builders
+  bool particles_ok_ = true;
+};
+
+// ---------------------------------------------------------------------------
+// Diagnostics
+
+bool path_within(const std::string& path, const std::string& prefix) {
+  if (path.rfind(prefix, 0) != 0) return false;
+  return path.size() == prefix.size() || path[prefix.size()] == '.' || path[prefix.size()] == '[';
+}
+
+std::string Loader::where(const YAML::Node& at, const std::string& path) const {
+  // A value that came from --set has no place in the file: name the override.
+  for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {
+    if (path_within(path, it->path)) return fmt::format("--set {}={}", it->path, it->value);
+  }
+  if (at.IsDefined()) {
+    const YAML::Mark m = at.Mark();
+    if (m.line >= 0) return fmt::format("{}:{}:{}", file_, m.line + 1, m.column + 1);
+  }
+  return file_;
+}
+
+void Loader::error(const YAML::Node& at, const std::string& path, std::string message) {
+  diags_.push_back({where(at, path), std::move(message)});
+}
+
+void Loader::fail() { throw SceneError(diags_); }
+
+// ---------------------------------------------------------------------------
+// Generic readers
+
+bool Loader::check_map(const YAML::Node& n, const std::string& path, const char* what) {
+  if (n.IsMap()) return true;
+  error(n, path, fmt::format("{}: is not a mapping (expected {})", path, what));
+  return false;
+}
+
+void Loader::check_keys(const YAML::Node& map, const std::string& path,
+                        const std::vector<std::string>& allowed, const char* context) {
+  std::set<std::string> seen;
+  for (const auto& kv : map) {
+    const std::string key = kv.first.Scalar();
+    const std::string key_path = path.empty() ? key : path + "." + key;
+    if (!seen.insert(key).second) {
+      error(kv.first, key_path,
+            fmt::format("{}: duplicate key '{}' (expected each key once)", path, key));
+      continue;
+    }
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    const std::string guess = closest_match(key, allowed);
+    error(kv.first, key_path,
+          fmt::format("unknown key '{}' in {} ({}expected one of: {})", key,
+                      path.empty() ? "the scene" : path,
+                      guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess),
+                      join(allowed)));
+  }
+  (void)context;
+}
+
+std::optional<double> Loader::read_number(const YAML::Node& n, const std::string& path,
+                                          const ParamSpec& spec) {
+  double x = 0;
+  if (!n.IsScalar() || !YAML::convert<double>::decode(n, x)) {
+    error(n, path, fmt::format("{}: '{}' is not a number (expected {})", path,
+                               n.IsScalar() ? n.Scalar() : "a list or mapping", expectation(spec)));
+    return std::nullopt;
+  }
+  if (!std::isfinite(x)) {
+    error(n, path, fmt::format("{}: {} is not finite (expected {})", path, n.Scalar(),
+                               expectation(spec)));
+    return std::nullopt;
+  }
+  const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
+  const bool above = spec.max && x > *spec.max;
+  if (below || above) {
+    error(n, path, fmt::format("{}: {} is out of range (expected {})", path, n.Scalar(),
+                               expectation(spec)));
+    return std::nullopt;
+  }
+  return x;
+}
+
+std::optional<std::int64_t> Loader::read_integer(const YAML::Node& n, const std::string& path,
+                                                 const ParamSpec& spec) {
+  long long x = 0;
+  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, x)) {
+    error(n, path, fmt::format("{}: '{}' is not a whole number (expected {})", path,
+                               n.IsScalar() ? n.Scalar() : "a list or mapping", expectation(spec)));
+    return std::nullopt;
+  }
+  if ((spec.min && x < *spec.min) || (spec.max && x > *spec.max)) {
+    error(n, path, fmt::format("{}: {} is out of range (expected {})", path, x,
+                               expectation(spec)));
+    return std::nullopt;
+  }
+  return static_cast<std::int64_t>(x);
+}
+
+std::optional<Index> Loader::read_index(const YAML::Node& n, const std::string& path,
+                                        Index n_particles) {
+  long long i = 0;
+  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, i)) {
+    error(n, path, fmt::format("{}: '{}' is not a particle index (expected a whole number)", path,
+                               n.IsScalar() ? n.Scalar() : "a list or mapping"));
+    return std::nullopt;
+  }
+  if (n_particles >= 0 && (i < 0 || i >= n_particles)) {
+    error(n, path,
+          fmt::format("{}: particle index {} is out of range (expected 0..{}: the scene has {} "
+                      "particles)",
+                      path, i, n_particles - 1, n_particles));
+    return std::nullopt;
+  }
+  return static_cast<Index>(i);
+}
+
+std::optional<Vec3> Loader::read_vec3(const YAML::Node& n, const std::string& path,
+                                      const ParamSpec& spec) {
+  if (!n.IsSequence() || n.size() != 3) {
+    error(n, path, fmt::format("{}: is not a 3-vector (expected {})", path, expectation(spec)));
+    return std::nullopt;
+  }
+  ParamSpec element = spec;  // bounds apply to each component
+  element.type = ParamType::Real;
+  Vec3 v;
+  for (int k = 0; k < 3; ++k) {
+    auto c = read_number(n[k], fmt::format("{}[{}]", path, k), element);
+    if (!c) return std::nullopt;
+    v[k] = *c;
+  }
+  if (spec.nonzero && v.norm() == 0.0) {
+    error(n, path, fmt::format("{}: is the zero vector (expected {})", path, expectation(spec)));
+    return std::nullopt;
+  }
+  return v;
+}
+
+template <std::size_t K>
+std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML::Node& n,
+                                                                     const std::string& path,
+                                                                     Index n_particles) {
+  const char* expected = K == 2 ? "a list of particle index pairs [[i, j], ...]"
+                                : "a list of particle index triples [[i, j, k], ...]";
+  if (!n.IsSequence()) {
+    error(n, path, fmt::format("{}: is not a list (expected {})", path, expected));
+    return std::nullopt;
+  }
+  std::vector<std::array<Index, K>> out;
+  out.reserve(n.size());
+  bool ok = true;
+  for (std::size_t e = 0; e < n.size(); ++e) {
+    const YAML::Node t = n[e];
+    const std::string ep = fmt::format("{}[{}]", path, e);
+    if (!t.IsSequence() || t.size() != K) {
+      error(t, ep, fmt::format("{}: is not a list of {} indices (expected {})", ep, K, expected));
+      ok = false;
+      continue;
+    }
+    std::array<Index, K> a{};
+    for (std::size_t k = 0; k < K; ++k) {
+      auto i = read_index(t[k], fmt::format("{}[{}]", ep, k), n_particles);
+      if (!i) {
+        ok = false;
+        break;
+      }
+      a[k] = *i;
+    }
+    out.push_back(a);
+  }
+  if (!ok) return std::nullopt;
+  return out;
+}
+
+std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::string& path,
+                                             const ParamSpec& spec, Index n_particles) {
+  auto list_of = [&](auto&& read_one) -> std::optional<ParamValue> {
+    using T = typename std::decay_t<decltype(*read_one(n, path))>;
+    if (!n.IsSequence()) {
+      error(n, path, fmt::format("{}: is not a list (expected {})", path, expectation(spec)));
+      return std::nullopt;
+    }
+    std::vector<T> out;
+    out.reserve(n.size());
+    bool ok = true;
+    for (std::size_t e = 0; e < n.size(); ++e) {
+      auto x = read_one(n[e], fmt::format("{}[{}]", path, e));
+      if (x) out.push_back(*x);
+      else ok = false;
+    }
+    if (!ok) return std::nullopt;
+    return ParamValue(std::move(out));
+  };
+  ParamSpec element = spec;
+  switch (spec.type) {
+    case ParamType::Real:
+      if (auto x = read_number(n, path, spec)) return ParamValue(*x);
+      return std::nullopt;
+    case ParamType::Integer:
+      if (auto x = read_integer(n, path, spec)) return ParamValue(*x);
+      return std::nullopt;
+    case ParamType::Boolean: {
+      bool b = false;
+      if (n.IsScalar() && YAML::convert<bool>::decode(n, b)) return ParamValue(b);
+      error(n, path, fmt::format("{}: '{}' is not true or false (expected {})", path,
+                                 n.IsScalar() ? n.Scalar() : "a list or mapping",
+                                 expectation(spec)));
+      return std::nullopt;
+    }
+    case ParamType::String:
+      if (n.IsScalar()) return ParamValue(n.Scalar());
+      error(n, path, fmt::format("{}: is not a string (expected {})", path, expectation(spec)));
+      return std::nullopt;
+    case ParamType::Vector:
+      if (auto v = read_vec3(n, path, spec)) return ParamValue(*v);
+      return std::nullopt;
+    case ParamType::RealList:
+      element.type = ParamType::Real;
+      return list_of([&](const YAML::Node& e, const std::string& p) {
+        return read_number(e, p, element);
+      });
+    case ParamType::VectorList:
+      element.type = ParamType::Vector;
+      return list_of([&](const YAML::Node& e, const std::string& p) {
+        return read_vec3(e, p, element);
+      });
+    case ParamType::IndexList:
+      return list_of([&](const YAML::Node& e, const std::string& p) {
+        return read_index(e, p, n_particles);
+      });
+    case ParamType::IndexPairs:
+      if (auto t = read_tuples<2>(n, path, n_particles)) return ParamValue(std::move(*t));
+      return std::nullopt;
+    case ParamType::IndexTriples:
+      if (auto t = read_tuples<3>(n, path, n_particles)) return ParamValue(std::move(*t));
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+std::optional<Params> Loader::read_params(const YAML::Node& map, const std::string& path,
+                                          const std::vector<ParamSpec>& specs,
+                                          const std::vector<std::string>& extra,
+                                          Index n_particles, const char* context) {
+  std::vector<std::string> allowed = spec_names(specs);
+  allowed.insert(allowed.end(), extra.begin(), extra.end());
+  const std::size_t before = diags_.size();
+  check_keys(map, path, allowed, context);
+  Params params;
+  for (const auto& spec : specs) {
+    const YAML::Node n = map[spec.name];
+    const std::string p = path + "." + spec.name;
+    if (!n.IsDefined() || n.IsNull()) {
+      if (spec.fallback) {
+        params.set(spec.name, *spec.fallback);
+      } else if (spec.required) {
+        error(n.IsDefined() ? n : map, p,
+              fmt::format("{}: missing required key '{}' (expected {}{})", path, spec.name,
+                          expectation(spec), spec.doc.empty() ? "" : ": " + spec.doc));
+      }
+      continue;
+    }
+    if (auto value = read_value(n, p, spec, n_particles)) params.set(spec.name, std::move(*value));
+  }
+  if (diags_.size() != before) return std::nullopt;
+  return params;
+}
+
+// ---------------------------------------------------------------------------
+// --set overrides
+
+void Loader::apply_overrides(YAML::Node& root) {
+  for (const auto& ov : overrides_) {
+    const std::string loc = fmt::format("--set {}={}", ov.path, ov.value);
+    auto bad = [&](const std::string& msg) { diags_.push_back({loc, msg}); };
+    // Split "forces[0].g" into keys and indices.
+    struct Step {
+      std::string key;
+      long index = -1;
+    };
+    std::vector<Step> steps;
+    std::string s = ov.path;
+    bool ok = true;
+    std::size_t i = 0;
+    while (i < s.size() && ok) {
+      if (s[i] == '.') {
+        ++i;
+        continue;
+      }
+      if (s[i] == '[') {
+        const auto close = s.find(']', i);
+        long idx = -1;
+        try {
+          std::size_t used = 0;
+          idx = std::stol(s.substr(i + 1, close - i - 1), &used);
+          ok = close != std::string::npos && used == close - i - 1 && idx >= 0;
+        } catch (const std::exception&) {
+          ok = false;
+        }
+        steps.push_back({"", idx});
+        i = close == std::string::npos ? s.size() : close + 1;
+        continue;
+      }
+      const auto end = s.find_first_of(".[", i);
+      steps.push_back({s.substr(i, end - i), -1});
+      i = end == std::string::npos ? s.size() : end;
+    }
+    if (!ok || steps.empty()) {
+      bad(fmt::format("malformed key path '{}' (expected keys and [index]es, e.g. forces[0].g)",
+                      ov.path));
+      continue;
+    }
+    YAML::Node value;
+    try {
+      value = YAML::Load(ov.value);
+    } catch (const YAML::Exception& e) {
+      bad(fmt::format("the value is not valid YAML: {} (expected a YAML value, e.g. 0.5 or "
+                      "[0, 0, -9.81])",
+                      e.msg));
+      continue;
+    }
+    YAML::Node cur;
+    cur.reset(root);
+    std::string walked;
+    for (std::size_t k = 0; k < steps.size() && ok; ++k) {
+      const Step& st = steps[k];
+      const bool last = k + 1 == steps.size();
+      if (st.index >= 0) {
+        if (!cur.IsSequence() || static_cast<std::size_t>(st.index) >= cur.size()) {
+          bad(fmt::format("{} has no element [{}] (expected an index below {})",
+                          walked.empty() ? "the scene" : walked, st.index,
+                          cur.IsSequence() ? cur.size() : 0));
+          ok = false;
+          break;
+        }
+        walked += fmt::format("[{}]", st.index);
+        if (last) {
+          cur[st.index] = value;
+        } else {
+          YAML::Node next = cur[st.index];
+          cur.reset(next);
+        }
+      } else {
+        if (!(cur.IsMap() || cur.IsNull())) {
+          bad(fmt::format("{} is not a mapping, so it has no key '{}'", walked, st.key));
+          ok = false;
+          break;
+        }
+        walked += (walked.empty() ? "" : ".") + st.key;
+        if (last) {
+          cur[st.key] = value;
+        } else {
+          YAML::Node next = cur[st.key];
+          cur.reset(next);
+        }
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Sections
+
+void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
+  if (!n.IsDefined()) {
+    diags_.push_back({file_, "missing section 'simulation' (expected simulation: { dt: ..., "
+                             "steps: ... } )"});
+    return;
+  }
+  if (!check_map(n, "simulation", "simulation: { dt: ..., steps: ..., solver: { type: ... } }")) {
+    return;
+  }
+  auto specs = simulation_specs();
+  specs[1].at_least(0);
+  specs[2].at_least(0);
+  auto p = read_params(n, "simulation", specs, {"solver"}, -1, "simulation");
+  if (p) {
+    scene.dt = p->real("dt");
+    const bool has_steps = p->has("steps"), has_duration = p->has("duration");
+    if (has_steps == has_duration) {
+      error(n, "simulation",
+            has_steps ? "simulation: both 'steps' and 'duration' are given (expected one of them)"
+                      : "simulation: neither 'steps' nor 'duration' is given (expected one of "
+                        "them, e.g. steps: 1000)");
+    } else if (has_steps) {
+      scene.steps = p->integer("steps");
+      scene.end_time = static_cast<double>(scene.steps) * scene.dt;
+    } else {
+      // The last step is shortened so that the run ends exactly at `duration`.
+      scene.end_time = p->real("duration");
+      scene.steps = static_cast<std::int64_t>(std::ceil(scene.end_time / scene.dt - 1e-9));
+      if (scene.steps > static_cast<std::int64_t>(1) << 40) {
+        error(n["duration"], "simulation.duration",
+              "simulation.duration: needs more than 2^40 steps (expected a duration / dt that a "
+              "run can reach)");
+      }
+    }
+  }
+  // The solver, rk4 unless the scene names another.
+  const YAML::Node s = n["solver"];
+  if (!s.IsDefined() || s.IsNull()) {
+    scene.solver_name = "rk4";
+  }
+}
+
+void Loader::read_particles(const YAML::Node& n) {
+  if (!n.IsDefined()) {
+    diags_.push_back({file_, "missing section 'particles' (expected a list of particles or "
+                             "builders, e.g. - { position: [0, 0, 1], mass: 1 })"});
+    particles_ok_ = false;
+    return;
+  }
+  if (!n.IsSequence()) {
+    error(n, "particles", "particles: is not a list (expected a list of particles or builders)");
+    particles_ok_ = false;
+    return;
+  }
+  const std::size_t before = diags_.size();
+  const auto specs = particle_specs();
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const YAML::Node item = n[i];
+    const std::string path = fmt::format("particles[{}]", i);
+    if (!check_map(item, path, "{ position: [x, y, z], mass: m } or a builder such as grid")) {
+      continue;
+    }
+    if (item["grid"].IsDefined()) {
+      if (item.size() != 1) {
+        error(item, path, fmt::format("{}: a builder entry holds only its builder (expected "
+                                      "{{ grid: {{ ... }} }})",
+                                      path));
+        continue;
+      }
+      read_grid(item["grid"], path + ".grid");
+      continue;
+    }
+    auto p = read_params(item, path, specs, {}, -1, "particle");
+    if (!p) continue;
+    x_.push_back(p->vec3("position"));
+    v_.push_back(p->vec3("velocity"));
+    m_.push_back(p->real("mass"));
+    fixed_.push_back(p->boolean("fixed") ? 1 : 0);
+  }
+  if (diags_.size() != before) particles_ok_ = false;
+  if (particles_ok_ && x_.empty()) {
+    error(n, "particles", "particles: the scene has no particles (expected at least one "
+                          "particle or builder)");
+    particles_ok_ = false;
+  }
+}
+
+// A rectangular sheet of nx x ny particles at origin + i u + j v; particle
+// (i, j) gets index base + j nx + i. Springs per Provot's cloth model:
+// structural (neighbours), shear (diagonals), bend (second neighbours).
+void Loader::read_grid(const YAML::Node& g, const std::string& path) {
+  if (!check_map(g, path, "grid: { origin, u, v, nx, ny, mass, ... }")) return;
+  auto p = read_params(g, path, grid_specs(), {"springs"}, -1, "grid");
+  if (!p) return;
+  const std::int64_t nx = p->integer("nx"), ny = p->integer("ny");
+  if (nx * ny > (static_cast<std::int64_t>(1) << 28)) {
+    error(g, path, fmt::format("{}: {} x {} particles is too many (expected at most 2^28)", path,
+                               nx, ny));
+    return;
+  }
+  const Index base = static_cast<Index>(x_.size());
+  auto id = [&](std::int64_t i, std::int64_t j) { return base + j * nx + i; };
+  const Vec3 origin = p->vec3("origin"), u = p->vec3("u"), v = p->vec3("v");
+  const Vec3 vel = p->vec3("velocity");
+  std::vector<Index> members;
+  members.reserve(static_cast<std::size_t>(nx * ny));
+  for (std::int64_t j = 0; j < ny; ++j) {
+    for (std::int64_t i = 0; i < nx; ++i) {
+      x_.push_back(origin + static_cast<double>(i) * u + static_cast<double>(j) * v);
+      v_.push_back(vel);
+      m_.push_back(p->real("mass"));
+      fixed_.push_back(0);
+      members.push_back(id(i, j));
+    }
+  }
+  if (p->has("pin")) {
+    const auto& pins = p->pairs("pin");
+    for (std::size_t k = 0; k < pins.size(); ++k) {
+      std::int64_t i = pins[k][0], j = pins[k][1];
+      if (i < 0) i += nx;
+      if (j < 0) j += ny;
+      if (i < 0 || i >= nx || j < 0 || j >= ny) {
+        error(g["pin"][k], fmt::format("{}.pin[{}]", path, k),
+              fmt::format("{}.pin[{}]: [{}, {}] is outside the {} x {} grid (expected i in "
+                          "-{}..{}, j in -{}..{})",
+                          path, k, pins[k][0], pins[k][1], nx, ny, nx, nx - 1, ny, ny - 1));
+        continue;
+      }
+      fixed_[static_cast<std::size_t>(id(i, j))] = 1;
+    }
+  }
+  if (p->has("name")) {
+    const std::string& name = p->string("name");
+    if (!groups_.emplace(name, std::move(members)).second) {
+      error(g["name"], path + ".name",
+            fmt::format("{}.name: group '{}' is already defined (expected a unique name)", path,
+                        name));
+    }
+  }
+  const YAML::Node springs = g["springs"];
+  if (!springs.IsDefined() || springs.IsNull()) return;
+  const std::string sp = path + ".springs";
+  if (!check_map(springs, sp, "springs: { structural: { ks, kd }, shear: {...}, bend: {...} }")) {
+    return;
+  }
+  check_keys(springs, sp, {"structural", "shear", "bend"}, "springs");
+  const PluginRecord* spring = nullptr;
+  for (const char* family : {"structural", "shear", "bend"}) {
+    const YAML::Node s = springs[family];
+    if (!s.IsDefined()) continue;
+    const std::string fp = sp + "." + family;
+    if (!check_map(s, fp, "{ ks: N/m, kd: N s/m }")) continue;
+    if (!spring) {
+      registry_.require_healthy("spring");
+      spring = registry_.find(PluginKind::Force, "spring");
+      if (!spring) {
+        error(s, fp, fmt::format("{}: grid springs need the 'spring' force plugin, which was "
+                                 "not found (expected it on the plugin path)",
+                                 fp));
+        return;
+      }
+    }
+    std::vector<IndexPair> pairs;
+    const std::string f = family;
+    for (std::int64_t j = 0; j < ny; ++j) {
+      for (std::int64_t i = 0; i < nx; ++i) {
+        if (f == "structural") {
+          if (i + 1 < nx) pairs.push_back({id(i, j), id(i + 1, j)});
+          if (j + 1 < ny) pairs.push_back({id(i, j), id(i, j + 1)});
+        } else if (f == "shear") {
+          if (i + 1 < nx && j + 1 < ny) {
+            pairs.push_back({id(i, j), id(i + 1, j + 1)});
+            pairs.push_back({id(i + 1, j), id(i, j + 1)});
+          }
+        } else {
+          if (i + 2 < nx) pairs.push_back({id(i, j), id(i + 2, j)});
+          if (j + 2 < ny) pairs.push_back({id(i, j), id(i, j + 2)});
+        }
+      }
+    }
+    if (pairs.empty()) continue;
+    auto params = read_plugin_params(s, fp, *spring, {"pairs"});
+    if (!params) continue;
+    params->set("pairs", std::move(pairs));
+    builder_forces_.push_back({spring, std::move(*params), s, fp});
+  }
+}
+
+const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::string& path,
+                                        PluginKind kind) {
+  const YAML::Node t = item["type"];
+  const char* kname = kind_name(kind);
+  if (!t.IsDefined() || t.IsNull()) {
+    error(item, path, fmt::format("{}: missing key 'type' (expected the name of a {} plugin: {})",
+                                  path, kname, join(registry_.names(kind))));
+    return nullptr;
+  }
+  if (!t.IsScalar() || !is_valid_plugin_name(t.Scalar())) {
+    error(t, path + ".type",
+          fmt::format("{}.type: '{}' is not a plugin name (expected [a-z0-9_]+, one of: {})",
+                      path, t.IsScalar() ? t.Scalar() : "a list or mapping",
+                      join(registry_.names(kind))));
+    return nullptr;
+  }
+  const std::string name = t.Scalar();
+  if (const PluginRecord* r = registry_.find(kind, name)) {
+    registry_.require_healthy(name);
+    return r;
+  }
+  registry_.require_healthy(name);  // a library for it exists but is broken: exit 3
+  if (const PluginRecord* other = registry_.find_any(name)) {
+    error(t, path + ".type",
+          fmt::format("{}.type: '{}' is a {} plugin, not a {} (expected one of: {})", path, name,
+                      kind_name(other->descriptor->kind), kname, join(registry_.names(kind))));
+    return nullptr;
+  }
+  const auto names = registry_.names(kind);
+  const std::string guess = closest_match(name, names);
+  error(t, path + ".type",
+        fmt::format("{}.type: unknown {} type '{}' ({}expected one of: {})", path, kname, name,
+                    guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess),
+                    names.empty() ? "none found on the plugin path" : join(names)));
+  return nullptr;
+}
+
+std::optional<Params> Loader::read_plugin_params(const YAML::Node& item, const std::string& path,
+                                                 const PluginRecord& rec,
+                                                 const std::vector<std::string>& generated) {
+  std::vector<ParamSpec> specs;
+  for (const auto& s : rec.descriptor->params) {
+    if (std::find(generated.begin(), generated.end(), s.name) == generated.end()) {
+      specs.push_back(s);
+    }
+  }
+  const Index n = particles_ok_ ? static_cast<Index>(x_.size()) : -1;
+  const bool is_builder = !generated.empty();
+  return read_params(item, path, specs, is_builder ? std::vector<std::string>{}
+                                                   : std::vector<std::string>{"type"},
+                     n, rec.descriptor->name.c_str());
+}
+
+void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
+                              std::vector<PendingPlugin>& out) {
+  if (!n.IsDefined() || n.IsNull()) return;
+  if (!n.IsSequence()) {
+    error(n, section, fmt::format("{}: is not a list (expected a list of {{ type: NAME, ... }})",
+                                  section));
+    return;
+  }
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const YAML::Node item = n[i];
+    const std::string path = fmt::format("{}[{}]", section, i);
+    if (!check_map(item, path, "{ type: NAME, parameters... }")) continue;
+    const PluginRecord* rec = find_plugin(item, path, kind);
+    if (!rec) continue;
+    auto params = read_plugin_params(item, path, *rec, {});
+    if (params) out.push_back({rec, std::move(*params), item, path});
+  }
+}
+
+void Loader::read_output(const YAML::Node& n, Scene& scene) {
+  if (!n.IsDefined() || n.IsNull()) return;
+  if (!check_map(n, "output", "output: { path: FILE.csv, every: N, energy: FILE.csv }")) return;
+  auto p = read_params(n, "output", output_specs(), {}, -1, "output");
+  if (!p) return;
+  if (p->has("path")) scene.output.path = p->string("path");
+  if (p->has("energy")) scene.output.energy = p->string("energy");
+  scene.output.every = p->integer("every");
+  if (!scene.output.path.empty() && scene.output.path == scene.output.energy) {
+    error(n["energy"], "output.energy",
+          "output.energy: is the same file as output.path (expected a different file)");
+  }
+}
+
+template <class Create>
+auto Loader::create(const PendingPlugin& p, Create&& create_fn) -> decltype(create_fn()) {
+  try {
+    return create_fn();
+  } catch (const ParamError& e) {
+    YAML::Node at = p.node[e.param()];
+    std::string path = p.path + "." + e.param();
+    if (at.IsDefined() && e.element() >= 0 && at.IsSequence() &&
+        static_cast<std::size_t>(e.element()) < at.size()) {
+      at.reset(at[e.element()]);
+      path += fmt::format("[{}]", e.element());
+    }
+    error(at.IsDefined() ? at : p.node, path, fmt::format("{}: {}", path, e.what()));
+  } catch (const PluginError&) {
+    throw;
+  } catch (const std::exception& e) {
+    error(p.node, p.path,
+          fmt::format("{}: plugin '{}' refused its parameters: {}", p.path,
+                      p.record->descriptor->name, e.what()));
+  }
+  return nullptr;
+}
+
+Scene Loader::load(const std::string& text) {
+  Scene scene;
+  scene.file = file_;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    diags_.push_back({fmt::format("{}:{}:{}", file_, e.mark.line + 1, e.mark.column + 1),
+                      fmt::format("malformed YAML: {} (expected valid YAML)", e.msg)});
+    fail();
+  } catch (const YAML::Exception& e) {
+    diags_.push_back({file_, fmt::format("malformed YAML: {} (expected valid YAML)", e.msg)});
+    fail();
+  }
+  if (!root.IsDefined() || root.IsNull()) {
+    diags_.push_back({file_, "the scene is empty (expected the sections simulation, particles, "
+                             "and optionally output, forces, colliders)"});
+    fail();
+  }
+  if (!root.IsMap()) {
+    error(root, "", "the scene is not a mapping (expected the sections simulation, particles, "
+                    "and optionally output, forces, colliders)");
+    fail();
+  }
+  apply_overrides(root);
+  if (!diags_.empty()) fail();
+
+  check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"}, "scene");
+  read_simulation(root["simulation"], scene);
+  read_particles(root["particles"]);
+  std::vector<PendingPlugin> forces, colliders, solvers;
+  read_plugin_list(root["forces"], "forces", PluginKind::Force, forces);
+  read_plugin_list(root["colliders"], "colliders", PluginKind::Collider, colliders);
+  const YAML::Node sim = root["simulation"];
+  if (sim.IsMap() && sim["solver"].IsDefined() && !sim["solver"].IsNull()) {
+    const YAML::Node s = sim["solver"];
+    if (check_map(s, "simulation.solver", "{ type: NAME, parameters... }")) {
+      if (const PluginRecord* rec = find_plugin(s, "simulation.solver", PluginKind::Solver)) {
+        if (auto params = read_plugin_params(s, "simulation.solver", *rec, {})) {
+          solvers.push_back({rec, std::move(*params), s, "simulation.solver"});
+        }
+      }
+    }
+  } else {
+    registry_.require_healthy("rk4");
+    if (const PluginRecord* rec = registry_.find(PluginKind::Solver, "rk4")) {
+      solvers.push_back({rec, Params{}, sim, "simulation"});
+      for (const auto& spec : rec->descriptor->params) {
+        if (spec.fallback) solvers.back().params.set(spec.name, *spec.fallback);
+      }
+    } else {
+      diags_.push_back({file_, "simulation: no solver is given and the default 'rk4' was not "
+                               "found (expected simulation.solver: { type: NAME })"});
+    }
+  }
+  read_output(root["output"], scene);
+  if (!diags_.empty()) fail();
+
+  // Assemble. Everything is valid as far as the descriptors can tell; the
+  // factories may still refuse values (ParamError), reported the same way.
+  const Index n = static_cast<Index>(x_.size());
+  Matrix3X x(3, n), v(3, n);
+  Eigen::VectorXd m(n);
+  for (Index i = 0; i < n; ++i) {
+    x.col(i) = x_[i];
+    v.col(i) = v_[i];
+    m(i) = m_[i];
+  }
+  scene.system = std::make_unique<System>();
+  scene.system->set_particles(x, v, m, fixed_);
+  scene.groups = groups_;
+  const SceneContext ctx{scene.system->view(), &scene.groups};
+  auto label = [&](const PendingPlugin& p) {
+    return fmt::format("{} ({})", p.record->descriptor->name, where(p.node, p.path));
+  };
+  for (const auto* list : {&builder_forces_, &forces}) {
+    for (const auto& p : *list) {
+      auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
+      if (f) scene.system->add_force(std::move(f), label(p));
+    }
+  }
+  for (const auto& p : colliders) {
+    auto c = create(p, [&] { return registry_.create_collider(*p.record, p.params, ctx); });
+    if (c) scene.system->add_collider(std::move(c), label(p));
+  }
+  for (const auto& p : solvers) {
+    scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
+    scene.solver_name = p.record->descriptor->name;
+  }
+  if (!diags_.empty()) fail();
+  return scene;
+}
+
+}  // namespace
+
+Scene load_scene_text(const std::string& text, const std::string& file,
+                      const PluginRegistry& registry, const std::vector<Override>& overrides) {
+  return Loader(file, registry, overrides).load(text);
+}
+
+Scene load_scene(const fs::path& file, const PluginRegistry& registry,
+                 const std::vector<Override>& overrides) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    throw SceneError({{file.string(), "cannot read the scene file (expected a readable YAML "
+                                      "file)"}});
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return load_scene_text(ss.str(), file.string(), registry, overrides);
+}
+
+}  // namespace pdyn

@@ -1,0 +1,126 @@
+// The particle system: Witkin's derivative evaluation loop.
+#include "pdyn/system.hpp"
+
+#include "pdyn/error.hpp"
+
+namespace pdyn {
+
+void System::set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::VectorXd& mass,
+                           const std::vector<std::uint8_t>& fixed) {
+  const Index n = mass.size();
+  if (x.cols() != n || v.cols() != n || static_cast<Index>(fixed.size()) != n) {
+    throw Error("System::set_particles: x, v, mass and fixed must have the same length");
+  }
+  state_.resize(6 * n);
+  mass_ = mass;
+  fixed_ = fixed;
+  positions() = x;
+  velocities() = v;
+  for (Index i = 0; i < n; ++i) {
+    if (fixed_[i]) velocities().col(i).setZero();
+  }
+  force_.setZero(3, n);
+  accel_.setZero(3, n);
+  update_inverse_mass();
+}
+
+Index System::add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed) {
+  const Index n = size();
+  Matrix3X xs(3, n + 1), vs(3, n + 1);
+  xs.leftCols(n) = positions();
+  vs.leftCols(n) = velocities();
+  xs.col(n) = x;
+  vs.col(n) = v;
+  Eigen::VectorXd m(n + 1);
+  m.head(n) = mass_;
+  m(n) = mass;
+  std::vector<std::uint8_t> f = fixed_;
+  f.push_back(fixed ? 1 : 0);
+  set_particles(xs, vs, m, f);
+  return n;
+}
+
+void System::set_fixed(Index i, bool fixed) {
+  fixed_.at(static_cast<std::size_t>(i)) = fixed ? 1 : 0;
+  if (fixed) velocities().col(i).setZero();
+  update_inverse_mass();
+}
+
+void System::update_inverse_mass() {
+  inv_mass_.resize(mass_.size());
+  for (Index i = 0; i < mass_.size(); ++i) inv_mass_(i) = fixed_[i] ? 0.0 : 1.0 / mass_(i);
+}
+
+void System::add_force(std::shared_ptr<Force> force, std::string label) {
+  forces_.push_back({std::move(force), std::move(label)});
+}
+
+void System::add_collider(std::shared_ptr<Collider> collider, std::string label) {
+  colliders_.push_back({std::move(collider), std::move(label)});
+}
+
+void System::get_state(Eigen::Ref<Eigen::VectorXd> y) const { y = state_; }
+
+void System::set_state(const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (y.size() != state_.size()) throw Error("System::set_state: wrong state dimension");
+  state_ = y;
+}
+
+ParticleView System::view() const noexcept {
+  return ParticleView{time_, positions(), velocities(),
+                      Eigen::Map<const Eigen::VectorXd>(mass_.data(), mass_.size()),
+                      std::span<const std::uint8_t>(fixed_.data(), fixed_.size())};
+}
+
+// Witkin's loop, steps 1 and 2 (clear accumulators, invoke force objects),
+// followed by the colliders' contact forces, which must see the total force.
+void System::evaluate_forces() {
+  force_.setZero();
+  const ParticleView p = view();
+  for (auto& entry : forces_) entry.force->add_forces(p, force_);
+  for (auto& entry : colliders_) entry.collider->apply_contact_forces(p, force_);
+}
+
+// Step 3, the gather: [v | f/m]. A fixed particle has zero velocity (nailing
+// zeroes it and its acceleration is zero) and zero inverse mass, so both
+// halves vanish for it without a branch.
+void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
+  evaluate_forces();
+  const Index n = size();
+  dydt.head(3 * n) = state_.tail(3 * n);
+  Eigen::Map<Matrix3X> a(dydt.data() + 3 * n, 3, n);
+  a = force_ * inv_mass_.asDiagonal();
+}
+
+const Matrix3X& System::compute_accelerations() {
+  evaluate_forces();
+  accel_ = force_ * inv_mass_.asDiagonal();
+  return accel_;
+}
+
+double System::kinetic_energy() const {
+  return 0.5 * (velocities().colwise().squaredNorm() * mass_)(0);
+}
+
+double System::potential_energy() const {
+  const ParticleView p = view();
+  double u = 0.0;
+  for (const auto& entry : forces_) {
+    if (auto e = entry.force->potential_energy(p)) u += *e;
+  }
+  return u;
+}
+
+void System::respond_to_collisions(double h) {
+  if (colliders_.empty()) return;
+  const Index n = size();
+  MutableParticleView p{time_,
+                        positions(),
+                        velocities(),
+                        Eigen::Map<const Matrix3X>(force_.data(), 3, n),
+                        Eigen::Map<const Eigen::VectorXd>(mass_.data(), n),
+                        std::span<const std::uint8_t>(fixed_.data(), fixed_.size())};
+  for (auto& entry : colliders_) entry.collider->respond(p, h);
+}
+
+}  // namespace pdyn

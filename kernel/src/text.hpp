@@ -1,0 +1,17 @@
+// Small text helpers shared by the loader and the command line.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pdyn {
+
+/// Levenshtein distance between two words.
+std::size_t edit_distance(std::string_view a, std::string_view b);
+/// The candidate closest to `word`, if close enough to be a likely typo; else "".
+std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
+/// "a, b, c"
+std::string join(const std::vector<std::string>& words, std::string_view sep = ", ");
+
+}  // namespace pdyn

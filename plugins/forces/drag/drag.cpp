@@ -1,0 +1,35 @@
+// drag: linear viscous drag, f = -k v (Witkin, SIGGRAPH '97 notes,
+// "Viscous Drag"). It removes energy, so it declares itself dissipative.
+#include <pdyn/plugin.hpp>
+
+namespace {
+
+class Drag final : public pdyn::Force {
+ public:
+  explicit Drag(double k) : k_(k) {}
+
+  void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
+    f.noalias() -= k_ * p.v;
+  }
+
+ private:
+  double k_;
+};
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Force;
+  d.name = "drag";
+  d.version = "1.0.0";
+  d.description = "linear viscous drag on every particle: f = -k v";
+  d.params = {pdyn::param::real("k", 0.1, "kg/s", "drag coefficient").at_least(0)};
+  d.force_traits.dissipative = true;
+  d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext&) {
+    return std::make_unique<Drag>(p.real("k"));
+  };
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)

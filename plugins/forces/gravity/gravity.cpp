@@ -1,0 +1,39 @@
+// gravity: constant gravitational acceleration, f = m g
+// (Witkin, SIGGRAPH '97 notes, "Gravity").
+#include <pdyn/plugin.hpp>
+
+namespace {
+
+class Gravity final : public pdyn::Force {
+ public:
+  explicit Gravity(const pdyn::Vec3& g) : g_(g) {}
+
+  void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
+    f.noalias() += g_ * p.mass.transpose();
+  }
+
+  // U = -sum m g.x, so that f = -grad U = m g.
+  std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
+    return -(g_.transpose() * p.x * p.mass)(0);
+  }
+
+ private:
+  pdyn::Vec3 g_;
+};
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Force;
+  d.name = "gravity";
+  d.version = "1.0.0";
+  d.description = "constant gravity on every particle: f = m g";
+  d.params = {pdyn::param::vec3("g", {0, 0, -9.81}, "m/s^2", "gravitational acceleration")};
+  d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext&) {
+    return std::make_unique<Gravity>(p.vec3("g"));
+  };
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)

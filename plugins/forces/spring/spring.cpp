@@ -1,0 +1,106 @@
+// spring: Witkin's damped spring, for any number of particle pairs in one
+// force object (SIGGRAPH '97 notes, "Damped Spring"):
+//
+//   dx = x_i - x_j,  dv = v_i - v_j,  L = |dx|
+//   f_i = -[ks (L - r) + kd (dv . dx) / L] dx / L,   f_j = -f_i
+//
+// The damping term acts only along the spring, so it removes relative
+// motion along dx without slowing rigid rotation. Potential U = ks (L-r)^2/2.
+#include <fmt/format.h>
+
+#include <pdyn/plugin.hpp>
+
+namespace {
+
+using pdyn::Index;
+using pdyn::IndexPair;
+
+class Spring final : public pdyn::Force {
+ public:
+  Spring(std::vector<IndexPair> pairs, std::vector<double> rest, double ks, double kd)
+      : pairs_(std::move(pairs)), rest_(std::move(rest)), ks_(ks), kd_(kd) {}
+
+  void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
+    for (std::size_t s = 0; s < pairs_.size(); ++s) {
+      const Index i = pairs_[s][0], j = pairs_[s][1];
+      const pdyn::Vec3 dx = p.x.col(i) - p.x.col(j);
+      const double len = dx.norm();
+      // Coincident ends have no direction: the spring adds nothing rather
+      // than NaN (a zero-length spring at rest exerts no force anyway).
+      if (len == 0.0) continue;
+      const pdyn::Vec3 dv = p.v.col(i) - p.v.col(j);
+      const double magnitude = ks_ * (len - rest_[s]) + kd_ * dv.dot(dx) / len;
+      const pdyn::Vec3 fi = -(magnitude / len) * dx;
+      f.col(i) += fi;
+      f.col(j) -= fi;
+    }
+  }
+
+  std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
+    double u = 0.0;
+    for (std::size_t s = 0; s < pairs_.size(); ++s) {
+      const double stretch = (p.x.col(pairs_[s][0]) - p.x.col(pairs_[s][1])).norm() - rest_[s];
+      u += 0.5 * ks_ * stretch * stretch;
+    }
+    return u;
+  }
+
+ private:
+  std::vector<IndexPair> pairs_;
+  std::vector<double> rest_;  // rest length of each pair, m
+  double ks_, kd_;
+};
+
+std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
+  const auto& pairs = p.pairs("pairs");
+  for (std::size_t s = 0; s < pairs.size(); ++s) {
+    if (pairs[s][0] == pairs[s][1]) {
+      throw pdyn::ParamError(
+          "pairs",
+          fmt::format("joins particle {} to itself (expected two different particles)",
+                      pairs[s][0]),
+          static_cast<long>(s));
+    }
+  }
+  std::vector<double> rest(pairs.size());
+  if (p.has("rest")) {
+    const auto& given = p.reals("rest");
+    if (given.size() != 1 && given.size() != pairs.size()) {
+      throw pdyn::ParamError(
+          "rest", fmt::format("has {} values for {} pairs (expected 1 value for all, or {})",
+                              given.size(), pairs.size(), pairs.size()));
+    }
+    for (std::size_t s = 0; s < pairs.size(); ++s) rest[s] = given.size() == 1 ? given[0] : given[s];
+  } else {
+    for (std::size_t s = 0; s < pairs.size(); ++s) {
+      rest[s] = (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();
+    }
+  }
+  return std::make_unique<Spring>(pairs, std::move(rest), p.real("ks"), p.real("kd"));
+}
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Force;
+  d.name = "spring";
+  d.version = "1.0.0";
+  d.description =
+      "damped springs between particle pairs: f_i = -[ks (L - r) + kd (dv.dx)/L] dx/L, f_j = -f_i";
+  d.params = {
+      pdyn::param::required("pairs", pdyn::ParamType::IndexPairs, "",
+                            "particle pairs [[i, j], ...] joined by a spring"),
+      pdyn::param::real("ks", 1.0, "N/m", "stiffness").at_least(0),
+      pdyn::param::real("kd", 0.0, "N s/m", "damping along the spring").at_least(0),
+      pdyn::param::optional("rest", pdyn::ParamType::RealList, "m",
+                            "rest lengths: one for all pairs or one per pair; default: the "
+                            "initial distances")
+          .at_least(0),
+  };
+  d.force_traits.internal = true;
+  d.create_force = create;
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)

@@ -1,0 +1,41 @@
+// midpoint: the explicit midpoint method (second-order Runge-Kutta):
+//   k1 = f(t0, y0),  k2 = f(t0 + h/2, y0 + h/2 k1),  y1 = y0 + h k2.
+#include <pdyn/plugin.hpp>
+#include <pdyn/system.hpp>
+
+namespace {
+
+class Midpoint final : public pdyn::Solver {
+ public:
+  void step(pdyn::System& sys, double h) override {
+    const double t0 = sys.time();
+    y0_ = sys.state();  // allocates only when the dimension changes
+    k_.resize(sys.dimension());
+    sys.derivative(k_);
+    sys.state() = y0_ + (0.5 * h) * k_;
+    sys.set_time(t0 + 0.5 * h);
+    sys.derivative(k_);
+    sys.state() = y0_ + h * k_;
+    sys.set_time(t0 + h);
+  }
+
+ private:
+  Eigen::VectorXd y0_, k_;
+};
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Solver;
+  d.name = "midpoint";
+  d.version = "1.0.0";
+  d.description = "explicit midpoint: y1 = y0 + h f(t0 + h/2, y0 + h/2 f(t0, y0)); order 2";
+  d.solver_traits.order = 2;
+  d.create_solver = [](const pdyn::Params&, const pdyn::SceneContext&) {
+    return std::make_unique<Midpoint>();
+  };
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)

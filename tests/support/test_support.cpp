@@ -1,0 +1,59 @@
+#include "support/test_support.hpp"
+
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "commands.hpp"
+
+namespace pdyn::test {
+
+namespace fs = std::filesystem;
+
+const PluginRegistry& shipped_plugins() {
+  static const PluginRegistry registry = [] {
+    PluginRegistry r;
+    r.discover({PDYN_PLUGIN_DIR});
+    return r;
+  }();
+  return registry;
+}
+
+Scene load_text(const std::string& yaml, const std::vector<Override>& overrides) {
+  return load_scene_text(yaml, "test.yaml", shipped_plugins(), overrides);
+}
+
+CommandResult pdyn(const std::vector<std::string>& args) {
+  std::ostringstream out, err;
+  CommandResult r;
+  r.status = cli::run_command(args, out, err, false);
+  r.out = out.str();
+  r.err = err.str();
+  return r;
+}
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() /
+                       ("pdyn-test-" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  static const struct Cleanup {
+    fs::path root = fs::temp_directory_path() / ("pdyn-test-" + std::to_string(::getpid()));
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(root, ec);
+    }
+  } cleanup;
+  return dir;
+}
+
+fs::path write_file(const fs::path& path, const std::string& text) {
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+fs::path source_path(const std::string& relative) { return fs::path(PDYN_SOURCE_DIR) / relative; }
+
+}  // namespace pdyn::test

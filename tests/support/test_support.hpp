@@ -1,0 +1,37 @@
+// Helpers shared by pdyn's tests.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "registry.hpp"
+#include "runner.hpp"
+#include "scene.hpp"
+
+namespace pdyn::test {
+
+/// The registry of the shipped plugins in the build tree (discovered once).
+const PluginRegistry& shipped_plugins();
+
+/// Loads a scene from YAML text (named "test.yaml" in messages).
+Scene load_text(const std::string& yaml, const std::vector<Override>& overrides = {});
+
+/// Result of running the `pdyn` command in-process.
+struct CommandResult {
+  int status = -1;
+  std::string out, err;
+};
+/// Runs `pdyn ARGS...` in-process.
+CommandResult pdyn(const std::vector<std::string>& args);
+
+/// A fresh empty directory under the system temp folder, removed at exit.
+std::filesystem::path temp_dir(const std::string& name);
+
+/// Writes `text` to `path` (creating folders) and returns the path.
+std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text);
+
+/// Path of a file in the source tree, e.g. source_path("configs/demo.yaml").
+std::filesystem::path source_path(const std::string& relative);
+
+}  // namespace pdyn::test
