@@ -117,64 +117,154 @@ class Progress {
 
 }  // namespace
 
-RunResult run_scene(Scene& scene, const RunOptions& options) {
-  System& sys = *scene.system;
-  RunResult result;
-  std::optional<AtomicFile> frames, energy;
-  if (!scene.output.path.empty()) {
-    frames.emplace(scene.output.path);
-    std::fputs("t,id,x,y,z,vx,vy,vz\n", frames->stream());
-  }
-  if (!scene.output.energy.empty()) {
-    energy.emplace(scene.output.energy);
-    std::fputs("t,kinetic,potential,total\n", energy->stream());
-  }
-  auto emit = [&] {
-    if (frames) write_frame(frames->stream(), sys);
-    if (energy) write_energy(energy->stream(), sys);
-  };
+namespace {
 
-  const std::int64_t n_steps = scene.steps;
-  const std::int64_t every = scene.output.every;
-  Progress progress(options.progress ? options.log : nullptr, n_steps, scene.end_time);
+// Shared by the fixed-step and adaptive loops: output files and the
+// last-good-state bookkeeping.
+class Output {
+ public:
+  explicit Output(const Scene& scene) : sys_(*scene.system) {
+    if (!scene.output.path.empty()) {
+      frames_.emplace(scene.output.path);
+      std::fputs("t,id,x,y,z,vx,vy,vz\n", frames_->stream());
+    }
+    if (!scene.output.energy.empty()) {
+      energy_.emplace(scene.output.energy);
+      std::fputs("t,kinetic,potential,total\n", energy_->stream());
+    }
+  }
+  void emit() {
+    if (frames_) write_frame(frames_->stream(), sys_);
+    if (energy_) write_energy(energy_->stream(), sys_);
+  }
+  void commit() {
+    if (frames_) frames_->commit();
+    if (energy_) energy_->commit();
+  }
+
+ private:
+  const System& sys_;
+  std::optional<AtomicFile> frames_, energy_;
+};
+
+std::string blow_up_message(const System& sys, Index bad, std::int64_t step, double t) {
+  const auto x = sys.positions().col(bad);
+  return fmt::format(
+      "the state became non-finite at step {} (t = {:.17g} s): particle {} has position "
+      "[{}, {}, {}]; the last good state (step {}) was written as the final frame. Try a "
+      "smaller dt or a more stable solver.",
+      step, t, bad, x(0), x(1), x(2), step - 1);
+}
+
+// Fixed steps of dt: step k ends at t0 + k dt, computed rather than
+// accumulated so that time carries no round-off drift; the last step of a
+// `duration` run is shortened to end exactly on it.
+void run_fixed(Scene& scene, Output& out, Progress& progress, RunResult& result) {
+  System& sys = *scene.system;
+  const std::int64_t n_steps = scene.steps, every = scene.output.every;
   Eigen::VectorXd previous(sys.dimension());
   const double t0 = sys.time();
-  emit();
   bool last_written = true;
   for (std::int64_t k = 1; k <= n_steps; ++k) {
-    // Step k ends at t0 + k dt, computed rather than accumulated so that time
-    // carries no round-off drift; the last step of a `duration` run is
-    // shortened to end exactly on it.
     const double t_begin = sys.time();
-    const double t_end = k == n_steps ? t0 + scene.end_time : t0 + static_cast<double>(k) * scene.dt;
+    const double t_end =
+        k == n_steps ? t0 + scene.end_time : t0 + static_cast<double>(k) * scene.dt;
     const double h = t_end - t_begin;
     previous = sys.state();
     scene.solver->step(sys, h);
     sys.set_time(t_end);
     sys.respond_to_collisions(h);
     if (const Index bad = first_non_finite(sys); bad >= 0) {
-      const auto x = sys.positions().col(bad);
       result.exit_code = 4;
-      result.message = fmt::format(
-          "the state became non-finite at step {} (t = {:.17g} s): particle {} has position "
-          "[{}, {}, {}]; the last good state (step {}) was written as the final frame. Try a "
-          "smaller dt or a more stable solver.",
-          k, t_end, bad, x(0), x(1), x(2), k - 1);
+      result.message = blow_up_message(sys, bad, k, t_end);
       sys.state() = previous;
       sys.set_time(t_begin);
-      if (!last_written) emit();
-      break;
+      if (!last_written) out.emit();
+      return;
     }
     result.steps_done = k;
     last_written = (every > 0 && k % every == 0) || k == n_steps;
-    if (last_written) emit();
+    if (last_written) out.emit();
     progress.update(k, t_end);
+  }
+}
+
+// Adaptive steps: the solver chooses each step's length; frames are due at
+// t0 + m every dt (the times a fixed-step run would write them) and at the
+// end. With dense output a frame is interpolated inside the step that
+// crosses its time, so the step sequence does not depend on the output; a
+// solver without it is stopped at each frame time instead.
+void run_adaptive(Scene& scene, Output& out, Progress& progress, RunResult& result) {
+  System& sys = *scene.system;
+  Solver& solver = *scene.solver;
+  const double t0 = sys.time(), t_end = t0 + scene.end_time;
+  const double frame_dt = static_cast<double>(scene.output.every) * scene.dt;
+  std::int64_t next_frame = 1;
+  auto frame_time = [&](std::int64_t m) {
+    const double tf = frame_dt > 0 ? t0 + static_cast<double>(m) * frame_dt : t_end;
+    return std::min(tf, t_end);
+  };
+  Eigen::VectorXd previous(sys.dimension()), dense(sys.dimension()), current(sys.dimension());
+  // Until a step has shown that the solver interpolates, stop on frame times.
+  bool has_dense = false;
+  std::int64_t k = 0;
+  while (sys.time() < t_end) {
+    const double t_begin = sys.time();
+    const double t_stop = has_dense ? t_end : frame_time(next_frame);
+    previous = sys.state();
+    const double h = solver.advance(sys, t_stop, scene.dt);
+    ++k;
+    const double t_new = sys.time();
+    if (const Index bad = first_non_finite(sys); bad >= 0) {
+      result.exit_code = 4;
+      result.message = blow_up_message(sys, bad, k, t_new);
+      sys.state() = previous;
+      sys.set_time(t_begin);
+      out.emit();
+      result.counts = solver.counts();
+      return;
+    }
+    if (!has_dense) has_dense = solver.interpolate(t_new, dense);
+    // Frames strictly inside this step come from the dense output, before the
+    // collision response changes the state at the step's end.
+    for (double tf; next_frame >= 0 && (tf = frame_time(next_frame)) < t_new;) {
+      if (!solver.interpolate(tf, dense)) break;
+      current = sys.state();
+      sys.state() = dense;
+      sys.set_time(tf);
+      out.emit();
+      sys.state() = current;
+      sys.set_time(t_new);
+      ++next_frame;
+    }
+    sys.respond_to_collisions(h);
+    result.steps_done = k;
+    if (next_frame >= 0 && frame_time(next_frame) <= t_new) {
+      out.emit();
+      next_frame = frame_time(next_frame) >= t_end ? -1 : next_frame + 1;
+    }
+    progress.update(k, t_new);
+  }
+  result.counts = solver.counts();
+}
+
+}  // namespace
+
+RunResult run_scene(Scene& scene, const RunOptions& options) {
+  System& sys = *scene.system;
+  RunResult result;
+  Output out(scene);
+  Progress progress(options.progress ? options.log : nullptr, scene.steps, scene.end_time);
+  out.emit();
+  if (scene.solver->adaptive()) {
+    run_adaptive(scene, out, progress, result);
+  } else {
+    run_fixed(scene, out, progress, result);
   }
   progress.update(result.steps_done, sys.time(), true);
   progress.finish();
   result.time = sys.time();
-  if (frames) frames->commit();
-  if (energy) energy->commit();
+  out.commit();
   return result;
 }
 

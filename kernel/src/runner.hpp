@@ -20,6 +20,7 @@ struct RunResult {
   std::int64_t steps_done = 0;
   double time = 0.0;
   std::string message;              ///< one line for the user when exit_code != 0
+  StepCounts counts;                ///< adaptive solvers: accepted and rejected steps
 };
 
 /// Runs `scene` to its end: steps the solver, applies collider responses

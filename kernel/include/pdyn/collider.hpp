@@ -7,12 +7,12 @@
 #pragma once
 
 #include "pdyn/particles.hpp"
+#include "pdyn/plugin_object.hpp"
 
 namespace pdyn {
 
-class Collider {
+class Collider : public PluginObject {
  public:
-  virtual ~Collider() = default;
 
   /// Contact forces, during every derivative evaluation after all force
   /// objects have run: for particles in resting contact, removes the part of

@@ -10,12 +10,23 @@
 #include <optional>
 
 #include "pdyn/particles.hpp"
+#include "pdyn/plugin_object.hpp"
 
 namespace pdyn {
 
-class Force {
+/// Receives the 3 x 3 blocks of a force's Jacobians, for implicit solvers
+/// (Baraff & Witkin 1998, "Large Steps in Cloth Simulation", section 4).
+class JacobianSink {
  public:
-  virtual ~Force() = default;
+  virtual ~JacobianSink() = default;
+  /// Adds `block` to df_i/dx_j, N/m.
+  virtual void add_dfdx(Index i, Index j, const Eigen::Matrix3d& block) = 0;
+  /// Adds `block` to df_i/dv_j, N s/m.
+  virtual void add_dfdv(Index i, Index j, const Eigen::Matrix3d& block) = 0;
+};
+
+class Force : public PluginObject {
+ public:
 
   /// Adds this object's forces (N) into `f` (3 x N), for every particle it
   /// influences. Called once per derivative evaluation, after the kernel has
@@ -28,6 +39,15 @@ class Force {
   virtual std::optional<double> potential_energy(const ParticleView& p) const {
     (void)p;
     return std::nullopt;
+  }
+
+  /// Optional: adds this force's analytic Jacobians df/dx and df/dv at the
+  /// state `p` into `sink` and returns true. A force without them returns
+  /// false; implicit solvers then differentiate add_forces numerically.
+  virtual bool add_jacobians(const ParticleView& p, JacobianSink& sink) {
+    (void)p;
+    (void)sink;
+    return false;
   }
 };
 

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# pdyn quick start, for a fresh Debian 12 machine (run as root, or with sudo).
+#
+#   bash scripts/quickstart.sh demo   # install what is missing, build, run the demo
+#   bash scripts/quickstart.sh test   # install what is missing, build, run every test
+#
+# Everything comes from Debian's packages; nothing is downloaded at build time.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+what="${1:-demo}"
+case "$what" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
+
+packages=(
+  g++ cmake ninja-build            # toolchain
+  libeigen3-dev                    # math and state vectors
+  libboost-dev                     # Boost.DLL (plugin loading), header-only here
+  libyaml-cpp-dev                  # scenes
+  libfmt-dev libcli11-dev          # messages, command line
+  nlohmann-json3-dev               # pdyn plugins --json
+  libgtest-dev libgmock-dev        # tests
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "quickstart: installing ${missing[*]}"
+  sudo=""
+  [[ $(id -u) -ne 0 ]] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+cmake --preset default
+cmake --build --preset default
+
+if [[ "$what" == demo ]]; then
+  ./build/bin/pdyn run configs/demo.yaml
+else
+  ctest --preset default
+fi
