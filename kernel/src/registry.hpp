@@ -19,6 +19,18 @@ class PluginError : public Error {
   using Error::Error;
 };
 
+/// A plugin object threw while the simulation ran: exit status 3. `label`
+/// names the plugin and its place in the scene.
+class PluginRuntimeError : public PluginError {
+ public:
+  PluginRuntimeError(std::string label, const std::string& what)
+      : PluginError(label + ": " + what), label_(std::move(label)) {}
+  const std::string& label() const noexcept { return label_; }
+
+ private:
+  std::string label_;
+};
+
 /// One plugin found on the search path.
 struct PluginRecord {
   const PluginDescriptor* descriptor = nullptr;

@@ -1,20 +1,50 @@
-// The step loop: Witkin's simulation loop plus output.
+// The step loop: Witkin's simulation loop plus output, checkpoints, signals
+// and fault handling.
 #include "runner.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <optional>
+#include <csignal>
+#include <cstring>
 #include <ostream>
 
 namespace pdyn {
 
 namespace fs = std::filesystem;
 
-AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
+// ---------------------------------------------------------------------------
+// AtomicFile
+
+namespace {
+
+// Copies the first mark.bytes bytes of `source` into `dest`, returning false
+// (and copying nothing usable) if the file is shorter or its CRC differs.
+bool copy_prefix(const fs::path& source, const OutputMark& mark, std::FILE* dest) {
+  std::FILE* in = std::fopen(source.c_str(), "rb");
+  if (!in) return false;
+  boost::crc_32_type crc;
+  std::vector<char> buf(1 << 16);
+  std::uint64_t left = mark.bytes;
+  bool ok = true;
+  while (left > 0 && ok) {
+    const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(left, buf.size()));
+    const std::size_t got = std::fread(buf.data(), 1, want, in);
+    ok = got == want;
+    crc.process_bytes(buf.data(), got);
+    ok = ok && std::fwrite(buf.data(), 1, got, dest) == got;
+    left -= got;
+  }
+  std::fclose(in);
+  return ok && crc.checksum() == mark.crc;
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(fs::path path, const OutputMark* resume) : path_(std::move(path)) {
   std::error_code ec;
   if (path_.has_parent_path()) fs::create_directories(path_.parent_path(), ec);
   temp_ = path_;
@@ -24,6 +54,40 @@ AtomicFile::AtomicFile(fs::path path) : path_(std::move(path)) {
     throw Error(fmt::format("{}: cannot create output file ({})", path_.string(),
                             std::strerror(errno)));
   }
+  if (!resume) return;
+  // The final file of an interrupted run, or the temporary one of a run
+  // that was killed outright.
+  std::vector<fs::path> candidates{path_};
+  const std::string prefix = path_.filename().string() + ".tmp-";
+  const fs::path dir = path_.has_parent_path() ? path_.parent_path() : fs::path(".");
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) == 0 && e.path().filename() != temp_.filename()) {
+      candidates.push_back(e.path());
+    }
+  }
+  for (const auto& c : candidates) {
+    if (std::fseek(file_, 0, SEEK_SET) != 0) break;
+    if (copy_prefix(c, *resume, file_)) {
+      bytes_ = resume->bytes;
+      crc_ = boost::crc_32_type();
+      // Recompute the running CRC over the copied prefix: the checksum object
+      // cannot be seeded from a finished value.
+      std::fflush(file_);
+      std::FILE* again = std::fopen(temp_.c_str(), "rb");
+      std::vector<char> buf(1 << 16);
+      std::size_t got = 0;
+      while (again && (got = std::fread(buf.data(), 1, buf.size(), again)) > 0) {
+        crc_.process_bytes(buf.data(), got);
+      }
+      if (again) std::fclose(again);
+      return;
+    }
+  }
+  throw CheckpointError(fmt::format(
+      "{}: cannot resume this output: no file holds the {} bytes the checkpoint recorded "
+      "(expected the file written by the interrupted run)",
+      path_.string(), resume->bytes));
 }
 
 AtomicFile::~AtomicFile() {
@@ -32,6 +96,20 @@ AtomicFile::~AtomicFile() {
     std::error_code ec;
     fs::remove(temp_, ec);
   }
+}
+
+void AtomicFile::write(const char* data, std::size_t n) {
+  if (std::fwrite(data, 1, n, file_) != n) {
+    throw Error(fmt::format("{}: cannot write output file ({})", path_.string(),
+                            std::strerror(errno)));
+  }
+  crc_.process_bytes(data, n);
+  bytes_ += n;
+}
+
+OutputMark AtomicFile::mark() {
+  std::fflush(file_);
+  return {path_.string(), bytes_, crc_.checksum()};
 }
 
 void AtomicFile::commit() {
@@ -46,29 +124,73 @@ void AtomicFile::commit() {
   }
 }
 
+fs::path checkpoint_path(const Scene& scene) {
+  if (!scene.output.checkpoint.empty()) return scene.output.checkpoint;
+  if (!scene.output.path.empty()) return fs::path(scene.output.path).replace_extension(".ckpt");
+  return fs::path(scene.file).stem().string() + ".ckpt";
+}
+
+// ---------------------------------------------------------------------------
+// Signals
+
 namespace {
+
+std::atomic<int> g_signals{0};
+
+extern "C" void on_signal(int) {
+  // The first signal asks the loop to stop after the current step; a second
+  // one means "now": leave at once, temporary files keep temporary names.
+  if (g_signals.fetch_add(1) >= 1) ::_exit(130);
+}
+
+class SignalGuard {
+ public:
+  explicit SignalGuard(bool active) : active_(active) {
+    if (!active_) return;
+    g_signals = 0;
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~SignalGuard() {
+    if (!active_) return;
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  bool raised() const { return active_ && g_signals.load() > 0; }
+
+ private:
+  bool active_;
+  struct sigaction old_int_ {}, old_term_ {};
+};
+
+// ---------------------------------------------------------------------------
+// Output
 
 // Frames: t,id,x,y,z,vx,vy,vz with 17 significant digits, enough to
 // round-trip a double exactly.
-void write_frame(std::FILE* f, const System& sys) {
+void write_frame(AtomicFile& f, const System& sys) {
   const auto x = sys.positions();
   const auto v = sys.velocities();
   const double t = sys.time();
   fmt::memory_buffer buf;
   for (Index i = 0; i < sys.size(); ++i) {
-    fmt::format_to(std::back_inserter(buf), "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n",
-                   t, i, x(0, i), x(1, i), x(2, i), v(0, i), v(1, i), v(2, i));
+    fmt::format_to(std::back_inserter(buf),
+                   "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", t, i, x(0, i),
+                   x(1, i), x(2, i), v(0, i), v(1, i), v(2, i));
     if (buf.size() > (1 << 16)) {
-      std::fwrite(buf.data(), 1, buf.size(), f);
+      f.write(buf.data(), buf.size());
       buf.clear();
     }
   }
-  std::fwrite(buf.data(), 1, buf.size(), f);
+  f.write(buf.data(), buf.size());
 }
 
-void write_energy(std::FILE* f, const System& sys) {
+void write_energy(AtomicFile& f, const System& sys) {
   const double k = sys.kinetic_energy(), u = sys.potential_energy();
-  fmt::print(f, "{:.17g},{:.17g},{:.17g},{:.17g}\n", sys.time(), k, u, k + u);
+  f.write(fmt::format("{:.17g},{:.17g},{:.17g},{:.17g}\n", sys.time(), k, u, k + u));
 }
 
 // Index of the first particle whose position or velocity is not finite, or -1.
@@ -92,9 +214,9 @@ class Progress {
     if (!force && now - last_ < std::chrono::milliseconds(100)) return;
     last_ = now;
     const double elapsed = std::chrono::duration<double>(now - start_).count();
-    const double rate = elapsed > 0 ? static_cast<double>(step) / elapsed : 0.0;
-    const double eta = rate > 0 ? static_cast<double>(total_ - step) / rate : 0.0;
-    const double frac = total_ > 0 ? static_cast<double>(step) / static_cast<double>(total_) : 1;
+    const double frac = end_time_ > 0 ? std::min(1.0, t / end_time_) : 1.0;
+    const double rate = elapsed > 0 ? static_cast<double>(step - first_) / elapsed : 0.0;
+    const double eta = frac > 0 ? elapsed * (1 - frac) / frac : 0.0;
     constexpr int kWidth = 30;
     const int filled = static_cast<int>(frac * kWidth);
     *out_ << fmt::format("\r[{:<{}}] {:>3.0f}%  step {}/{}  t = {:.4g}/{:.4g} s  {:.0f} steps/s  "
@@ -103,6 +225,7 @@ class Progress {
                          step, total_, t, end_time_, rate, eta)
           << std::flush;
   }
+  void start_at(std::int64_t step) { first_ = step; }
   void finish() {
     if (out_) *out_ << "\n" << std::flush;
   }
@@ -110,32 +233,50 @@ class Progress {
  private:
   using Clock = std::chrono::steady_clock;
   std::ostream* out_;
-  std::int64_t total_;
+  std::int64_t total_, first_ = 0;
   double end_time_;
   Clock::time_point start_, last_;
 };
 
-}  // namespace
-
-namespace {
-
-// Shared by the fixed-step and adaptive loops: output files and the
-// last-good-state bookkeeping.
+// Everything a run writes: frames, energy rows, checkpoints.
 class Output {
  public:
-  explicit Output(const Scene& scene) : sys_(*scene.system) {
+  Output(const Scene& scene, const Checkpoint* resume)
+      : scene_(scene), sys_(*scene.system), checkpoint_(checkpoint_path(scene)) {
     if (!scene.output.path.empty()) {
-      frames_.emplace(scene.output.path);
-      std::fputs("t,id,x,y,z,vx,vy,vz\n", frames_->stream());
+      frames_.emplace(scene.output.path, resume ? &resume->frames : nullptr);
+      if (!resume) frames_->write("t,id,x,y,z,vx,vy,vz\n");
     }
     if (!scene.output.energy.empty()) {
-      energy_.emplace(scene.output.energy);
-      std::fputs("t,kinetic,potential,total\n", energy_->stream());
+      energy_.emplace(scene.output.energy, resume ? &resume->energy : nullptr);
+      if (!resume) energy_->write("t,kinetic,potential,total\n");
     }
   }
   void emit() {
-    if (frames_) write_frame(frames_->stream(), sys_);
-    if (energy_) write_energy(energy_->stream(), sys_);
+    if (frames_) write_frame(*frames_, sys_);
+    if (energy_) write_energy(*energy_, sys_);
+  }
+  fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame) {
+    Checkpoint c;
+    c.scene_file = scene_.file;
+    c.scene_text = scene_.canonical_text;
+    c.step = step;
+    c.time = sys_.time();
+    c.next_frame = next_frame;
+    c.state = sys_.state();
+    c.mass = sys_.masses();
+    c.fixed = sys_.fixed();
+    c.plugin_states.emplace_back(scene_.solver_label, scene_.solver->save_state());
+    for (const auto& f : sys_.force_objects()) {
+      c.plugin_states.emplace_back(f.label, f.force->save_state());
+    }
+    for (const auto& col : sys_.collider_objects()) {
+      c.plugin_states.emplace_back(col.label, col.collider->save_state());
+    }
+    if (frames_) c.frames = frames_->mark();
+    if (energy_) c.energy = energy_->mark();
+    write_checkpoint(checkpoint_, c);
+    return checkpoint_;
   }
   void commit() {
     if (frames_) frames_->commit();
@@ -143,109 +284,189 @@ class Output {
   }
 
  private:
+  const Scene& scene_;
   const System& sys_;
+  fs::path checkpoint_;
   std::optional<AtomicFile> frames_, energy_;
 };
 
-std::string blow_up_message(const System& sys, Index bad, std::int64_t step, double t) {
+// ---------------------------------------------------------------------------
+// The loops
+
+std::string blow_up_message(const System& sys, Index bad, std::int64_t step, double t,
+                            const std::string& culprit) {
   const auto x = sys.positions().col(bad);
   return fmt::format(
       "the state became non-finite at step {} (t = {:.17g} s): particle {} has position "
-      "[{}, {}, {}]; the last good state (step {}) was written as the final frame. Try a "
+      "[{}, {}, {}]{}; the last good state (step {}) was written as the final frame. Try a "
       "smaller dt or a more stable solver.",
-      step, t, bad, x(0), x(1), x(2), step - 1);
+      step, t, bad, x(0), x(1), x(2), culprit.empty() ? "" : "; " + culprit, step - 1);
 }
 
+// Shared state of one run's loop.
+struct Loop {
+  Scene& scene;
+  Output& out;
+  Progress& progress;
+  SignalGuard& signals;
+  RunResult& result;
+  Eigen::VectorXd previous;  // the state before the current step
+  double t_previous = 0.0;
+  bool last_written = true;  // the current state's frame has been written
+  std::int64_t next_frame = 1;  // adaptive runs: index m of the next frame, due at m every dt
+
+  // One step or accepted adaptive step: returns its length, or nothing if
+  // the run must stop (result says why; the last good state is restored).
+  std::optional<double> guarded_step(const std::function<double()>& take, std::int64_t k) {
+    System& sys = *scene.system;
+    previous = sys.state();
+    t_previous = sys.time();
+    double h = 0.0;
+    try {
+      h = take();
+      sys.respond_to_collisions(h);
+    } catch (const PluginRuntimeError& e) {
+      return stop(3, fmt::format("plugin {} at step {}", e.what(), k));
+    } catch (const std::exception& e) {
+      return stop(3, fmt::format("plugin {}: step threw at step {}: {}", scene.solver_label, k,
+                                 e.what()));
+    }
+    if (const Index bad = first_non_finite(sys); bad >= 0) {
+      const std::string culprit = replay_for_culprit(take);
+      result.message = blow_up_message(sys, bad, k, sys.time(), culprit);
+      return stop(4, result.message);
+    }
+    return h;
+  }
+
+  // Replays the failed step from the last good state with finite checks on,
+  // to name the force object that first produced a NaN or infinity.
+  std::string replay_for_culprit(const std::function<double()>& take) {
+    System& sys = *scene.system;
+    const Eigen::VectorXd bad_state = sys.state();
+    const double bad_time = sys.time();
+    sys.state() = previous;
+    sys.set_time(t_previous);
+    sys.set_finite_checks(true);
+    std::string culprit;
+    try {
+      take();
+    } catch (const PluginRuntimeError& e) {
+      culprit = fmt::format("the first non-finite force came from {}", e.what());
+    } catch (const std::exception&) {
+    }
+    sys.set_finite_checks(false);
+    sys.state() = bad_state;
+    sys.set_time(bad_time);
+    return culprit;
+  }
+
+  std::nullopt_t stop(int code, std::string message) {
+    System& sys = *scene.system;
+    result.exit_code = code;
+    result.message = std::move(message);
+    sys.state() = previous;
+    sys.set_time(t_previous);
+    if (!last_written) out.emit();
+    return std::nullopt;
+  }
+};
+
 // Fixed steps of dt: step k ends at t0 + k dt, computed rather than
-// accumulated so that time carries no round-off drift; the last step of a
-// `duration` run is shortened to end exactly on it.
-void run_fixed(Scene& scene, Output& out, Progress& progress, RunResult& result) {
+// accumulated so that time carries no round-off drift (and a resumed run
+// computes the same times); the last step of a `duration` run is shortened
+// to end exactly on it.
+void run_fixed(Loop& loop, std::int64_t k0) {
+  Scene& scene = loop.scene;
   System& sys = *scene.system;
   const std::int64_t n_steps = scene.steps, every = scene.output.every;
-  Eigen::VectorXd previous(sys.dimension());
-  const double t0 = sys.time();
-  bool last_written = true;
-  for (std::int64_t k = 1; k <= n_steps; ++k) {
-    const double t_begin = sys.time();
+  const std::int64_t ckpt_every = scene.output.checkpoint_every;
+  for (std::int64_t k = k0 + 1; k <= n_steps; ++k) {
     const double t_end =
-        k == n_steps ? t0 + scene.end_time : t0 + static_cast<double>(k) * scene.dt;
-    const double h = t_end - t_begin;
-    previous = sys.state();
-    scene.solver->step(sys, h);
-    sys.set_time(t_end);
-    sys.respond_to_collisions(h);
-    if (const Index bad = first_non_finite(sys); bad >= 0) {
-      result.exit_code = 4;
-      result.message = blow_up_message(sys, bad, k, t_end);
-      sys.state() = previous;
-      sys.set_time(t_begin);
-      if (!last_written) out.emit();
+        k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
+    auto take = [&] {
+      const double h = t_end - sys.time();
+      scene.solver->step(sys, h);
+      sys.set_time(t_end);
+      return h;
+    };
+    if (!loop.guarded_step(take, k)) return;
+    loop.result.steps_done = k;
+    loop.last_written = (every > 0 && k % every == 0) || k == n_steps;
+    if (loop.last_written) loop.out.emit();
+    if (ckpt_every > 0 && k % ckpt_every == 0 && k != n_steps) {
+      loop.result.checkpoint = loop.out.write_checkpoint_now(k, 0);
+    }
+    loop.progress.update(k, t_end);
+    if (loop.signals.raised() && k != n_steps) {
+      loop.result.exit_code = 130;
+      if (!loop.last_written) loop.out.emit();
+      loop.last_written = true;
       return;
     }
-    result.steps_done = k;
-    last_written = (every > 0 && k % every == 0) || k == n_steps;
-    if (last_written) out.emit();
-    progress.update(k, t_end);
   }
 }
 
 // Adaptive steps: the solver chooses each step's length; frames are due at
-// t0 + m every dt (the times a fixed-step run would write them) and at the
-// end. With dense output a frame is interpolated inside the step that
-// crosses its time, so the step sequence does not depend on the output; a
-// solver without it is stopped at each frame time instead.
-void run_adaptive(Scene& scene, Output& out, Progress& progress, RunResult& result) {
+// m every dt (the times a fixed-step run would write them) and at the end.
+// With dense output a frame is interpolated inside the step that crosses its
+// time, so the step sequence does not depend on the output; a solver without
+// it is stopped at each frame time instead.
+void run_adaptive(Loop& loop, std::int64_t k0) {
+  Scene& scene = loop.scene;
   System& sys = *scene.system;
   Solver& solver = *scene.solver;
-  const double t0 = sys.time(), t_end = t0 + scene.end_time;
+  const double t_end = scene.end_time;
   const double frame_dt = static_cast<double>(scene.output.every) * scene.dt;
-  std::int64_t next_frame = 1;
+  const std::int64_t ckpt_every = scene.output.checkpoint_every;
+  std::int64_t& next_frame = loop.next_frame;
   auto frame_time = [&](std::int64_t m) {
-    const double tf = frame_dt > 0 ? t0 + static_cast<double>(m) * frame_dt : t_end;
-    return std::min(tf, t_end);
+    return frame_dt > 0 ? std::min(static_cast<double>(m) * frame_dt, t_end) : t_end;
   };
-  Eigen::VectorXd previous(sys.dimension()), dense(sys.dimension()), current(sys.dimension());
+  Eigen::VectorXd dense(sys.dimension()), current(sys.dimension());
   // Until a step has shown that the solver interpolates, stop on frame times.
   bool has_dense = false;
-  std::int64_t k = 0;
-  while (sys.time() < t_end) {
+  // One accepted step, then the frames strictly inside it from the dense
+  // output, before the collision response changes the state at its end.
+  auto take = [&] {
     const double t_begin = sys.time();
-    const double t_stop = has_dense ? t_end : frame_time(next_frame);
-    previous = sys.state();
-    const double h = solver.advance(sys, t_stop, scene.dt);
-    ++k;
-    const double t_new = sys.time();
-    if (const Index bad = first_non_finite(sys); bad >= 0) {
-      result.exit_code = 4;
-      result.message = blow_up_message(sys, bad, k, t_new);
-      sys.state() = previous;
-      sys.set_time(t_begin);
-      out.emit();
-      result.counts = solver.counts();
-      return;
-    }
+    const double h = solver.advance(sys, has_dense ? t_end : frame_time(next_frame), scene.dt);
+    const double t_new = t_begin + h;
     if (!has_dense) has_dense = solver.interpolate(t_new, dense);
-    // Frames strictly inside this step come from the dense output, before the
-    // collision response changes the state at the step's end.
-    for (double tf; next_frame >= 0 && (tf = frame_time(next_frame)) < t_new;) {
+    for (double tf; (tf = frame_time(next_frame)) < t_new;) {
       if (!solver.interpolate(tf, dense)) break;
       current = sys.state();
       sys.state() = dense;
       sys.set_time(tf);
-      out.emit();
+      loop.out.emit();
       sys.state() = current;
       sys.set_time(t_new);
       ++next_frame;
     }
-    sys.respond_to_collisions(h);
-    result.steps_done = k;
-    if (next_frame >= 0 && frame_time(next_frame) <= t_new) {
-      out.emit();
-      next_frame = frame_time(next_frame) >= t_end ? -1 : next_frame + 1;
+    return h;
+  };
+  for (std::int64_t k = k0 + 1; sys.time() < t_end; ++k) {
+    if (!loop.guarded_step(take, k)) break;
+    const double t_new = sys.time();
+    loop.result.steps_done = k;
+    loop.last_written = frame_time(next_frame) <= t_new;
+    if (loop.last_written) {
+      loop.out.emit();
+      ++next_frame;
     }
-    progress.update(k, t_new);
+    const bool done = t_new >= t_end;
+    if (ckpt_every > 0 && k % ckpt_every == 0 && !done) {
+      loop.result.checkpoint = loop.out.write_checkpoint_now(k, next_frame);
+    }
+    loop.progress.update(k, t_new);
+    if (loop.signals.raised() && !done) {
+      loop.result.exit_code = 130;
+      if (!loop.last_written) loop.out.emit();
+      loop.last_written = true;
+      break;
+    }
   }
-  result.counts = solver.counts();
+  loop.result.counts = solver.counts();
 }
 
 }  // namespace
@@ -253,17 +474,28 @@ void run_adaptive(Scene& scene, Output& out, Progress& progress, RunResult& resu
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
   RunResult result;
-  Output out(scene);
+  SignalGuard signals(options.handle_signals);
+  Output out(scene, options.resume);
   Progress progress(options.progress ? options.log : nullptr, scene.steps, scene.end_time);
-  out.emit();
+  const std::int64_t k0 = options.resume ? options.resume->step : 0;
+  progress.start_at(k0);
+  if (!options.resume) out.emit();
+  Loop loop{scene, out, progress, signals, result, Eigen::VectorXd(sys.dimension())};
+  if (options.resume) loop.next_frame = options.resume->next_frame;
+  result.steps_done = k0;
   if (scene.solver->adaptive()) {
-    run_adaptive(scene, out, progress, result);
+    run_adaptive(loop, k0);
   } else {
-    run_fixed(scene, out, progress, result);
+    run_fixed(loop, k0);
   }
   progress.update(result.steps_done, sys.time(), true);
   progress.finish();
   result.time = sys.time();
+  // A checkpoint at the end of every run that keeps them, and at any early
+  // stop, so that the run can be continued or inspected.
+  if (!scene.output.checkpoint.empty() || result.exit_code != 0) {
+    result.checkpoint = out.write_checkpoint_now(result.steps_done, loop.next_frame);
+  }
   out.commit();
   return result;
 }

@@ -1,51 +1,85 @@
 // The simulation runner: steps a loaded scene and writes its output.
 #pragma once
 
+#include <boost/crc.hpp>
 #include <cstdint>
-#include <functional>
+#include <cstdio>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
+#include "checkpoint.hpp"
 #include "scene.hpp"
 
 namespace pdyn {
 
 struct RunOptions {
   bool progress = false;            ///< draw a progress bar on `log`
-  std::ostream* log = nullptr;      ///< where the progress bar and messages go
+  std::ostream* log = nullptr;      ///< where the progress bar goes
+  /// Catch SIGINT and SIGTERM: finish the current step, write the final
+  /// frame, energy row and a checkpoint, and stop with exit code 130. A
+  /// second signal exits at once (temporary files keep their temporary names).
+  bool handle_signals = false;
+  /// Continue from this checkpoint (already checked against the scene and
+  /// applied by restore_checkpoint); its output files are continued.
+  const Checkpoint* resume = nullptr;
 };
 
 struct RunResult {
-  int exit_code = 0;                ///< 0 done, 4 the state became non-finite
+  /// 0 done; 3 a plugin threw; 4 the state became non-finite; 130 interrupted.
+  int exit_code = 0;
   std::int64_t steps_done = 0;
   double time = 0.0;
   std::string message;              ///< one line for the user when exit_code != 0
   StepCounts counts;                ///< adaptive solvers: accepted and rejected steps
+  std::filesystem::path checkpoint; ///< the last checkpoint written, if any
 };
 
 /// Runs `scene` to its end: steps the solver, applies collider responses
-/// after each step, writes frames and energy rows. Output files are written
-/// under a temporary name and renamed when complete. If the state becomes
-/// NaN or infinite the run stops at that step, the last good state is
-/// restored and written as the final frame, and exit_code is 4.
+/// after each step, writes frames, energy rows and checkpoints. Output files
+/// are written under a temporary name and renamed when complete. If the
+/// state becomes NaN or infinite, or a plugin throws, the run stops at that
+/// step, the last good state is restored, written as the final frame and
+/// checkpointed. Throws CheckpointError if resumed output files do not match.
 RunResult run_scene(Scene& scene, const RunOptions& options = {});
+
+/// Applies checkpoint `c` to a freshly loaded `scene`: state, masses, fixed
+/// flags, time and every plugin's internal state. Throws CheckpointError if
+/// the checkpoint was written for another scene (unless `force`), or does not
+/// fit it. With `force`, `differences` receives one line per differing key.
+void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
+                        std::vector<std::string>* differences = nullptr);
+
+/// Where a run's checkpoint goes: output.checkpoint.path, else beside the
+/// frames file (.ckpt), else `<scene name>.ckpt` in the working directory.
+std::filesystem::path checkpoint_path(const Scene& scene);
 
 /// Writes a file under a temporary name in the same folder and renames it to
 /// its final name on commit(), so an interrupted run never leaves a file that
-/// looks finished. Abandoned (not committed) files are removed.
+/// looks finished. Abandoned (not committed) files are removed. Keeps a CRC
+/// of what was written so that a checkpoint can record it.
 class AtomicFile {
  public:
-  explicit AtomicFile(std::filesystem::path path);
+  /// Starts a new file, or, with `resume`, continues the one a checkpoint
+  /// recorded: its first resume->bytes bytes are copied from the final file
+  /// or from a temporary file an interrupted run left behind, after checking
+  /// their CRC. Throws CheckpointError if no such file matches.
+  explicit AtomicFile(std::filesystem::path path, const OutputMark* resume = nullptr);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
-  std::FILE* stream() const noexcept { return file_; }
-  /// Flushes, closes and renames to the final name. Throws Error on failure.
+  void write(const char* data, std::size_t n);
+  void write(std::string_view s) { write(s.data(), s.size()); }
+  /// Flushes and returns what has been written so far.
+  OutputMark mark();
+  /// Flushes, fsyncs, closes and renames to the final name. Throws Error on failure.
   void commit();
 
  private:
   std::filesystem::path path_, temp_;
   std::FILE* file_ = nullptr;
+  std::uint64_t bytes_ = 0;
+  boost::crc_32_type crc_;
 };
 
 }  // namespace pdyn

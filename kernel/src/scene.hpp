@@ -43,6 +43,8 @@ struct OutputSpec {
   std::filesystem::path path;    ///< frames CSV; empty: no frames
   std::filesystem::path energy;  ///< energy CSV; empty: none
   std::int64_t every = 1;        ///< a frame every `every` steps; 0: first and final only
+  std::filesystem::path checkpoint;     ///< checkpoint file; empty: none unless interrupted
+  std::int64_t checkpoint_every = 0;    ///< a checkpoint every N steps (and at the end); 0: end only
 };
 
 /// A loaded, validated scene, ready for the runner.
@@ -51,6 +53,10 @@ struct Scene {
   std::unique_ptr<System> system;
   std::shared_ptr<Solver> solver;
   std::string solver_name;
+  std::string solver_label;  ///< "rk4 (scene.yaml:3:11)", for messages
+  /// The scene after overrides, as canonical YAML without simulation.steps
+  /// and simulation.duration: what a checkpoint must match to be resumed.
+  std::string canonical_text;
   double dt = 0.0;           ///< step, s
   std::int64_t steps = 0;    ///< number of steps
   double end_time = 0.0;     ///< time after the last step, s (steps * dt, or the duration)

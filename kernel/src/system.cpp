@@ -1,7 +1,10 @@
 // The particle system: Witkin's derivative evaluation loop.
 #include "pdyn/system.hpp"
 
+#include <fmt/format.h>
+
 #include "pdyn/error.hpp"
+#include "registry.hpp"
 
 namespace pdyn {
 
@@ -72,13 +75,49 @@ ParticleView System::view() const noexcept {
                       std::span<const std::uint8_t>(fixed_.data(), fixed_.size())};
 }
 
+namespace {
+
+// Runs one plugin call; an exception from it becomes a PluginRuntimeError
+// naming the plugin object, so the user learns which scene entry failed.
+// The try block costs nothing unless something is thrown.
+template <class Call>
+void guarded(const std::string& label, const char* hook, Call&& call) {
+  try {
+    call();
+  } catch (const PluginRuntimeError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw PluginRuntimeError(label, fmt::format("{} threw: {}", hook, e.what()));
+  } catch (...) {
+    throw PluginRuntimeError(label, fmt::format("{} threw a non-standard exception", hook));
+  }
+}
+
+void check_finite(const Matrix3X& f, const std::string& label) {
+  if (f.allFinite()) return;
+  Index i = 0;
+  while (f.col(i).allFinite()) ++i;
+  throw PluginRuntimeError(label, fmt::format("produced a non-finite force on particle {}: "
+                                              "[{}, {}, {}] N",
+                                              i, f(0, i), f(1, i), f(2, i)));
+}
+
+}  // namespace
+
 // Witkin's loop, steps 1 and 2 (clear accumulators, invoke force objects),
 // followed by the colliders' contact forces, which must see the total force.
 void System::evaluate_forces() {
   force_.setZero();
   const ParticleView p = view();
-  for (auto& entry : forces_) entry.force->add_forces(p, force_);
-  for (auto& entry : colliders_) entry.collider->apply_contact_forces(p, force_);
+  for (auto& entry : forces_) {
+    guarded(entry.label, "add_forces", [&] { entry.force->add_forces(p, force_); });
+    if (finite_checks_) check_finite(force_, entry.label);
+  }
+  for (auto& entry : colliders_) {
+    guarded(entry.label, "apply_contact_forces",
+            [&] { entry.collider->apply_contact_forces(p, force_); });
+    if (finite_checks_) check_finite(force_, entry.label);
+  }
 }
 
 // Step 3, the gather: [v | f/m]. A fixed particle has zero velocity (nailing
@@ -120,7 +159,9 @@ void System::respond_to_collisions(double h) {
                         Eigen::Map<const Matrix3X>(force_.data(), 3, n),
                         Eigen::Map<const Eigen::VectorXd>(mass_.data(), n),
                         std::span<const std::uint8_t>(fixed_.data(), fixed_.size())};
-  for (auto& entry : colliders_) entry.collider->respond(p, h);
+  for (auto& entry : colliders_) {
+    guarded(entry.label, "respond", [&] { entry.collider->respond(p, h); });
+  }
 }
 
 }  // namespace pdyn

@@ -98,6 +98,11 @@ class System {
   /// Runs every collider's collision response; the kernel's runner calls it
   /// after each accepted step of length `h`.
   void respond_to_collisions(double h);
+  /// When on, every force evaluation checks each force object's output and
+  /// throws an error naming the first object that produced a NaN or infinite
+  /// force. Off by default (it costs a pass over f per force object); the
+  /// runner turns it on to replay a step that blew up.
+  void set_finite_checks(bool on) noexcept { finite_checks_ = on; }
 
   struct ForceEntry {
     std::shared_ptr<Force> force;
@@ -121,6 +126,7 @@ class System {
   Matrix3X force_;               // force accumulators, 3 x N
   Matrix3X accel_;               // f/m for compute_accelerations()
   double time_ = 0.0;
+  bool finite_checks_ = false;
   std::vector<ForceEntry> forces_;
   std::vector<ColliderEntry> colliders_;
 };

@@ -1,0 +1,240 @@
+// The checkpoint file format, version 1 (native byte order, x86-64):
+//
+//   "PDYNCKPT"                8 bytes magic
+//   u32 format version        Checkpoint::kFormatVersion
+//   u64 payload length        bytes that follow, before the CRC
+//   payload                   fields below, in this order
+//   u32 CRC-32 of payload     boost::crc_32_type
+//
+// Payload: string scene_file, string scene_text, i64 step, f64 time,
+// i64 next_frame, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
+// u64 count, count x (string label, bytes state), 2 x (string path,
+// u64 bytes, u32 crc). A string or byte block is a u64 length and its bytes.
+//
+// The length and CRC are checked before any field is parsed, and every read
+// is bounds-checked, so a truncated or corrupted file is refused whole.
+#include "checkpoint.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <boost/crc.hpp>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace pdyn {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kMagic[8] = {'P', 'D', 'Y', 'N', 'C', 'K', 'P', 'T'};
+
+class Writer {
+ public:
+  template <class T>
+  void pod(const T& v) {
+    const auto* p = reinterpret_cast<const char*>(&v);
+    buf_.append(p, sizeof(T));
+  }
+  void bytes(const void* data, std::size_t n) {
+    pod<std::uint64_t>(n);
+    buf_.append(static_cast<const char*>(data), n);
+  }
+  void string(const std::string& s) { bytes(s.data(), s.size()); }
+  const std::string& data() const { return buf_; }
+
+ private:
+  std::string buf_;
+};
+
+class Reader {
+ public:
+  Reader(const std::string& data, std::string file) : data_(data), file_(std::move(file)) {}
+  template <class T>
+  T pod() {
+    need(sizeof(T));
+    T v;
+    std::memcpy(&v, data_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  std::string bytes() {
+    const auto n = pod<std::uint64_t>();
+    need(n);
+    std::string s = data_.substr(pos_, n);
+    pos_ += n;
+    return s;
+  }
+  void doubles(double* out, std::uint64_t n) {
+    if (n > data_.size() / sizeof(double)) fail("a vector is longer than the file");
+    need(n * sizeof(double));
+    std::memcpy(out, data_.data() + pos_, n * sizeof(double));
+    pos_ += n * sizeof(double);
+  }
+  bool done() const { return pos_ == data_.size(); }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw CheckpointError(fmt::format("{}: corrupt checkpoint: {} (expected a file written by "
+                                      "pdyn run)",
+                                      file_, what));
+  }
+
+ private:
+  void need(std::uint64_t n) const {
+    if (n > data_.size() - pos_) fail("a field runs past the end of the payload");
+  }
+  const std::string& data_;
+  std::string file_;
+  std::size_t pos_ = 0;
+};
+
+std::uint32_t crc32(const std::string& s) {
+  boost::crc_32_type crc;
+  crc.process_bytes(s.data(), s.size());
+  return crc.checksum();
+}
+
+}  // namespace
+
+std::uint64_t fnv1a(const std::string& text) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+void write_checkpoint(const fs::path& path, const Checkpoint& c) {
+  Writer w;
+  w.string(c.scene_file);
+  w.string(c.scene_text);
+  w.pod(c.step);
+  w.pod(c.time);
+  w.pod(c.next_frame);
+  const std::uint64_t n = static_cast<std::uint64_t>(c.mass.size());
+  w.pod(n);
+  std::string payload = w.data();
+  payload.append(reinterpret_cast<const char*>(c.state.data()), 6 * n * sizeof(double));
+  payload.append(reinterpret_cast<const char*>(c.mass.data()), n * sizeof(double));
+  payload.append(reinterpret_cast<const char*>(c.fixed.data()), n);
+  Writer tail;
+  tail.pod<std::uint64_t>(c.plugin_states.size());
+  for (const auto& [label, bytes] : c.plugin_states) {
+    tail.string(label);
+    tail.bytes(bytes.data(), bytes.size());
+  }
+  for (const OutputMark* m : {&c.frames, &c.energy}) {
+    tail.string(m->path);
+    tail.pod(m->bytes);
+    tail.pod(m->crc);
+  }
+  payload += tail.data();
+
+  Writer file;
+  std::string out(kMagic, sizeof(kMagic));
+  file.pod(Checkpoint::kFormatVersion);
+  file.pod<std::uint64_t>(payload.size());
+  out += file.data();
+  out += payload;
+  const std::uint32_t crc = crc32(payload);
+  out.append(reinterpret_cast<const char*>(&crc), sizeof(crc));
+
+  std::error_code ec;
+  if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
+  fs::path temp = path;
+  temp += fmt::format(".tmp-{}", ::getpid());
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  bool ok = fd >= 0;
+  std::size_t done = 0;
+  while (ok && done < out.size()) {
+    const ssize_t k = ::write(fd, out.data() + done, out.size() - done);
+    if (k < 0 && errno == EINTR) continue;
+    ok = k > 0;
+    if (ok) done += static_cast<std::size_t>(k);
+  }
+  ok = ok && ::fsync(fd) == 0;
+  if (fd >= 0) ok = (::close(fd) == 0) && ok;
+  if (ok) fs::rename(temp, path, ec);
+  if (!ok || ec) {
+    fs::remove(temp, ec);
+    throw Error(fmt::format("{}: cannot write checkpoint ({})", path.string(),
+                            std::strerror(errno)));
+  }
+}
+
+Checkpoint read_checkpoint(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw CheckpointError(fmt::format("{}: cannot read checkpoint (expected a file written by "
+                                      "pdyn run)",
+                                      path.string()));
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const std::string data = ss.str();
+  const std::string file = path.string();
+  constexpr std::size_t kHeader = sizeof(kMagic) + sizeof(std::uint32_t) + sizeof(std::uint64_t);
+  if (data.size() < kHeader || std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0) {
+    throw CheckpointError(fmt::format("{}: not a pdyn checkpoint (expected a file written by "
+                                      "pdyn run)",
+                                      file));
+  }
+  std::uint32_t version = 0;
+  std::uint64_t length = 0;
+  std::memcpy(&version, data.data() + sizeof(kMagic), sizeof(version));
+  std::memcpy(&length, data.data() + sizeof(kMagic) + sizeof(version), sizeof(length));
+  if (version != Checkpoint::kFormatVersion) {
+    throw CheckpointError(fmt::format("{}: checkpoint format version {} is not supported "
+                                      "(expected version {})",
+                                      file, version, Checkpoint::kFormatVersion));
+  }
+  if (data.size() - kHeader < sizeof(std::uint32_t) ||
+      length != data.size() - kHeader - sizeof(std::uint32_t)) {
+    throw CheckpointError(fmt::format("{}: checkpoint is truncated or has trailing bytes "
+                                      "({} bytes, expected {})",
+                                      file, data.size(), kHeader + length + 4));
+  }
+  const std::string payload = data.substr(kHeader, length);
+  std::uint32_t stored = 0;
+  std::memcpy(&stored, data.data() + kHeader + length, sizeof(stored));
+  if (crc32(payload) != stored) {
+    throw CheckpointError(fmt::format("{}: checkpoint checksum mismatch: the file is corrupted "
+                                      "(expected CRC-32 {:08x}, computed {:08x})",
+                                      file, stored, crc32(payload)));
+  }
+  Reader r(payload, file);
+  Checkpoint c;
+  c.scene_file = r.bytes();
+  c.scene_text = r.bytes();
+  c.step = r.pod<std::int64_t>();
+  c.time = r.pod<double>();
+  c.next_frame = r.pod<std::int64_t>();
+  const auto n = r.pod<std::uint64_t>();
+  if (n > payload.size() / (7 * sizeof(double))) r.fail("particle count larger than the file");
+  c.state.resize(static_cast<Index>(6 * n));
+  c.mass.resize(static_cast<Index>(n));
+  r.doubles(c.state.data(), 6 * n);
+  r.doubles(c.mass.data(), n);
+  c.fixed.resize(n);
+  for (auto& f : c.fixed) f = r.pod<std::uint8_t>();
+  const auto count = r.pod<std::uint64_t>();
+  if (count > payload.size()) r.fail("plugin count larger than the file");
+  for (std::uint64_t i = 0; i < count; ++i) {
+    std::string label = r.bytes();
+    std::string bytes = r.bytes();
+    c.plugin_states.emplace_back(std::move(label),
+                                 std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
+  }
+  for (OutputMark* m : {&c.frames, &c.energy}) {
+    m->path = r.bytes();
+    m->bytes = r.pod<std::uint64_t>();
+    m->crc = r.pod<std::uint32_t>();
+  }
+  if (!r.done()) r.fail("unexpected bytes after the last field");
+  return c;
+}
+
+}  // namespace pdyn

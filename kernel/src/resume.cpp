@@ -1,0 +1,101 @@
+// Resuming from a checkpoint: match it to the scene, then apply it.
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "runner.hpp"
+
+namespace pdyn {
+
+namespace {
+
+std::string flow(const YAML::Node& n) {
+  if (!n.IsDefined()) return "(absent)";
+  YAML::Emitter e;
+  e << YAML::Flow << n;
+  return e.c_str();
+}
+
+// One line per path where the two scene trees differ.
+void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path,
+          std::vector<std::string>& out) {
+  const std::string here = path.empty() ? "(scene)" : path;
+  if (a.IsMap() && b.IsMap()) {
+    std::vector<std::string> keys;
+    for (const auto& kv : a) keys.push_back(kv.first.Scalar());
+    for (const auto& kv : b) {
+      if (!a[kv.first.Scalar()].IsDefined()) keys.push_back(kv.first.Scalar());
+    }
+    for (const auto& k : keys) {
+      diff(a[k], b[k], path.empty() ? k : path + "." + k, out);
+    }
+    return;
+  }
+  if (a.IsSequence() && b.IsSequence() && a.size() == b.size()) {
+    for (std::size_t i = 0; i < a.size(); ++i) diff(a[i], b[i], fmt::format("{}[{}]", path, i), out);
+    return;
+  }
+  const std::string fa = flow(a), fb = flow(b);
+  if (fa != fb) out.push_back(fmt::format("{}: {} in the checkpoint, {} now", here, fa, fb));
+}
+
+}  // namespace
+
+void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
+                        std::vector<std::string>* differences) {
+  System& sys = *scene.system;
+  if (c.scene_text != scene.canonical_text) {
+    std::vector<std::string> lines;
+    try {
+      diff(YAML::Load(c.scene_text), YAML::Load(scene.canonical_text), "", lines);
+    } catch (const YAML::Exception&) {
+      lines.push_back("(the checkpoint's scene text cannot be parsed)");
+    }
+    if (lines.empty()) lines.push_back("(formatting only)");
+    if (!force) {
+      throw CheckpointError(fmt::format(
+          "the checkpoint was written for a different scene ({}): {} (expected the same scene; "
+          "--force resumes anyway)",
+          c.scene_file, lines.front() + (lines.size() > 1
+                                             ? fmt::format(" and {} more", lines.size() - 1)
+                                             : "")));
+    }
+    if (differences) *differences = lines;
+  }
+  if (c.mass.size() != sys.size()) {
+    throw CheckpointError(fmt::format("the checkpoint holds {} particles but the scene has {} "
+                                      "(expected the same particles)",
+                                      c.mass.size(), sys.size()));
+  }
+  const std::size_t expected = 1 + sys.force_objects().size() + sys.collider_objects().size();
+  if (c.plugin_states.size() != expected) {
+    throw CheckpointError(fmt::format("the checkpoint holds the state of {} plugin objects but "
+                                      "the scene has {} (expected the same solver, forces and "
+                                      "colliders)",
+                                      c.plugin_states.size(), expected));
+  }
+  if (c.step > scene.steps || c.time > scene.end_time) {
+    throw CheckpointError(fmt::format("the checkpoint is at step {} (t = {} s), past the end of "
+                                      "this run (step {}, t = {} s); expected a longer run",
+                                      c.step, c.time, scene.steps, scene.end_time));
+  }
+  // Every check passed: apply. A plugin that refuses its bytes leaves the
+  // run unstarted (the caller exits), so nothing half-applied is simulated.
+  auto restore = [&](PluginObject& obj, std::size_t i) {
+    try {
+      obj.restore_state(c.plugin_states[i].second);
+    } catch (const std::exception& e) {
+      throw CheckpointError(fmt::format("{}: cannot restore its state from the checkpoint: {}",
+                                        c.plugin_states[i].first, e.what()));
+    }
+  };
+  std::size_t i = 0;
+  restore(*scene.solver, i++);
+  for (const auto& f : sys.force_objects()) restore(*f.force, i++);
+  for (const auto& col : sys.collider_objects()) restore(*col.collider, i++);
+  Matrix3X x = Eigen::Map<const Matrix3X>(c.state.data(), 3, sys.size());
+  Matrix3X v = Eigen::Map<const Matrix3X>(c.state.data() + 3 * sys.size(), 3, sys.size());
+  sys.set_particles(x, v, c.mass, c.fixed);
+  sys.set_time(c.time);
+}
+
+}  // namespace pdyn
