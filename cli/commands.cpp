@@ -5,6 +5,7 @@
 #include <fmt/ostream.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <ostream>
@@ -200,14 +201,21 @@ int cmd_plugins(const Common& c, bool json, std::ostream& out) {
     out << j.dump(2) << "\n";
     return kOk;
   }
-  out << fmt::format("{:<9} {:<12} {:<8} {:<16} {}\n", "KIND", "NAME", "VERSION", "TRAITS",
-                     "DESCRIPTION");
+  // Columns as wide as their longest entry, so that long names stay aligned.
+  std::size_t name_w = 12, version_w = 8, traits_w = 16;
+  for (const auto& r : registry.plugins()) {
+    name_w = std::max(name_w, r.descriptor->name.size());
+    version_w = std::max(version_w, r.descriptor->version.size());
+    traits_w = std::max(traits_w, traits_text(*r.descriptor).size());
+  }
+  out << fmt::format("{:<9} {:<{}} {:<{}} {:<{}} {}\n", "KIND", "NAME", name_w, "VERSION",
+                     version_w, "TRAITS", traits_w, "DESCRIPTION");
   for (PluginKind kind : {PluginKind::Force, PluginKind::Solver, PluginKind::Collider}) {
     for (const auto& r : registry.plugins()) {
       const PluginDescriptor& d = *r.descriptor;
       if (d.kind != kind) continue;
-      out << fmt::format("{:<9} {:<12} {:<8} {:<16} {}\n", kind_name(d.kind), d.name, d.version,
-                         traits_text(d), d.description);
+      out << fmt::format("{:<9} {:<{}} {:<{}} {:<{}} {}\n", kind_name(d.kind), d.name, name_w,
+                         d.version, version_w, traits_text(d), traits_w, d.description);
     }
   }
   out << "\nfrom:\n";

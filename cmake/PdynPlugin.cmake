@@ -16,6 +16,7 @@ function(pdyn_add_plugin name)
     set(ARG_OUTPUT_DIRECTORY "${PDYN_PLUGIN_OUTPUT_DIR}")
   endif()
   add_library(${name} MODULE ${ARG_SOURCES})
+  set_property(GLOBAL APPEND PROPERTY PDYN_PLUGIN_TARGETS ${name})
   target_link_libraries(${name} PRIVATE pdyn::kernel)
   set_target_properties(${name} PROPERTIES
     PREFIX ""

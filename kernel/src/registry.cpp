@@ -43,6 +43,21 @@ std::string name_from_file(const fs::path& file) {
   return stem;
 }
 
+// Boost.DLL reports a failed dlopen() as "...load() failed (dlerror system
+// message: FILE: WHY): ERRNO TEXT"; the errno text is unrelated and FILE is
+// already in the fault. Keeps WHY ("file too short", "undefined symbol: ...").
+std::string load_failure(const std::string& what, const fs::path& file) {
+  const std::string tag = "dlerror system message: ";
+  auto begin = what.find(tag);
+  const auto end = what.rfind("): ");
+  if (begin == std::string::npos || end == std::string::npos || end < begin) return what;
+  begin += tag.size();
+  std::string why = what.substr(begin, end - begin);
+  const std::string prefix = file.string() + ": ";
+  if (why.rfind(prefix, 0) == 0) why.erase(0, prefix.size());
+  return why;
+}
+
 // Checks what the host relies on before listing a plugin.
 std::string descriptor_problem(const PluginDescriptor& d) {
   if (!is_valid_plugin_name(d.name)) {
@@ -100,6 +115,7 @@ std::vector<fs::path> PluginRegistry::search_path(const std::vector<fs::path>& e
   std::set<fs::path> seen;
   for (const auto& c : candidates) {
     std::error_code fec;
+    if (!fs::is_directory(c, fec)) continue;
     const fs::path canon = fs::weakly_canonical(c, fec);
     const fs::path key = fec ? c : canon;
     if (seen.insert(key).second) dirs.push_back(key);
@@ -131,7 +147,10 @@ bool PluginRegistry::load_library(const fs::path& file) {
   try {
     lib->load(file, boost::dll::load_mode::rtld_now | boost::dll::load_mode::rtld_local);
   } catch (const std::exception& e) {
-    fault(file, hint, fmt::format("cannot load library: {}", e.what()));
+    fault(file, hint,
+          fmt::format("cannot load library: {} (expected a shared library built with "
+                      "pdyn_add_plugin against this pdyn)",
+                      load_failure(e.what(), file)));
     return false;
   }
   if (!lib->has(kAbiSymbol) || !lib->has(kDescriptorSymbol)) {

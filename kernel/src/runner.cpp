@@ -493,7 +493,7 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   result.time = sys.time();
   // A checkpoint at the end of every run that keeps them, and at any early
   // stop, so that the run can be continued or inspected.
-  if (!scene.output.checkpoint.empty() || result.exit_code != 0) {
+  if (!scene.output.checkpoint.empty() || result.exit_code == 3 || result.exit_code == 130) {
     result.checkpoint = out.write_checkpoint_now(result.steps_done, loop.next_frame);
   }
   out.commit();

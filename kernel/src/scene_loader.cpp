@@ -115,6 +115,32 @@ std::string expectation(const ParamSpec& s) {
   return e;
 }
 
+// What yaml-cpp's terse parser messages usually mean, as the expectation.
+std::string yaml_hint(const std::string& text, const YAML::ParserException& e) {
+  std::istringstream lines(text);
+  std::string line;
+  for (int i = 0; i <= e.mark.line; ++i) {
+    if (!std::getline(lines, line)) line.clear();
+  }
+  const auto indent = line.find_first_not_of(" \t");
+  if (line.substr(0, indent).find('\t') != std::string::npos) {
+    return "expected indentation with spaces: YAML does not allow tabs there";
+  }
+  const std::string& m = e.msg;
+  if (m == "illegal map value") {
+    return "expected 'key: value' lines of one mapping indented alike, with spaces";
+  }
+  if (m == "illegal flow end") {
+    return "expected every '[' closed by ']' and every '{' by '}', innermost first";
+  }
+  if (m == "end of map flow not found") return "expected a '}' closing the '{'";
+  if (m == "end of sequence flow not found") return "expected a ']' closing the '['";
+  if (m == "end of map not found" || m == "end of sequence not found") {
+    return "expected the entries of one mapping or list indented alike";
+  }
+  return "expected valid YAML";
+}
+
 // A queued force or collider: created once all particles exist.
 struct PendingPlugin {
   const PluginRecord* record;
@@ -181,6 +207,7 @@ class Loader {
   const PluginRegistry& registry_;
   std::vector<Override> overrides_;
   std::vector<Diagnostic> diags_;
+  YAML::Node root_;  // the whole scene: where a missing section is reported
 
   // particles as read
   std::vector<Vec3> x_, v_;
@@ -208,6 +235,10 @@ std::string Loader::where(const YAML::Node& at, const std::string& path) const {
     const YAML::Mark m = at.Mark();
     if (m.line >= 0) return fmt::format("{}:{}:{}", file_, m.line + 1, m.column + 1);
   }
+  // Nor does a mapping that --set created on the way to its value.
+  for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {
+    if (path_within(it->path, path)) return fmt::format("--set {}={}", it->path, it->value);
+  }
   return file_;
 }
 
@@ -234,7 +265,8 @@ void Loader::check_keys(const YAML::Node& map, const std::string& path,
     const std::string key_path = path.empty() ? key : path + "." + key;
     if (!seen.insert(key).second) {
       error(kv.first, key_path,
-            fmt::format("{}: duplicate key '{}' (expected each key once)", path, key));
+            fmt::format("duplicate key '{}' in {} (expected each key once)", key,
+                        path.empty() ? "the scene" : path));
       continue;
     }
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
@@ -516,10 +548,18 @@ void Loader::apply_overrides(YAML::Node& root) {
       const Step& st = steps[k];
       const bool last = k + 1 == steps.size();
       if (st.index >= 0) {
-        if (!cur.IsSequence() || static_cast<std::size_t>(st.index) >= cur.size()) {
-          bad(fmt::format("{} has no element [{}] (expected an index below {})",
-                          walked.empty() ? "the scene" : walked, st.index,
-                          cur.IsSequence() ? cur.size() : 0));
+        const std::string here = walked.empty() ? "the scene" : walked;
+        if (!cur.IsSequence()) {
+          bad(fmt::format("{} is {}, so it has no element [{}] (expected a key path into "
+                          "the scene's existing lists)",
+                          here, cur.IsDefined() && !cur.IsNull() ? "not a list" : "not in the scene",
+                          st.index));
+          ok = false;
+          break;
+        }
+        if (static_cast<std::size_t>(st.index) >= cur.size()) {
+          bad(fmt::format("{} has no element [{}] (expected an index below {})", here, st.index,
+                          cur.size()));
           ok = false;
           break;
         }
@@ -532,7 +572,9 @@ void Loader::apply_overrides(YAML::Node& root) {
         }
       } else {
         if (!(cur.IsMap() || cur.IsNull())) {
-          bad(fmt::format("{} is not a mapping, so it has no key '{}'", walked, st.key));
+          bad(fmt::format("{} is not a mapping, so it has no key '{}' (expected a key path "
+                          "that follows the scene's mappings)",
+                          walked, st.key));
           ok = false;
           break;
         }
@@ -540,7 +582,12 @@ void Loader::apply_overrides(YAML::Node& root) {
         if (last) {
           cur[st.key] = value;
         } else {
+          // A missing mapping on the way is created: --set output.path=... works
+          // for a scene without an output section.
           YAML::Node next = cur[st.key];
+          if (!next.IsDefined() && steps[k + 1].index < 0) {
+            next = YAML::Node(YAML::NodeType::Map);
+          }
           cur.reset(next);
         }
       }
@@ -553,8 +600,7 @@ void Loader::apply_overrides(YAML::Node& root) {
 
 void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   if (!n.IsDefined()) {
-    diags_.push_back({file_, "missing section 'simulation' (expected simulation: { dt: ..., "
-                             "steps: ... } )"});
+    error(root_, "", "missing section 'simulation' (expected simulation: { dt: ..., steps: ... })");
     return;
   }
   if (!check_map(n, "simulation", "simulation: { dt: ..., steps: ..., solver: { type: ... } }")) {
@@ -567,22 +613,40 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   if (p) {
     scene.dt = p->real("dt");
     const bool has_steps = p->has("steps"), has_duration = p->has("duration");
-    if (has_steps == has_duration) {
+    if (has_steps && has_duration) {
+      // Point at the one a --set added, else at the one given last.
+      auto from_set = [&](const char* key) {
+        return where(n[key], fmt::format("simulation.{}", key)).rfind("--set ", 0) == 0;
+      };
+      auto mark = [&](const char* key) {
+        const YAML::Mark m = n[key].Mark();
+        return std::pair(m.line, m.column);
+      };
+      const bool at_steps =
+          from_set("steps") || (!from_set("duration") && mark("steps") > mark("duration"));
+      const char* key = at_steps ? "steps" : "duration";
+      error(n[key], fmt::format("simulation.{}", key),
+            fmt::format("simulation.{}: both 'steps' and 'duration' are given (expected one of "
+                        "them)",
+                        key));
+    } else if (!has_steps && !has_duration) {
       error(n, "simulation",
-            has_steps ? "simulation: both 'steps' and 'duration' are given (expected one of them)"
-                      : "simulation: neither 'steps' nor 'duration' is given (expected one of "
-                        "them, e.g. steps: 1000)");
+            "simulation: neither 'steps' nor 'duration' is given (expected one of them, e.g. "
+            "steps: 1000)");
     } else if (has_steps) {
       scene.steps = p->integer("steps");
       scene.end_time = static_cast<double>(scene.steps) * scene.dt;
     } else {
       // The last step is shortened so that the run ends exactly at `duration`.
       scene.end_time = p->real("duration");
-      scene.steps = static_cast<std::int64_t>(std::ceil(scene.end_time / scene.dt - 1e-9));
-      if (scene.steps > static_cast<std::int64_t>(1) << 40) {
+      // Compared as a double: duration / dt may not fit an integer at all.
+      const double steps = std::ceil(scene.end_time / scene.dt - 1e-9);
+      if (!(steps <= static_cast<double>(static_cast<std::int64_t>(1) << 40))) {
         error(n["duration"], "simulation.duration",
               "simulation.duration: needs more than 2^40 steps (expected a duration / dt that a "
               "run can reach)");
+      } else {
+        scene.steps = static_cast<std::int64_t>(steps);
       }
     }
   }
@@ -595,8 +659,8 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
 
 void Loader::read_particles(const YAML::Node& n) {
   if (!n.IsDefined()) {
-    diags_.push_back({file_, "missing section 'particles' (expected a list of particles or "
-                             "builders, e.g. - { position: [0, 0, 1], mass: 1 })"});
+    error(root_, "", "missing section 'particles' (expected a list of particles or builders, "
+                     "e.g. - { position: [0, 0, 1], mass: 1 })");
     particles_ok_ = false;
     return;
   }
@@ -856,15 +920,15 @@ Scene Loader::load(const std::string& text) {
     root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     diags_.push_back({fmt::format("{}:{}:{}", file_, e.mark.line + 1, e.mark.column + 1),
-                      fmt::format("malformed YAML: {} (expected valid YAML)", e.msg)});
+                      fmt::format("malformed YAML: {} ({})", e.msg, yaml_hint(text, e))});
     fail();
   } catch (const YAML::Exception& e) {
     diags_.push_back({file_, fmt::format("malformed YAML: {} (expected valid YAML)", e.msg)});
     fail();
   }
   if (!root.IsDefined() || root.IsNull()) {
-    diags_.push_back({file_, "the scene is empty (expected the sections simulation, particles, "
-                             "and optionally output, forces, colliders)"});
+    diags_.push_back({file_ + ":1:1", "the scene is empty (expected the sections simulation, "
+                                      "particles, and optionally output, forces, colliders)"});
     fail();
   }
   if (!root.IsMap()) {
@@ -874,6 +938,7 @@ Scene Loader::load(const std::string& text) {
   }
   apply_overrides(root);
   if (!diags_.empty()) fail();
+  root_.reset(root);
 
   check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"}, "scene");
   read_simulation(root["simulation"], scene);
@@ -899,8 +964,9 @@ Scene Loader::load(const std::string& text) {
         if (spec.fallback) solvers.back().params.set(spec.name, *spec.fallback);
       }
     } else {
-      diags_.push_back({file_, "simulation: no solver is given and the default 'rk4' was not "
-                               "found (expected simulation.solver: { type: NAME })"});
+      error(sim.IsDefined() ? sim : root, "simulation",
+            "simulation: no solver is given and the default 'rk4' was not found (expected "
+            "simulation.solver: { type: NAME })");
     }
   }
   read_output(root["output"], scene);
