@@ -53,7 +53,35 @@ struct RunArgs {
   std::string scene;
   std::optional<std::int64_t> steps;
   std::optional<double> duration;
+  std::string resume;    // checkpoint to continue from
+  bool force = false;    // resume even if the scene changed
+  std::vector<std::string> argv;  // the command as given, to print how to resume
 };
+
+// A word as a POSIX shell reads it back.
+std::string shell_quote(const std::string& w) {
+  if (!w.empty() && w.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789_-./=:,+@%") == std::string::npos) {
+    return w;
+  }
+  std::string q = "'";
+  for (char ch : w) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  return q + "'";
+}
+
+// "pdyn run ... --resume CKPT": the same command, continued from `checkpoint`.
+std::string resume_command(const RunArgs& a, const fs::path& checkpoint) {
+  std::string cmd = "pdyn";
+  for (std::size_t i = 0; i < a.argv.size(); ++i) {
+    if (a.argv[i] == "--resume") {
+      ++i;
+      continue;
+    }
+    if (a.argv[i].rfind("--resume=", 0) == 0) continue;
+    cmd += " " + shell_quote(a.argv[i]);
+  }
+  return cmd + " --resume " + shell_quote(checkpoint.string());
+}
 
 Scene load(const RunArgs& a, const Common& c, const PluginRegistry& registry) {
   std::vector<Override> overrides;
@@ -78,6 +106,9 @@ int report(const std::exception_ptr& error, std::ostream& err) {
   } catch (const PluginError& e) {
     err << e.what() << "\n";
     return kPluginFault;
+  } catch (const CheckpointError& e) {
+    err << "pdyn: " << e.what() << "\n";
+    return kBadInput;
   } catch (const std::exception& e) {
     err << "pdyn: " << e.what() << "\n";
     return kFailure;
@@ -111,17 +142,43 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     RunOptions options;
     options.progress = terminal && !c.quiet;
     options.log = &err;
+    options.handle_signals = true;
+    std::optional<Checkpoint> checkpoint;
+    if (!a.resume.empty()) {
+      checkpoint = read_checkpoint(a.resume);
+      std::vector<std::string> differences;
+      restore_checkpoint(scene, *checkpoint, a.force, &differences);
+      for (const auto& d : differences) {
+        err << fmt::format("pdyn: warning: resuming with a changed scene (--force): {}\n", d);
+      }
+      options.resume = &*checkpoint;
+    }
     const auto start = std::chrono::steady_clock::now();
     const RunResult r = run_scene(scene, options);
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (r.exit_code != 0) {
-      err << "pdyn: " << r.message << "\n";
-      return kNonFinite;
+    switch (r.exit_code) {
+      case 0:
+        break;
+      case 130:
+        err << fmt::format("pdyn: interrupted at step {} (t = {} s); resume with: {}\n",
+                           r.steps_done, r.time, resume_command(a, r.checkpoint));
+        return kInterrupted;
+      case 3:
+        err << fmt::format("pdyn: {}; the last good frame and a checkpoint ({}) were written\n",
+                           r.message, r.checkpoint.string());
+        return kPluginFault;
+      default:
+        err << "pdyn: " << r.message << "\n";
+        return kNonFinite;
     }
     if (!c.quiet) {
-      out << fmt::format("pdyn: {} steps of {} particles with {} to t = {} s in {:.3g} s\n",
-                         r.steps_done, scene.system->size(), scene.solver_name, r.time, wall);
+      out << fmt::format("pdyn: {} steps of {} particles with {} to t = {} s in {:.3g} s{}\n",
+                         r.steps_done, scene.system->size(), scene.solver_name, r.time, wall,
+                         scene.solver->adaptive()
+                             ? fmt::format(" ({} steps accepted, {} rejected)", r.counts.accepted,
+                                           r.counts.rejected)
+                             : "");
       if (!scene.output.path.empty()) {
         out << fmt::format("pdyn: frames written to {}\n", fs::absolute(scene.output.path).string());
       }
@@ -286,6 +343,10 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   run->add_option("--duration", run_args.duration, "simulated time in s (replaces the scene's)")
       ->check(CLI::NonNegativeNumber)
       ->excludes(steps);
+  run->add_option("--resume", run_args.resume,
+                  "continue from a checkpoint written by an earlier run of this scene");
+  run->add_flag("--force", run_args.force,
+                "with --resume: continue even if the scene changed (says what differs)");
 
   CLI::App* validate = app.add_subcommand("validate", "check a scene without simulating");
   scene_options(validate);
@@ -313,6 +374,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
     return kBadInput;
   }
   try {
+    run_args.argv = args;
     if (run->parsed()) return cmd_run(run_args, common, out, err, terminal);
     if (validate->parsed()) return cmd_validate(run_args, common, out, err);
     if (describe_cmd->parsed()) return cmd_describe(common, describe_name, out, err);

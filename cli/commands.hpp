@@ -14,6 +14,7 @@ enum Exit : int {
   kBadInput = 2,       ///< bad scene or command line
   kPluginFault = 3,    ///< a plugin the scene needs cannot be used
   kNonFinite = 4,      ///< the simulation blew up (NaN or infinity)
+  kInterrupted = 130,  ///< SIGINT or SIGTERM: stopped cleanly after a step, checkpoint written
 };
 
 /// Runs `pdyn ARGS...` (without the program name), writing to `out` and

@@ -70,8 +70,8 @@ std::vector<ParamSpec> grid_specs() {
   ny.at_least(1);
   return {
       param::required_vec3("origin", "m", "position of particle (0, 0)"),
-      param::required_vec3("u", "m", "spacing vector along the first grid direction"),
-      param::required_vec3("v", "m", "spacing vector along the second grid direction"),
+      param::required_vec3("u", "m", "spacing vector along the first grid direction").not_zero(),
+      param::required_vec3("v", "m", "spacing vector along the second grid direction").not_zero(),
       nx,
       ny,
       param::required_real("mass", "kg", "mass of each particle").greater_than(0),
@@ -91,6 +91,17 @@ std::vector<ParamSpec> output_specs() {
       param::optional("energy", ParamType::String, "", "energy CSV: t,kinetic,potential,total"),
   };
 }
+
+std::vector<ParamSpec> checkpoint_specs() {
+  ParamSpec every = param::integer("every", 0, "a checkpoint every N steps; 0: at the end only");
+  every.at_least(0);
+  return {param::required("path", ParamType::String, "", "checkpoint file"), every};
+}
+
+// The most particles a scene may hold: about 3.5 GB of kernel state, far
+// beyond any interactive scene, and a clear refusal instead of an
+// out-of-memory failure for a mistyped grid size.
+constexpr std::int64_t kMaxParticles = std::int64_t{1} << 24;
 
 std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs) {
   std::vector<std::string> names;
@@ -650,11 +661,6 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
       }
     }
   }
-  // The solver, rk4 unless the scene names another.
-  const YAML::Node s = n["solver"];
-  if (!s.IsDefined() || s.IsNull()) {
-    scene.solver_name = "rk4";
-  }
 }
 
 void Loader::read_particles(const YAML::Node& n) {
@@ -710,9 +716,11 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
   auto p = read_params(g, path, grid_specs(), {"springs"}, -1, "grid");
   if (!p) return;
   const std::int64_t nx = p->integer("nx"), ny = p->integer("ny");
-  if (nx * ny > (static_cast<std::int64_t>(1) << 28)) {
-    error(g, path, fmt::format("{}: {} x {} particles is too many (expected at most 2^28)", path,
-                               nx, ny));
+  if (nx > kMaxParticles || ny > kMaxParticles ||
+      static_cast<std::int64_t>(x_.size()) + nx * ny > kMaxParticles) {
+    error(g, path, fmt::format("{}: {} x {} particles is too many (expected at most {} particles "
+                               "in a scene)",
+                               path, nx, ny, kMaxParticles));
     return;
   }
   const Index base = static_cast<Index>(x_.size());
@@ -764,7 +772,7 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
   const PluginRecord* spring = nullptr;
   for (const char* family : {"structural", "shear", "bend"}) {
     const YAML::Node s = springs[family];
-    if (!s.IsDefined()) continue;
+    if (!s.IsDefined() || s.IsNull()) continue;
     const std::string fp = sp + "." + family;
     if (!check_map(s, fp, "{ ks: N/m, kd: N s/m }")) continue;
     if (!spring) {
@@ -795,9 +803,10 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
         }
       }
     }
-    if (pairs.empty()) continue;
+    // Checked even when the grid is too small for this family, so that a
+    // typo is reported whatever the grid's size.
     auto params = read_plugin_params(s, fp, *spring, {"pairs"});
-    if (!params) continue;
+    if (!params || pairs.empty()) continue;
     params->set("pairs", std::move(pairs));
     builder_forces_.push_back({spring, std::move(*params), s, fp});
   }
@@ -878,8 +887,16 @@ void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKi
 void Loader::read_output(const YAML::Node& n, Scene& scene) {
   if (!n.IsDefined() || n.IsNull()) return;
   if (!check_map(n, "output", "output: { path: FILE.csv, every: N, energy: FILE.csv }")) return;
-  auto p = read_params(n, "output", output_specs(), {}, -1, "output");
+  auto p = read_params(n, "output", output_specs(), {"checkpoint"}, -1, "output");
   if (!p) return;
+  const YAML::Node c = n["checkpoint"];
+  if (c.IsDefined() && !c.IsNull() &&
+      check_map(c, "output.checkpoint", "checkpoint: { path: FILE.ckpt, every: N }")) {
+    if (auto cp = read_params(c, "output.checkpoint", checkpoint_specs(), {}, -1, "checkpoint")) {
+      scene.output.checkpoint = cp->string("path");
+      scene.output.checkpoint_every = cp->integer("every");
+    }
+  }
   if (p->has("path")) scene.output.path = p->string("path");
   if (p->has("energy")) scene.output.energy = p->string("energy");
   scene.output.every = p->integer("every");
@@ -939,6 +956,18 @@ Scene Loader::load(const std::string& text) {
   apply_overrides(root);
   if (!diags_.empty()) fail();
   root_.reset(root);
+  {
+    // What a checkpoint must match: the scene after overrides, less the run
+    // length, which a resumed run may extend.
+    YAML::Node canonical = YAML::Clone(root);
+    if (canonical["simulation"].IsMap()) {
+      canonical["simulation"].remove("steps");
+      canonical["simulation"].remove("duration");
+    }
+    YAML::Emitter emitter;
+    emitter << canonical;
+    scene.canonical_text = emitter.c_str();
+  }
 
   check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"}, "scene");
   read_simulation(root["simulation"], scene);
@@ -1002,6 +1031,7 @@ Scene Loader::load(const std::string& text) {
   for (const auto& p : solvers) {
     scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
     scene.solver_name = p.record->descriptor->name;
+    scene.solver_label = label(p);
   }
   if (!diags_.empty()) fail();
   return scene;
