@@ -2,7 +2,9 @@
 # pdyn quick start, for a fresh Debian 12 machine (run as root, or with sudo).
 #
 #   bash scripts/quickstart.sh demo   # install what is missing, build, run the demo
-#   bash scripts/quickstart.sh test   # install what is missing, build, run every test
+#   bash scripts/quickstart.sh test   # install what is missing, build, run every test:
+#                                     # a 2-minute fuzz run of the scene loader, the suite
+#                                     # under ASan + UBSan, then the suite as built for use
 #
 # Everything comes from Debian's packages; nothing is downloaded at build time.
 set -euo pipefail
@@ -19,6 +21,7 @@ packages=(
   libfmt-dev libcli11-dev          # messages, command line
   nlohmann-json3-dev               # pdyn plugins --json
   libgtest-dev libgmock-dev        # tests
+  clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -38,5 +41,9 @@ cmake --build --preset default
 if [[ "$what" == demo ]]; then
   ./build/bin/pdyn run configs/demo.yaml
 else
+  bash scripts/fuzz.sh "${PDYN_FUZZ_SECONDS:-120}"
+  cmake --preset asan
+  cmake --build --preset asan
+  ctest --preset asan
   ctest --preset default
 fi
