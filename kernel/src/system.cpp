@@ -51,7 +51,11 @@ void System::set_fixed(Index i, bool fixed) {
 
 void System::update_inverse_mass() {
   inv_mass_.resize(mass_.size());
-  for (Index i = 0; i < mass_.size(); ++i) inv_mass_(i) = fixed_[i] ? 0.0 : 1.0 / mass_(i);
+  fixed_ids_.clear();
+  for (Index i = 0; i < mass_.size(); ++i) {
+    inv_mass_(i) = fixed_[i] ? 0.0 : 1.0 / mass_(i);
+    if (fixed_[i]) fixed_ids_.push_back(i);
+  }
 }
 
 void System::add_force(std::shared_ptr<Force> force, std::string label) {
@@ -129,11 +133,15 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   dydt.head(3 * n) = state_.tail(3 * n);
   Eigen::Map<Matrix3X> a(dydt.data() + 3 * n, 3, n);
   a = force_ * inv_mass_.asDiagonal();
+  // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
+  // blew up, so the blow-up is reported at the particle that moved.
+  for (const Index i : fixed_ids_) a.col(i).setZero();
 }
 
 const Matrix3X& System::compute_accelerations() {
   evaluate_forces();
   accel_ = force_ * inv_mass_.asDiagonal();
+  for (const Index i : fixed_ids_) accel_.col(i).setZero();
   return accel_;
 }
 

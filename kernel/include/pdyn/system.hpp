@@ -123,6 +123,7 @@ class System {
   Eigen::VectorXd mass_;         // N
   Eigen::VectorXd inv_mass_;     // N, zero for fixed particles: gathers f/m with no branch
   std::vector<std::uint8_t> fixed_;
+  std::vector<Index> fixed_ids_;  // indices of fixed particles
   Matrix3X force_;               // force accumulators, 3 x N
   Matrix3X accel_;               // f/m for compute_accelerations()
   double time_ = 0.0;

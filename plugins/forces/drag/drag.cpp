@@ -12,6 +12,13 @@ class Drag final : public pdyn::Force {
     f.noalias() -= k_ * p.v;
   }
 
+  // df_i/dv_i = -k I for every particle; no position dependence.
+  bool add_jacobians(const pdyn::ParticleView& p, pdyn::JacobianSink& sink) override {
+    const Eigen::Matrix3d block = -k_ * Eigen::Matrix3d::Identity();
+    for (pdyn::Index i = 0; i < p.size(); ++i) sink.add_dfdv(i, i, block);
+    return true;
+  }
+
  private:
   double k_;
 };

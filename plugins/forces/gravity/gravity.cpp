@@ -12,6 +12,10 @@ class Gravity final : public pdyn::Force {
     f.noalias() += g_ * p.mass.transpose();
   }
 
+  // A constant force: both Jacobians are zero, so there is nothing to add,
+  // but saying so spares implicit solvers a finite difference.
+  bool add_jacobians(const pdyn::ParticleView&, pdyn::JacobianSink&) override { return true; }
+
   // U = -sum m g.x, so that f = -grad U = m g.
   std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
     return -(g_.transpose() * p.x * p.mass)(0);

@@ -1,0 +1,40 @@
+// implicit_euler: the plugin's descriptor. The method is in
+// implicit_euler_solver.cpp.
+#include <pdyn/plugin.hpp>
+
+#include "implicit_euler_solver.hpp"
+
+namespace {
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Solver;
+  d.name = "implicit_euler";
+  d.version = "1.0.0";
+  d.description =
+      "linearised backward Euler (Baraff & Witkin 1998), (M - h df/dv - h^2 df/dx) dv = "
+      "h (f0 + h df/dx v0) by conjugate gradients; order 1";
+  d.params = {
+      pdyn::param::real("cg_tolerance", pdyn::solvers::ImplicitEulerOptions{}.cg_tolerance, "",
+                        "CG stops when |residual| <= cg_tolerance |right side|, in the "
+                        "preconditioner's norm")
+          .greater_than(0)
+          .at_most(1),
+      pdyn::param::integer("cg_max_iterations",
+                           pdyn::solvers::ImplicitEulerOptions{}.cg_max_iterations,
+                           "CG iterations per step; needing more is an error")
+          .at_least(1),
+  };
+  d.solver_traits.order = 1;
+  d.create_solver = [](const pdyn::Params& p, const pdyn::SceneContext&) {
+    pdyn::solvers::ImplicitEulerOptions o;
+    o.cg_tolerance = p.real("cg_tolerance");
+    o.cg_max_iterations = p.integer("cg_max_iterations");
+    return std::make_unique<pdyn::solvers::ImplicitEuler>(o);
+  };
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)
