@@ -13,6 +13,7 @@
 #include "registry.hpp"
 #include "runner.hpp"
 #include "scene.hpp"
+#include "sdk_commands.hpp"
 #include "text.hpp"
 
 namespace pdyn::cli {
@@ -111,6 +112,10 @@ int report(const std::exception_ptr& error, std::ostream& err) {
     return kBadInput;
   } catch (const std::exception& e) {
     err << "pdyn: " << e.what() << "\n";
+    return kFailure;
+  } catch (...) {
+    // Rethrowing it from here would end the process with std::terminate.
+    err << "pdyn: internal error: a non-standard exception\n";
     return kFailure;
   }
 }
@@ -359,6 +364,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   CLI::App* describe_cmd = plugins->add_subcommand("describe", "show one plugin's parameters");
   describe_cmd->add_option("name", describe_name, "plugin name")->required();
   add_plugin_path_option(describe_cmd, common);
+  const std::vector<SdkCommand> sdk = add_sdk_commands(app);
 
   std::vector<std::string> reversed(args.rbegin(), args.rend());
   try {
@@ -379,6 +385,8 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
     if (validate->parsed()) return cmd_validate(run_args, common, out, err);
     if (describe_cmd->parsed()) return cmd_describe(common, describe_name, out, err);
     if (plugins->parsed()) return cmd_plugins(common, json, out);
+    for (const auto& command : sdk)
+      if (command.sub->parsed()) return command.run(out, err);
   } catch (...) {
     return report(std::current_exception(), err);
   }

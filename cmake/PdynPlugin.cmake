@@ -4,6 +4,13 @@
 # (no "lib" prefix) with hidden symbols except the two entry points that
 # PDYN_PLUGIN exports, placed where the registry looks for plugins, and
 # installed beside the shipped ones.
+#
+# The same file is installed with pdyn's CMake package, so that out-of-tree
+# plugin projects get it from find_package(pdyn). There, the plugin is built
+# into the project's build folder (load it with `pdyn run --plugin-path
+# <build dir>`) and installed into lib/pdyn/plugins of the project's own
+# install prefix (add that folder to PDYN_PLUGIN_PATH). Set
+# PDYN_PLUGIN_INSTALL_DIR to "" before calling it for no install rule.
 function(pdyn_add_plugin name)
   cmake_parse_arguments(PARSE_ARGV 1 ARG "" "KIND;OUTPUT_DIRECTORY" "SOURCES")
   if(NOT ARG_KIND MATCHES "^(force|solver|collider)$")
@@ -15,6 +22,13 @@ function(pdyn_add_plugin name)
   if(NOT ARG_OUTPUT_DIRECTORY)
     set(ARG_OUTPUT_DIRECTORY "${PDYN_PLUGIN_OUTPUT_DIR}")
   endif()
+  if(NOT ARG_OUTPUT_DIRECTORY)  # out of tree: the project's build folder
+    set(ARG_OUTPUT_DIRECTORY "${CMAKE_BINARY_DIR}")
+  endif()
+  if(NOT DEFINED PDYN_PLUGIN_INSTALL_DIR)
+    include(GNUInstallDirs)
+    set(PDYN_PLUGIN_INSTALL_DIR "${CMAKE_INSTALL_LIBDIR}/pdyn/plugins")
+  endif()
   add_library(${name} MODULE ${ARG_SOURCES})
   set_property(GLOBAL APPEND PROPERTY PDYN_PLUGIN_TARGETS ${name})
   target_link_libraries(${name} PRIVATE pdyn::kernel)
@@ -25,6 +39,12 @@ function(pdyn_add_plugin name)
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON
     INSTALL_RPATH "$ORIGIN/../..")
+  target_compile_features(${name} PRIVATE cxx_std_20)
+  # A missing symbol (e.g. an Eigen template defined in a header the plugin
+  # forgot to include) is a link error, not a load failure at run time.
+  if(CMAKE_SYSTEM_NAME STREQUAL "Linux")
+    target_link_options(${name} PRIVATE "LINKER:--no-undefined")
+  endif()
   if(PDYN_WARNINGS)
     target_compile_options(${name} PRIVATE ${PDYN_WARNINGS})
   endif()

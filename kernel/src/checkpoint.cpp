@@ -1,4 +1,4 @@
-// The checkpoint file format, version 1 (native byte order, x86-64):
+// The checkpoint file format, version 2 (native byte order, x86-64):
 //
 //   "PDYNCKPT"                8 bytes magic
 //   u32 format version        Checkpoint::kFormatVersion
@@ -7,7 +7,7 @@
 //   u32 CRC-32 of payload     boost::crc_32_type
 //
 // Payload: string scene_file, string scene_text, i64 step, f64 time,
-// i64 next_frame, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
+// i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
 // u64 count, count x (string label, bytes state), 2 x (string path,
 // u64 bytes, u32 crc). A string or byte block is a u64 length and its bytes.
 //
@@ -19,6 +19,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <boost/crc.hpp>
 #include <cstring>
 #include <fstream>
@@ -114,6 +115,7 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   w.pod(c.step);
   w.pod(c.time);
   w.pod(c.next_frame);
+  w.pod<std::uint8_t>(c.has_dense ? 1 : 0);
   const std::uint64_t n = static_cast<std::uint64_t>(c.mass.size());
   w.pod(n);
   std::string payload = w.data();
@@ -166,21 +168,45 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
 }
 
 Checkpoint read_checkpoint(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw CheckpointError(fmt::format("{}: cannot read checkpoint (expected a file written by "
-                                      "pdyn run)",
-                                      path.string()));
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  std::string why;
+  if (status.type() == fs::file_type::not_found) {
+    why = "no such file";
+  } else if (ec) {
+    why = ec.message();
+  } else if (fs::is_directory(status)) {
+    why = "it is a folder";
+  }
+  std::ifstream in;
+  if (why.empty()) {
+    in.open(path, std::ios::binary);
+    if (!in) why = std::strerror(errno);
+  }
+  if (!why.empty()) {
+    throw CheckpointError(fmt::format("{}: cannot read checkpoint: {} (expected a file written "
+                                      "by pdyn run)",
+                                      path.string(), why));
   }
   std::ostringstream ss;
   ss << in.rdbuf();
   const std::string data = ss.str();
   const std::string file = path.string();
   constexpr std::size_t kHeader = sizeof(kMagic) + sizeof(std::uint32_t) + sizeof(std::uint64_t);
-  if (data.size() < kHeader || std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0) {
+  if (data.empty()) {
+    throw CheckpointError(fmt::format("{}: checkpoint is empty (expected a file written by "
+                                      "pdyn run)",
+                                      file));
+  }
+  if (std::memcmp(data.data(), kMagic, std::min(data.size(), sizeof(kMagic))) != 0) {
     throw CheckpointError(fmt::format("{}: not a pdyn checkpoint (expected a file written by "
                                       "pdyn run)",
                                       file));
+  }
+  if (data.size() < kHeader) {
+    throw CheckpointError(fmt::format("{}: checkpoint is truncated ({} bytes, shorter than its "
+                                      "{}-byte header)",
+                                      file, data.size(), kHeader));
   }
   std::uint32_t version = 0;
   std::uint64_t length = 0;
@@ -191,11 +217,18 @@ Checkpoint read_checkpoint(const fs::path& path) {
                                       "(expected version {})",
                                       file, version, Checkpoint::kFormatVersion));
   }
-  if (data.size() - kHeader < sizeof(std::uint32_t) ||
-      length != data.size() - kHeader - sizeof(std::uint32_t)) {
-    throw CheckpointError(fmt::format("{}: checkpoint is truncated or has trailing bytes "
-                                      "({} bytes, expected {})",
-                                      file, data.size(), kHeader + length + 4));
+  // As unsigned sums, so that a corrupted length cannot wrap around.
+  const std::uint64_t have = data.size() - kHeader;
+  if (have < sizeof(std::uint32_t) || length > have - sizeof(std::uint32_t)) {
+    throw CheckpointError(fmt::format("{}: checkpoint is truncated ({} bytes; its header "
+                                      "announces a {}-byte payload)",
+                                      file, data.size(), length));
+  }
+  if (length < have - sizeof(std::uint32_t)) {
+    throw CheckpointError(fmt::format("{}: checkpoint has {} trailing bytes after its checksum "
+                                      "(expected {} bytes)",
+                                      file, have - sizeof(std::uint32_t) - length,
+                                      kHeader + length + sizeof(std::uint32_t)));
   }
   const std::string payload = data.substr(kHeader, length);
   std::uint32_t stored = 0;
@@ -212,6 +245,9 @@ Checkpoint read_checkpoint(const fs::path& path) {
   c.step = r.pod<std::int64_t>();
   c.time = r.pod<double>();
   c.next_frame = r.pod<std::int64_t>();
+  const auto has_dense = r.pod<std::uint8_t>();
+  if (has_dense > 1) r.fail("a flag is neither 0 nor 1");
+  c.has_dense = has_dense == 1;
   const auto n = r.pod<std::uint64_t>();
   if (n > payload.size() / (7 * sizeof(double))) r.fail("particle count larger than the file");
   c.state.resize(static_cast<Index>(6 * n));

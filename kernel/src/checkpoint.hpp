@@ -26,13 +26,14 @@ struct OutputMark {
 };
 
 struct Checkpoint {
-  static constexpr std::uint32_t kFormatVersion = 1;
+  static constexpr std::uint32_t kFormatVersion = 2;
 
   std::string scene_file;    ///< where the scene came from (for messages)
   std::string scene_text;    ///< canonical scene after overrides, without steps/duration
   std::int64_t step = 0;     ///< steps done
   double time = 0.0;         ///< simulated time, s
   std::int64_t next_frame = 0;  ///< adaptive runs: index of the next frame due
+  bool has_dense = false;       ///< adaptive runs: the solver has shown dense output
   Eigen::VectorXd state;     ///< [x | v], 6N
   Eigen::VectorXd mass;      ///< N
   std::vector<std::uint8_t> fixed;  ///< N

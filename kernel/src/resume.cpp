@@ -73,7 +73,10 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
                                       "colliders)",
                                       c.plugin_states.size(), expected));
   }
-  if (c.step > scene.steps || c.time > scene.end_time) {
+  // An adaptive solver's steps are accepted steps, unrelated to the scene's
+  // nominal step count: only the time tells whether it is past the end.
+  const bool adaptive = scene.solver && scene.solver->adaptive();
+  if ((!adaptive && c.step > scene.steps) || c.time > scene.end_time) {
     throw CheckpointError(fmt::format("the checkpoint is at step {} (t = {} s), past the end of "
                                       "this run (step {}, t = {} s); expected a longer run",
                                       c.step, c.time, scene.steps, scene.end_time));

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstring>
 #include <ostream>
+#include <tuple>
 
 namespace pdyn {
 
@@ -55,6 +56,22 @@ AtomicFile::AtomicFile(fs::path path, const OutputMark* resume) : path_(std::mov
                             std::strerror(errno)));
   }
   if (!resume) return;
+  try {
+    resume_from(*resume);
+  } catch (...) {
+    // The destructor does not run for an object whose constructor threw:
+    // remove the temporary file here, so a refused resume leaves nothing.
+    std::fclose(file_);
+    file_ = nullptr;
+    std::error_code ignored;
+    fs::remove(temp_, ignored);
+    throw;
+  }
+}
+
+void AtomicFile::resume_from(const OutputMark& mark) {
+  const OutputMark* resume = &mark;
+  std::error_code ec;
   // The final file of an interrupted run, or the temporary one of a run
   // that was killed outright.
   std::vector<fs::path> candidates{path_};
@@ -256,13 +273,24 @@ class Output {
     if (frames_) write_frame(*frames_, sys_);
     if (energy_) write_energy(*energy_, sys_);
   }
-  fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame) {
+  // A frame off the run's schedule: the end of a run that a longer run
+  // would pass through without a frame, the step an interrupt stopped at,
+  // the last good state before a fault. It is written, but a checkpoint
+  // taken after it records the output without it, so that a resumed run
+  // continues the files exactly as an uninterrupted run would have.
+  void emit_extra() {
+    if (!held_) held_.emplace(frames_ ? frames_->mark() : OutputMark{},
+                              energy_ ? energy_->mark() : OutputMark{});
+    emit();
+  }
+  fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame, bool has_dense) {
     Checkpoint c;
     c.scene_file = scene_.file;
     c.scene_text = scene_.canonical_text;
     c.step = step;
     c.time = sys_.time();
     c.next_frame = next_frame;
+    c.has_dense = has_dense;
     c.state = sys_.state();
     c.mass = sys_.masses();
     c.fixed = sys_.fixed();
@@ -275,6 +303,7 @@ class Output {
     }
     if (frames_) c.frames = frames_->mark();
     if (energy_) c.energy = energy_->mark();
+    if (held_) std::tie(c.frames, c.energy) = *held_;
     write_checkpoint(checkpoint_, c);
     return checkpoint_;
   }
@@ -288,6 +317,7 @@ class Output {
   const System& sys_;
   fs::path checkpoint_;
   std::optional<AtomicFile> frames_, energy_;
+  std::optional<std::pair<OutputMark, OutputMark>> held_;  // marks before an extra frame
 };
 
 // ---------------------------------------------------------------------------
@@ -314,6 +344,11 @@ struct Loop {
   double t_previous = 0.0;
   bool last_written = true;  // the current state's frame has been written
   std::int64_t next_frame = 1;  // adaptive runs: index m of the next frame, due at m every dt
+  // Adaptive runs: a step has shown that the solver interpolates (dense
+  // output). Until then each step stops on the next frame time. Carried by
+  // checkpoints, since it changes the steps taken.
+  bool has_dense = false;
+  bool replaying = false;  // a failed step is being replayed: write no frames
 
   // One step or accepted adaptive step: returns its length, or nothing if
   // the run must stop (result says why; the last good state is restored).
@@ -328,33 +363,56 @@ struct Loop {
     } catch (const PluginRuntimeError& e) {
       return stop(3, fmt::format("plugin {} at step {}", e.what(), k));
     } catch (const std::exception& e) {
+      // The solver failed on its own account, or so it seems: it may have
+      // called a force directly (finite-difference Jacobians) that threw,
+      // or given up on a NaN a force fed it. Replay the step to find out.
+      const std::string solver = fmt::format("{} reported: {}", scene.solver_label, e.what());
+      if (const auto thrower = replay(take, false)) {
+        return stop(3, fmt::format("plugin {} at step {} (found by replaying the step; {})",
+                                   *thrower, k, solver));
+      }
+      if (const auto culprit = replay(take, true)) {
+        return stop(4, fmt::format("a force produced a non-finite value at step {} (t = {:.17g} "
+                                   "s): {}; then {}; the last good state (step {}) was written "
+                                   "as the final frame",
+                                   k, t_previous, *culprit, solver, k - 1));
+      }
       return stop(3, fmt::format("plugin {}: step threw at step {}: {}", scene.solver_label, k,
                                  e.what()));
+    } catch (...) {
+      return stop(3, fmt::format("plugin {}: step threw a non-standard exception at step {}",
+                                 scene.solver_label, k));
     }
     if (const Index bad = first_non_finite(sys); bad >= 0) {
-      const std::string culprit = replay_for_culprit(take);
-      result.message = blow_up_message(sys, bad, k, sys.time(), culprit);
+      const auto culprit = replay(take, true);
+      result.message = blow_up_message(
+          sys, bad, k, sys.time(),
+          culprit ? fmt::format("the first non-finite force came from {}", *culprit) : "");
       return stop(4, result.message);
     }
     return h;
   }
 
-  // Replays the failed step from the last good state with finite checks on,
-  // to name the force object that first produced a NaN or infinity.
-  std::string replay_for_culprit(const std::function<double()>& take) {
+  // Replays the failed step from the last good state, with finite checks on
+  // or off, and returns what the first plugin that threw (PluginRuntimeError,
+  // which names it) said, if one did. With finite checks on, that names the
+  // force object that first produced a NaN or infinity. Writes no frames.
+  std::optional<std::string> replay(const std::function<double()>& take, bool finite_checks) {
     System& sys = *scene.system;
     const Eigen::VectorXd bad_state = sys.state();
     const double bad_time = sys.time();
     sys.state() = previous;
     sys.set_time(t_previous);
-    sys.set_finite_checks(true);
-    std::string culprit;
+    sys.set_finite_checks(finite_checks);
+    replaying = true;
+    std::optional<std::string> culprit;
     try {
       take();
     } catch (const PluginRuntimeError& e) {
-      culprit = fmt::format("the first non-finite force came from {}", e.what());
-    } catch (const std::exception&) {
+      culprit = e.what();
+    } catch (...) {
     }
+    replaying = false;
     sys.set_finite_checks(false);
     sys.state() = bad_state;
     sys.set_time(bad_time);
@@ -367,7 +425,7 @@ struct Loop {
     result.message = std::move(message);
     sys.state() = previous;
     sys.set_time(t_previous);
-    if (!last_written) out.emit();
+    if (!last_written) out.emit_extra();
     return std::nullopt;
   }
 };
@@ -392,15 +450,17 @@ void run_fixed(Loop& loop, std::int64_t k0) {
     };
     if (!loop.guarded_step(take, k)) return;
     loop.result.steps_done = k;
-    loop.last_written = (every > 0 && k % every == 0) || k == n_steps;
+    // The final frame is extra unless it falls on the schedule: a longer
+    // run resumed from this one's checkpoint does not write it.
+    loop.last_written = every > 0 && k % every == 0;
     if (loop.last_written) loop.out.emit();
     if (ckpt_every > 0 && k % ckpt_every == 0 && k != n_steps) {
-      loop.result.checkpoint = loop.out.write_checkpoint_now(k, 0);
+      loop.result.checkpoint = loop.out.write_checkpoint_now(k, 0, false);
     }
     loop.progress.update(k, t_end);
-    if (loop.signals.raised() && k != n_steps) {
-      loop.result.exit_code = 130;
-      if (!loop.last_written) loop.out.emit();
+    if (k == n_steps || loop.signals.raised()) {
+      if (k != n_steps) loop.result.exit_code = 130;
+      if (!loop.last_written) loop.out.emit_extra();
       loop.last_written = true;
       return;
     }
@@ -423,15 +483,20 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
   auto frame_time = [&](std::int64_t m) {
     return frame_dt > 0 ? std::min(static_cast<double>(m) * frame_dt, t_end) : t_end;
   };
+  // A frame due at m every dt, not the end of the run cut short before it.
+  auto on_schedule = [&](std::int64_t m) {
+    return frame_dt > 0 && static_cast<double>(m) * frame_dt <= t_end;
+  };
   Eigen::VectorXd dense(sys.dimension()), current(sys.dimension());
   // Until a step has shown that the solver interpolates, stop on frame times.
-  bool has_dense = false;
+  bool& has_dense = loop.has_dense;
   // One accepted step, then the frames strictly inside it from the dense
   // output, before the collision response changes the state at its end.
   auto take = [&] {
     const double t_begin = sys.time();
     const double h = solver.advance(sys, has_dense ? t_end : frame_time(next_frame), scene.dt);
     const double t_new = t_begin + h;
+    if (loop.replaying) return h;
     if (!has_dense) has_dense = solver.interpolate(t_new, dense);
     for (double tf; (tf = frame_time(next_frame)) < t_new;) {
       if (!solver.interpolate(tf, dense)) break;
@@ -449,19 +514,21 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
     if (!loop.guarded_step(take, k)) break;
     const double t_new = sys.time();
     loop.result.steps_done = k;
-    loop.last_written = frame_time(next_frame) <= t_new;
+    loop.last_written = on_schedule(next_frame) && frame_time(next_frame) <= t_new;
     if (loop.last_written) {
       loop.out.emit();
       ++next_frame;
     }
     const bool done = t_new >= t_end;
     if (ckpt_every > 0 && k % ckpt_every == 0 && !done) {
-      loop.result.checkpoint = loop.out.write_checkpoint_now(k, next_frame);
+      loop.result.checkpoint = loop.out.write_checkpoint_now(k, next_frame, has_dense);
     }
     loop.progress.update(k, t_new);
-    if (loop.signals.raised() && !done) {
-      loop.result.exit_code = 130;
-      if (!loop.last_written) loop.out.emit();
+    if (done || loop.signals.raised()) {
+      if (!done) loop.result.exit_code = 130;
+      // The end of a run whose length is not a whole number of frame
+      // intervals, or an interrupt: not a frame a longer run writes.
+      if (!loop.last_written) loop.out.emit_extra();
       loop.last_written = true;
       break;
     }
@@ -481,20 +548,34 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   progress.start_at(k0);
   if (!options.resume) out.emit();
   Loop loop{scene, out, progress, signals, result, Eigen::VectorXd(sys.dimension())};
-  if (options.resume) loop.next_frame = options.resume->next_frame;
+  const bool adaptive = scene.solver->adaptive();
+  if (options.resume) {
+    loop.next_frame = options.resume->next_frame;
+    loop.has_dense = options.resume->has_dense;
+    // Whether the checkpoint's state is a frame on the schedule, and so in
+    // the output it recorded (an extra final frame is left out of it).
+    const std::int64_t every = scene.output.every;
+    const double frame_dt = static_cast<double>(every) * scene.dt;
+    loop.last_written =
+        adaptive ? frame_dt > 0 && static_cast<double>(loop.next_frame - 1) * frame_dt == sys.time()
+                 : every > 0 && k0 % every == 0;
+  }
   result.steps_done = k0;
-  if (scene.solver->adaptive()) {
+  if (adaptive) {
     run_adaptive(loop, k0);
   } else {
     run_fixed(loop, k0);
   }
+  // A run resumed at its very end takes no step; its final frame is due.
+  if (result.exit_code == 0 && !loop.last_written) out.emit_extra();
   progress.update(result.steps_done, sys.time(), true);
   progress.finish();
   result.time = sys.time();
   // A checkpoint at the end of every run that keeps them, and at any early
   // stop, so that the run can be continued or inspected.
   if (!scene.output.checkpoint.empty() || result.exit_code == 3 || result.exit_code == 130) {
-    result.checkpoint = out.write_checkpoint_now(result.steps_done, loop.next_frame);
+    result.checkpoint = out.write_checkpoint_now(result.steps_done, adaptive ? loop.next_frame : 0,
+                                                 adaptive && loop.has_dense);
   }
   out.commit();
   return result;

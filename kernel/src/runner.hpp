@@ -76,6 +76,8 @@ class AtomicFile {
   void commit();
 
  private:
+  void resume_from(const OutputMark& mark);
+
   std::filesystem::path path_, temp_;
   std::FILE* file_ = nullptr;
   std::uint64_t bytes_ = 0;

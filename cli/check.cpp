@@ -1,0 +1,105 @@
+// `pdyn check`: runs the conformance kit on one plugin and prints its table.
+//   exit 0: every check passed; 1: a check failed; 2: no such plugin (or a
+//   bad command line); 3: the plugin's library cannot be used.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <ostream>
+
+#include "commands.hpp"
+#include "pdyn/conformance.hpp"
+#include "registry.hpp"
+#include "sdk_commands.hpp"
+#include "text.hpp"
+
+namespace pdyn::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CheckArgs {
+  std::string name;  // a plugin name, or the path of a plugin library
+  std::vector<std::string> plugin_path;
+  std::string junit;
+  std::uint64_t seed = 1;
+};
+
+int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
+  PluginRegistry registry;
+  const PluginRecord* record = nullptr;
+  if (a.name.find('/') != std::string::npos || fs::path(a.name).extension() == ".so") {
+    // A library file: load just that one.
+    if (!registry.load_library(a.name)) {
+      const auto& f = registry.faults().back();
+      err << fmt::format("pdyn: {}: plugin '{}': {}\n", f.library.string(), f.plugin, f.message);
+      return kPluginFault;
+    }
+    record = &registry.plugins().back();
+  } else {
+    registry.discover(
+        PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+    try {
+      registry.require_healthy(a.name);
+    } catch (const PluginError& e) {
+      err << e.what() << "\n";
+      return kPluginFault;
+    }
+    record = registry.find_any(a.name);
+    if (!record) {
+      std::vector<std::string> all;
+      for (const auto& p : registry.plugins()) all.push_back(p.descriptor->name);
+      const std::string guess = closest_match(a.name, all);
+      err << fmt::format("pdyn: no plugin named '{}' ({}expected one of: {})\n", a.name,
+                         guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess), join(all));
+      return kBadInput;
+    }
+  }
+  const PluginDescriptor& d = *record->descriptor;
+  const auto results = conformance::run_checks(d, {a.seed});
+  out << fmt::format("pdyn check: {} {} {} ({}), seed {}\n\n", kind_name(d.kind), d.name, d.version,
+                     record->library.string(), a.seed);
+  out << conformance::table(results);
+  std::size_t failed = 0;
+  std::vector<std::string> failed_names;
+  for (const auto& r : results) {
+    if (r.verdict == conformance::Verdict::Fail) failed_names.push_back(r.name);
+  }
+  failed = failed_names.size();
+  if (!a.junit.empty()) {
+    std::ofstream file(a.junit);
+    file << conformance::junit_xml(d, results);
+    if (!file) {
+      err << fmt::format("pdyn: cannot write {}\n", a.junit);
+      return kFailure;
+    }
+  }
+  if (failed > 0) {
+    out << fmt::format("\n{}: {} check(s) failed: {}\n", d.name, failed, join(failed_names));
+    return kFailure;
+  }
+  out << fmt::format("\n{}: all checks passed\n", d.name);
+  return kOk;
+}
+
+}  // namespace
+
+SdkCommand add_check_command(CLI::App& app) {
+  auto a = std::make_shared<CheckArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "check", "run the conformance kit on a plugin (by name or library path)");
+  sub->add_option("name", a->name, "plugin name, or path of a plugin library")->required();
+  sub->add_option("--plugin-path", a->plugin_path,
+                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
+                  "(repeatable)");
+  sub->add_option("--junit", a->junit, "also write the report as JUnit XML to this file");
+  sub->add_option("--seed", a->seed, "seed of the generated particle configurations");
+  return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_check(*a, out, err); }};
+}
+
+std::vector<SdkCommand> add_sdk_commands(CLI::App& app) { return {add_check_command(app)}; }
+
+}  // namespace pdyn::cli

@@ -1,0 +1,28 @@
+// The plugin-author commands: `pdyn check` (conformance kit), and the SDK
+// helpers. Each lives in its own file; commands.cpp only registers them.
+#pragma once
+
+#include <functional>
+#include <iosfwd>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace pdyn::cli {
+
+/// A subcommand added to the app: run() executes it once the command line
+/// has been parsed and `sub` was chosen; it returns the exit status.
+struct SdkCommand {
+  CLI::App* sub = nullptr;
+  std::function<int(std::ostream& out, std::ostream& err)> run;
+};
+
+/// `pdyn check NAME [--plugin-path DIR] [--junit FILE] [--seed N]`.
+SdkCommand add_check_command(CLI::App& app);
+
+/// Every SDK command, in the order of `pdyn --help`.
+std::vector<SdkCommand> add_sdk_commands(CLI::App& app);
+
+}  // namespace pdyn::cli

@@ -1,0 +1,62 @@
+// pdyn/conformance.hpp — the plugin conformance kit: checks that a plugin
+// behaves as its descriptor claims (the physics, not only the interface).
+//
+// `pdyn check NAME` runs these checks and prints their table; a plugin
+// author's own tests can call them directly:
+//
+//   #include <pdyn/conformance.hpp>
+//   TEST(Vortex, Conforms) {
+//     const auto report = pdyn::conformance::run_checks(*my_descriptor(), {});
+//     EXPECT_TRUE(pdyn::conformance::all_passed(report)) << pdyn::conformance::table(report);
+//   }
+//
+// Each check states its bound; docs/plugins.md lists them all.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "pdyn/plugin.hpp"
+
+namespace pdyn::conformance {
+
+enum class Verdict { Pass, Fail, Skip };
+
+/// "pass", "FAIL" or "skip".
+const char* verdict_name(Verdict v);
+
+/// The outcome of one check: `measured` is compared with `bound` (both in
+/// the units `what` names); `detail` says what was measured, or why it failed.
+struct CheckResult {
+  std::string name;  ///< e.g. "force.net_force_zero"
+  Verdict verdict = Verdict::Pass;
+  double measured = 0.0;
+  double bound = 0.0;
+  std::string detail;
+};
+
+struct Options {
+  std::uint64_t seed = 1;  ///< seeds the random particle configurations
+};
+
+/// Runs every check for the descriptor's kind. Never throws: a plugin that
+/// throws fails the check that was running, naming the exception.
+std::vector<CheckResult> run_checks(const PluginDescriptor& descriptor, const Options& options);
+
+/// Parameters to construct the plugin with, for a system of `n` (>= 4)
+/// particles: every default, and a sample value for each required parameter
+/// without one (index lists: a few valid particle indices; numbers: a value
+/// inside the declared range). Optional parameters without a default are left out.
+Params sample_params(const PluginDescriptor& descriptor, Index n);
+
+/// True when no check failed (skipped checks do not count).
+bool all_passed(const std::vector<CheckResult>& results);
+
+/// The report as an aligned text table: check, verdict, measured, bound, detail.
+std::string table(const std::vector<CheckResult>& results);
+
+/// The report as JUnit XML (one testsuite named after the plugin).
+std::string junit_xml(const PluginDescriptor& descriptor, const std::vector<CheckResult>& results);
+
+}  // namespace pdyn::conformance
