@@ -42,7 +42,9 @@ function(pdyn_add_plugin name)
   target_compile_features(${name} PRIVATE cxx_std_20)
   # A missing symbol (e.g. an Eigen template defined in a header the plugin
   # forgot to include) is a link error, not a load failure at run time.
-  if(CMAKE_SYSTEM_NAME STREQUAL "Linux")
+  # Not with sanitizers: their runtime lives in the executable, so an
+  # instrumented plugin rightly leaves its symbols undefined.
+  if(CMAKE_SYSTEM_NAME STREQUAL "Linux" AND NOT CMAKE_CXX_FLAGS MATCHES "-fsanitize")
     target_link_options(${name} PRIVATE "LINKER:--no-undefined")
   endif()
   if(PDYN_WARNINGS)
