@@ -889,16 +889,33 @@ void Loader::read_output(const YAML::Node& n, Scene& scene) {
   if (!check_map(n, "output", "output: { path: FILE.csv, every: N, energy: FILE.csv }")) return;
   auto p = read_params(n, "output", output_specs(), {"checkpoint"}, -1, "output");
   if (!p) return;
+  // A file name, not a folder: found now rather than after the whole run.
+  auto file_name = [&](const YAML::Node& at, const std::string& key_path, const std::string& v) {
+    std::error_code ec;
+    if (v.empty() || v.back() == '/' || fs::is_directory(v, ec)) {
+      error(at, key_path, fmt::format("{}: '{}' is a folder, not a file (expected a file name, "
+                                      "e.g. out/run.csv)",
+                                      key_path, v));
+      return false;
+    }
+    return true;
+  };
   const YAML::Node c = n["checkpoint"];
   if (c.IsDefined() && !c.IsNull() &&
       check_map(c, "output.checkpoint", "checkpoint: { path: FILE.ckpt, every: N }")) {
     if (auto cp = read_params(c, "output.checkpoint", checkpoint_specs(), {}, -1, "checkpoint")) {
-      scene.output.checkpoint = cp->string("path");
+      if (file_name(c["path"], "output.checkpoint.path", cp->string("path"))) {
+        scene.output.checkpoint = cp->string("path");
+      }
       scene.output.checkpoint_every = cp->integer("every");
     }
   }
-  if (p->has("path")) scene.output.path = p->string("path");
-  if (p->has("energy")) scene.output.energy = p->string("energy");
+  if (p->has("path") && file_name(n["path"], "output.path", p->string("path"))) {
+    scene.output.path = p->string("path");
+  }
+  if (p->has("energy") && file_name(n["energy"], "output.energy", p->string("energy"))) {
+    scene.output.energy = p->string("energy");
+  }
   scene.output.every = p->integer("every");
   if (!scene.output.path.empty() && scene.output.path == scene.output.energy) {
     error(n["energy"], "output.energy",

@@ -3,8 +3,10 @@
 // long strings, control bytes, ...). Each is checked the way the fuzz
 // target reads it -- its "#set KEY=VALUE" lines are applied as --set
 // overrides -- with `pdyn validate` run in-process: it must exit 0 or 2,
-// never crash, hang or fail otherwise. Inputs too big to keep as files (a
-// 10 MB string, which would also make a poor fuzzing seed) are generated.
+// never crash, hang or fail otherwise. scripts/fuzz.sh seeds the fuzzer
+// with the folder, so its files stay under libFuzzer's default maximum input
+// length (4 KiB; a bigger seed would raise it for the whole run); inputs too
+// big for that (a 10 MB string) are generated here instead.
 #include <gtest/gtest.h>
 
 #include "resume/resume_support.hpp"
