@@ -23,11 +23,13 @@ namespace fs = std::filesystem;
 namespace {
 
 // Copies the first mark.bytes bytes of `source` into `dest`, returning false
-// (and copying nothing usable) if the file is shorter or its CRC differs.
-bool copy_prefix(const fs::path& source, const OutputMark& mark, std::FILE* dest) {
+// (and copying nothing usable) if the file is shorter or its CRC differs. On
+// success `crc` holds the running CRC of the copied bytes, ready to go on.
+bool copy_prefix(const fs::path& source, const OutputMark& mark, std::FILE* dest,
+                 boost::crc_32_type& crc) {
   std::FILE* in = std::fopen(source.c_str(), "rb");
   if (!in) return false;
-  boost::crc_32_type crc;
+  crc.reset();
   std::vector<char> buf(1 << 16);
   std::uint64_t left = mark.bytes;
   bool ok = true;
@@ -70,7 +72,6 @@ AtomicFile::AtomicFile(fs::path path, const OutputMark* resume) : path_(std::mov
 }
 
 void AtomicFile::resume_from(const OutputMark& mark) {
-  const OutputMark* resume = &mark;
   std::error_code ec;
   // The final file of an interrupted run, or the temporary one of a run
   // that was killed outright.
@@ -85,26 +86,15 @@ void AtomicFile::resume_from(const OutputMark& mark) {
   }
   for (const auto& c : candidates) {
     if (std::fseek(file_, 0, SEEK_SET) != 0) break;
-    if (copy_prefix(c, *resume, file_)) {
-      bytes_ = resume->bytes;
-      crc_ = boost::crc_32_type();
-      // Recompute the running CRC over the copied prefix: the checksum object
-      // cannot be seeded from a finished value.
-      std::fflush(file_);
-      std::FILE* again = std::fopen(temp_.c_str(), "rb");
-      std::vector<char> buf(1 << 16);
-      std::size_t got = 0;
-      while (again && (got = std::fread(buf.data(), 1, buf.size(), again)) > 0) {
-        crc_.process_bytes(buf.data(), got);
-      }
-      if (again) std::fclose(again);
+    if (copy_prefix(c, mark, file_, crc_)) {
+      bytes_ = mark.bytes;
       return;
     }
   }
   throw CheckpointError(fmt::format(
       "{}: cannot resume this output: no file holds the {} bytes the checkpoint recorded "
       "(expected the file written by the interrupted run)",
-      path_.string(), resume->bytes));
+      path_.string(), mark.bytes));
 }
 
 AtomicFile::~AtomicFile() {

@@ -176,7 +176,7 @@ class Loader {
   // ---- generic readers ----
   bool check_map(const YAML::Node& n, const std::string& path, const char* what);
   void check_keys(const YAML::Node& map, const std::string& path,
-                  const std::vector<std::string>& allowed, const char* context);
+                  const std::vector<std::string>& allowed);
   std::optional<ParamValue> read_value(const YAML::Node& n, const std::string& path,
                                        const ParamSpec& spec, Index n_particles);
   std::optional<double> read_number(const YAML::Node& n, const std::string& path,
@@ -195,8 +195,7 @@ class Loader {
   /// n_particles when it is >= 0.
   std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
                                     const std::vector<ParamSpec>& specs,
-                                    const std::vector<std::string>& extra, Index n_particles,
-                                    const char* context);
+                                    const std::vector<std::string>& extra, Index n_particles);
 
   // ---- sections ----
   void apply_overrides(YAML::Node& root);
@@ -269,7 +268,7 @@ bool Loader::check_map(const YAML::Node& n, const std::string& path, const char*
 }
 
 void Loader::check_keys(const YAML::Node& map, const std::string& path,
-                        const std::vector<std::string>& allowed, const char* context) {
+                        const std::vector<std::string>& allowed) {
   std::set<std::string> seen;
   for (const auto& kv : map) {
     const std::string key = kv.first.Scalar();
@@ -288,7 +287,6 @@ void Loader::check_keys(const YAML::Node& map, const std::string& path,
                       guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess),
                       join(allowed)));
   }
-  (void)context;
 }
 
 std::optional<double> Loader::read_number(const YAML::Node& n, const std::string& path,
@@ -474,11 +472,11 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
 std::optional<Params> Loader::read_params(const YAML::Node& map, const std::string& path,
                                           const std::vector<ParamSpec>& specs,
                                           const std::vector<std::string>& extra,
-                                          Index n_particles, const char* context) {
+                                          Index n_particles) {
   std::vector<std::string> allowed = spec_names(specs);
   allowed.insert(allowed.end(), extra.begin(), extra.end());
   const std::size_t before = diags_.size();
-  check_keys(map, path, allowed, context);
+  check_keys(map, path, allowed);
   Params params;
   for (const auto& spec : specs) {
     const YAML::Node n = map[spec.name];
@@ -620,7 +618,7 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   auto specs = simulation_specs();
   specs[1].at_least(0);
   specs[2].at_least(0);
-  auto p = read_params(n, "simulation", specs, {"solver"}, -1, "simulation");
+  auto p = read_params(n, "simulation", specs, {"solver"}, -1);
   if (p) {
     scene.dt = p->real("dt");
     const bool has_steps = p->has("steps"), has_duration = p->has("duration");
@@ -693,7 +691,7 @@ void Loader::read_particles(const YAML::Node& n) {
       read_grid(item["grid"], path + ".grid");
       continue;
     }
-    auto p = read_params(item, path, specs, {}, -1, "particle");
+    auto p = read_params(item, path, specs, {}, -1);
     if (!p) continue;
     x_.push_back(p->vec3("position"));
     v_.push_back(p->vec3("velocity"));
@@ -713,7 +711,7 @@ void Loader::read_particles(const YAML::Node& n) {
 // structural (neighbours), shear (diagonals), bend (second neighbours).
 void Loader::read_grid(const YAML::Node& g, const std::string& path) {
   if (!check_map(g, path, "grid: { origin, u, v, nx, ny, mass, ... }")) return;
-  auto p = read_params(g, path, grid_specs(), {"springs"}, -1, "grid");
+  auto p = read_params(g, path, grid_specs(), {"springs"}, -1);
   if (!p) return;
   const std::int64_t nx = p->integer("nx"), ny = p->integer("ny");
   if (nx > kMaxParticles || ny > kMaxParticles ||
@@ -768,7 +766,7 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
   if (!check_map(springs, sp, "springs: { structural: { ks, kd }, shear: {...}, bend: {...} }")) {
     return;
   }
-  check_keys(springs, sp, {"structural", "shear", "bend"}, "springs");
+  check_keys(springs, sp, {"structural", "shear", "bend"});
   const PluginRecord* spring = nullptr;
   for (const char* family : {"structural", "shear", "bend"}) {
     const YAML::Node s = springs[family];
@@ -862,7 +860,7 @@ std::optional<Params> Loader::read_plugin_params(const YAML::Node& item, const s
   const bool is_builder = !generated.empty();
   return read_params(item, path, specs, is_builder ? std::vector<std::string>{}
                                                    : std::vector<std::string>{"type"},
-                     n, rec.descriptor->name.c_str());
+                     n);
 }
 
 void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
@@ -887,7 +885,7 @@ void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKi
 void Loader::read_output(const YAML::Node& n, Scene& scene) {
   if (!n.IsDefined() || n.IsNull()) return;
   if (!check_map(n, "output", "output: { path: FILE.csv, every: N, energy: FILE.csv }")) return;
-  auto p = read_params(n, "output", output_specs(), {"checkpoint"}, -1, "output");
+  auto p = read_params(n, "output", output_specs(), {"checkpoint"}, -1);
   if (!p) return;
   // A file name, not a folder: found now rather than after the whole run.
   auto file_name = [&](const YAML::Node& at, const std::string& key_path, const std::string& v) {
@@ -903,7 +901,7 @@ void Loader::read_output(const YAML::Node& n, Scene& scene) {
   const YAML::Node c = n["checkpoint"];
   if (c.IsDefined() && !c.IsNull() &&
       check_map(c, "output.checkpoint", "checkpoint: { path: FILE.ckpt, every: N }")) {
-    if (auto cp = read_params(c, "output.checkpoint", checkpoint_specs(), {}, -1, "checkpoint")) {
+    if (auto cp = read_params(c, "output.checkpoint", checkpoint_specs(), {}, -1)) {
       if (file_name(c["path"], "output.checkpoint.path", cp->string("path"))) {
         scene.output.checkpoint = cp->string("path");
       }
@@ -986,7 +984,7 @@ Scene Loader::load(const std::string& text) {
     scene.canonical_text = emitter.c_str();
   }
 
-  check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"}, "scene");
+  check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
   std::vector<PendingPlugin> forces, colliders, solvers;
