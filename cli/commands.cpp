@@ -11,6 +11,7 @@
 #include <ostream>
 
 #include "registry.hpp"
+#include "render.hpp"
 #include "runner.hpp"
 #include "scene.hpp"
 #include "sdk_commands.hpp"
@@ -364,7 +365,8 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   CLI::App* describe_cmd = plugins->add_subcommand("describe", "show one plugin's parameters");
   describe_cmd->add_option("name", describe_name, "plugin name")->required();
   add_plugin_path_option(describe_cmd, common);
-  const std::vector<SdkCommand> sdk = add_sdk_commands(app);
+  std::vector<SdkCommand> sdk = add_sdk_commands(app);
+  sdk.push_back(add_render_command(app));
 
   std::vector<std::string> reversed(args.rbegin(), args.rend());
   try {

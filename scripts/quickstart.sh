@@ -20,6 +20,7 @@ packages=(
   libyaml-cpp-dev                  # scenes
   libfmt-dev libcli11-dev          # messages, command line
   nlohmann-json3-dev               # pdyn plugins --json
+  pkg-config libcairo2-dev         # pdyn render (PNG pictures)
   libgtest-dev libgmock-dev        # tests
   clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
 )

@@ -47,6 +47,17 @@ struct OutputSpec {
   std::int64_t checkpoint_every = 0;    ///< a checkpoint every N steps (and at the end); 0: end only
 };
 
+/// One plugin object as the scene declared it, with its checked parameters:
+/// what a renderer or viewer needs to draw it (springs from its particle
+/// pairs and triples, obstacles from their shape parameters) without
+/// knowing the plugin's insides. Builders' springs are listed too.
+struct PluginUse {
+  PluginKind kind = PluginKind::Force;
+  std::string type;   ///< the plugin's name, the scene's `type:`
+  std::string label;  ///< "spring (scene.yaml:12:5)", as in messages
+  Params params;
+};
+
 /// A loaded, validated scene, ready for the runner.
 struct Scene {
   std::string file;
@@ -62,6 +73,8 @@ struct Scene {
   double end_time = 0.0;     ///< time after the last step, s (steps * dt, or the duration)
   OutputSpec output;
   std::map<std::string, std::vector<Index>> groups;
+  /// Every force and collider object, in the order the system holds them.
+  std::vector<PluginUse> uses;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`

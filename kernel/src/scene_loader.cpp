@@ -1033,15 +1033,24 @@ Scene Loader::load(const std::string& text) {
   auto label = [&](const PendingPlugin& p) {
     return fmt::format("{} ({})", p.record->descriptor->name, where(p.node, p.path));
   };
-  for (const auto* list : {&builder_forces_, &forces}) {
-    for (const auto& p : *list) {
+  // Each object's parameters move into scene.uses once it exists: no copy
+  // of a large spring list.
+  auto keep = [&](PendingPlugin& p, PluginKind kind) {
+    scene.uses.push_back({kind, p.record->descriptor->name, label(p), std::move(p.params)});
+  };
+  for (auto* list : {&builder_forces_, &forces}) {
+    for (auto& p : *list) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
-      if (f) scene.system->add_force(std::move(f), label(p));
+      if (!f) continue;
+      scene.system->add_force(std::move(f), label(p));
+      keep(p, PluginKind::Force);
     }
   }
-  for (const auto& p : colliders) {
+  for (auto& p : colliders) {
     auto c = create(p, [&] { return registry_.create_collider(*p.record, p.params, ctx); });
-    if (c) scene.system->add_collider(std::move(c), label(p));
+    if (!c) continue;
+    scene.system->add_collider(std::move(c), label(p));
+    keep(p, PluginKind::Collider);
   }
   for (const auto& p : solvers) {
     scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });

@@ -1,0 +1,69 @@
+// `pdyn render`: pictures of a scene at given times, drawn with Cairo to PNG
+// files, with no display. The camera is orthographic and fitted to what is
+// drawn, so that a test (or a person) can tell where a particle lands.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "pdyn/types.hpp"
+#include "scene.hpp"
+#include "sdk_commands.hpp"
+
+namespace pdyn::cli {
+
+/// `pdyn render SCENE --at T1,T2,... --png FILE [--size WxH] [--view 3d|xy|xz|yz]`.
+SdkCommand add_render_command(CLI::App& app);
+
+namespace render {
+
+/// Which way the camera looks: `3d` is an oblique view with z up; `xy`
+/// looks down the z axis, `xz` along +y, `yz` along -x.
+enum class View { Oblique, XY, XZ, YZ };
+
+/// Fill colours (RGB in 0..1) of free and nailed particles.
+inline constexpr double kFree[3] = {0.12, 0.30, 0.65};
+inline constexpr double kFixed[3] = {0.80, 0.10, 0.10};
+
+/// Parses "3d", "xy", "xz" or "yz"; false for anything else.
+bool parse_view(const std::string& text, View& view);
+
+/// An orthographic camera from world coordinates (m) to pixels (x to the
+/// right, y down, origin at the image's top-left corner).
+struct Camera {
+  Vec3 right, up, toward;  ///< unit screen axes in the world; `toward` points at the viewer
+  double scale = 1.0;      ///< pixels per metre
+  Eigen::Vector2d origin;  ///< pixel where the world origin lands
+  Eigen::Vector2d pixel(const Vec3& p) const {
+    return {origin.x() + scale * p.dot(right), origin.y() - scale * p.dot(up)};
+  }
+  /// Larger is nearer the viewer; draw far things first.
+  double depth(const Vec3& p) const { return p.dot(toward); }
+};
+
+/// The camera looking along `view` that fits `points` (m) into a
+/// `width` x `height` image with a margin, keeping the aspect ratio. A single
+/// point, or none, gets a 1 m field of view.
+Camera fit_camera(View view, const std::vector<Vec3>& points, int width, int height);
+
+/// What is drawn besides the particles, read from the scene's plugin
+/// parameters: links from every force's particle pairs (springs) and
+/// triples (their edges), and the obstacles of the shipped colliders.
+struct Drawables {
+  std::vector<IndexPair> links;
+  struct Plane { Vec3 point, normal; };
+  struct Sphere { Vec3 center; double radius; };
+  struct Box { Vec3 min, max; };
+  std::vector<Plane> planes;
+  std::vector<Sphere> spheres;
+  std::vector<Box> boxes;
+};
+Drawables drawables(const Scene& scene);
+
+/// Points (m) the camera must keep in view for these obstacles: sphere and
+/// box extents (planes are unbounded and are drawn to fit the particles).
+std::vector<Vec3> obstacle_points(const Drawables& d);
+
+}  // namespace render
+}  // namespace pdyn::cli
