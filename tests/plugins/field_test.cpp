@@ -116,7 +116,7 @@ TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
             "\"-k**y\" (expected an expression in the variables x, y, z, vx, vy, vz, t, m or the "
             "constants k and functions such as sin, exp, sqrt)");
   EXPECT_EQ(Message(std::string(kOne) + "  - { type: field, force: [\"q*x\", \"0\", \"0\"] }\n"),
-            "test.yaml:5:27: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
+            "test.yaml:5:28: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
             "(expected one of the variables x, y, z, vx, vy, vz, t, m)");
   const std::string few = Message(std::string(kOne) + "  - { type: field, force: [\"x\", \"y\"] }\n");
   EXPECT_NE(few.find("forces[0].force: has 2 expressions (expected 3: [fx, fy, fz], in N)"),
