@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -177,8 +178,10 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
                            path, nv.x(), nv.y(), nv.z()));
     return;
   }
-  if (nv.maxCoeff() > 1e7 || !host.can_add(static_cast<std::int64_t>(nv.prod()), l, path)) {
-    if (nv.maxCoeff() > 1e7) host.can_add(std::int64_t{1} << 62, l, path);
+  // As a double first: the product of three mistyped sizes may not fit.
+  const double total = nv.prod();
+  if (!host.can_add(total > 1e15 ? std::int64_t{1} << 50 : static_cast<std::int64_t>(total), l,
+                    path)) {
     return;
   }
   const std::int64_t nx = static_cast<std::int64_t>(nv.x()), ny = static_cast<std::int64_t>(nv.y()),

@@ -879,8 +879,8 @@ void Loader::add_force(const std::string& plugin, const YAML::Node& node, const 
   }
   std::vector<std::string> names;
   for (const auto& kv : generated.values()) names.push_back(kv.first);
-  // A family left out entirely (undefined node) has no keys to check.
-  const YAML::Node keys = node.IsDefined() ? node : YAML::Node(YAML::NodeType::Map);
+  // A family left out entirely has no keys to check.
+  const YAML::Node keys = node.IsDefined() && node.IsMap() ? node : YAML::Node(YAML::NodeType::Map);
   auto params = read_plugin_params(keys, path, *rec, names);
   if (!params || !create) return;
   for (const auto& [key, value] : defaults.values()) {

@@ -4,7 +4,9 @@
 // (inside: true, six walls).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
+#include <numbers>
 
 #include "plugins/collider_support.hpp"
 
@@ -41,7 +43,7 @@ TEST(BoxCollider, NoThrownParticleEndsAStepInsideTheSolidBox) {
   int contacts = 0;
   const double worst = test::WorstPenetration(scene, 400, 5e-3, OutsideDistance, contacts);
   std::cout << "box outside: worst penetration " << worst << " m, " << contacts
-            << " particle-steps within 1 mm of the surface\n";
+            << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
   EXPECT_GT(contacts, 300);
 }
@@ -60,7 +62,7 @@ TEST(BoxCollider, NoParticleEndsAStepOutsideTheContainer) {
   int contacts = 0;
   const double worst = test::WorstPenetration(scene, 400, 5e-3, InsideDistance, contacts);
   std::cout << "box inside: worst penetration " << worst << " m, " << contacts
-            << " particle-steps within 1 mm of a wall\n";
+            << " particles reached a wall\n";
   EXPECT_LE(worst, 1e-12);
   EXPECT_GT(contacts, 300);
 }

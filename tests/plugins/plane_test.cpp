@@ -12,7 +12,9 @@
 //    reference implementation).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
+#include <numbers>
 
 #include "plugins/collider_support.hpp"
 

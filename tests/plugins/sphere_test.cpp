@@ -7,7 +7,9 @@
 //    normal at the contact point, u = (X - C) / |X - C|.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
+#include <numbers>
 
 #include "plugins/collider_support.hpp"
 
@@ -33,7 +35,7 @@ TEST(SphereCollider, NoThrownParticleEndsAStepInsideFromOutside) {
   const double worst = test::WorstPenetration(
       scene, 400, 5e-3, [](const Vec3& x) { return x.norm() - kR; }, contacts);
   std::cout << "sphere outside: worst penetration " << worst << " m, " << contacts
-            << " particle-steps within 1 mm of the surface\n";
+            << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
   EXPECT_GT(contacts, 300);
 }
@@ -54,7 +56,7 @@ TEST(SphereCollider, NoParticleEndsAStepOutsideWhenKeptInside) {
   const double worst = test::WorstPenetration(
       scene, 400, 5e-3, [](const Vec3& x) { return kR - x.norm(); }, contacts);
   std::cout << "sphere inside: worst penetration " << worst << " m, " << contacts
-            << " particle-steps within 1 mm of the surface\n";
+            << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
   EXPECT_GT(contacts, 300);
 }

@@ -7,7 +7,10 @@
 // refused with located messages.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <map>
 #include <numbers>
 #include <set>
@@ -72,7 +75,7 @@ TEST(ChainBuilder, MakesNEvenlySpacedParticlesAndNeighbourSprings) {
   for (Index i = 0; i < 20; ++i) {
     EXPECT_NEAR((s.system->positions().col(1 + i) - Vec3(i / 19.0, 0, 2)).norm(), 0.0, 1e-15);
     EXPECT_EQ(s.system->masses()(1 + i), 0.01);
-    EXPECT_EQ(s.system->fixed()[1 + i], i == 0 || i == 19) << i;
+    EXPECT_EQ(s.system->fixed()[1 + i] != 0, i == 0 || i == 19) << i;
   }
   const auto springs = SpringPairs(s);
   ASSERT_EQ(springs.size(), 1u);
@@ -123,8 +126,8 @@ TEST(LatticeBuilder, MakesStructuralAndShearSpringsByDefault) {
   EXPECT_EQ(std::count(s.system->fixed().begin(), s.system->fixed().end(), 1), 2);
   const auto springs = SpringPairs(s);
   ASSERT_EQ(springs.size(), 2u);
-  EXPECT_EQ(springs[0].size(), 2u * 4 * 5 + 3 * 3 * 5 + 3 * 4 * 4);                 // 133
-  EXPECT_EQ(springs[1].size(), 2u * (2 * 3 * 5 + 2 * 4 * 4 + 3 * 3 * 3));            // 196
+  EXPECT_EQ(springs[0].size(), 2u * 4 * 5 + 3 * 3 * 5 + 3 * 4 * 4);  // 133
+  EXPECT_EQ(springs[1].size(), 2u * (2 * 3 * 5 + 2 * 4 * 4 + 3 * 4 * 3));  // 196
   for (const auto& p : springs[0]) ASSERT_NEAR(Length(s, p), 0.1, 1e-12);
   for (const auto& p : springs[1]) ASSERT_NEAR(Length(s, p), 0.1 * std::sqrt(2.0), 1e-12);
   EXPECT_EQ(std::set(springs[1].begin(), springs[1].end()).size(), springs[1].size());
