@@ -18,6 +18,7 @@ packages=(
   libeigen3-dev                    # math and state vectors
   libboost-dev                     # Boost.DLL (plugin loading), header-only here
   libyaml-cpp-dev                  # scenes
+  libmuparser-dev pkg-config       # the field force's expressions
   libfmt-dev libcli11-dev          # messages, command line
   nlohmann-json3-dev               # pdyn plugins --json
   libgtest-dev libgmock-dev        # tests

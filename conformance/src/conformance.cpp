@@ -775,6 +775,10 @@ const char* verdict_name(Verdict v) {
 Params sample_params(const PluginDescriptor& d, Index n) {
   Params p;
   for (const auto& s : d.params) {
+    if (s.sample) {
+      p.set(s.name, *s.sample);
+      continue;
+    }
     if (s.fallback) {
       p.set(s.name, *s.fallback);
       continue;
@@ -799,6 +803,8 @@ Params sample_params(const PluginDescriptor& d, Index n) {
       case ParamType::IndexTriples:
         p.set(s.name, std::vector<IndexTriple>{{0, 1, 2}, {1, 2, 3}});
         break;
+      case ParamType::StringList: p.set(s.name, std::vector<std::string>{"1"}); break;
+      case ParamType::NamedReals: p.set(s.name, NamedReals{{"a", x}}); break;
     }
   }
   return p;

@@ -103,6 +103,13 @@ const std::vector<IndexTriple>& Params::triples(std::string_view name) const {
   return as<std::vector<IndexTriple>>(name);
 }
 
+const std::vector<std::string>& Params::strings(std::string_view name) const {
+  return as<std::vector<std::string>>(name);
+}
+const NamedReals& Params::named_reals(std::string_view name) const {
+  return as<NamedReals>(name);
+}
+
 const char* describe(ParamType type) {
   switch (type) {
     case ParamType::Real: return "a number";
@@ -115,6 +122,8 @@ const char* describe(ParamType type) {
     case ParamType::IndexList: return "a list of particle indices [i, j, ...]";
     case ParamType::IndexPairs: return "a list of particle index pairs [[i, j], ...]";
     case ParamType::IndexTriples: return "a list of particle index triples [[i, j, k], ...]";
+    case ParamType::StringList: return "a list of strings [\"a\", \"b\", ...]";
+    case ParamType::NamedReals: return "a mapping of names to numbers { name: value, ... }";
   }
   return "?";
 }
@@ -131,6 +140,8 @@ const char* type_name(ParamType type) {
     case ParamType::IndexList: return "index list";
     case ParamType::IndexPairs: return "index pairs";
     case ParamType::IndexTriples: return "index triples";
+    case ParamType::StringList: return "string list";
+    case ParamType::NamedReals: return "named reals";
   }
   return "?";
 }
@@ -169,6 +180,14 @@ std::string format_value(const ParamValue& value) {
     }
     std::string operator()(const std::vector<IndexTriple>& x) const {
       return list(x, tuple<3>);
+    }
+    std::string operator()(const std::vector<std::string>& x) const {
+      return list(x, [](const std::string& e) { return "\"" + e + "\""; });
+    }
+    std::string operator()(const NamedReals& x) const {
+      std::string s = "{";
+      for (const auto& [name, value] : x) s += (s.size() > 1 ? ", " : " ") + name + ": " + num(value);
+      return s + (x.empty() ? "}" : " }");
     }
   };
   return std::visit(Visitor{}, value);

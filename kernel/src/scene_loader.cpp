@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <optional>
@@ -182,6 +184,8 @@ class Loader final : public BuilderHost {
                                        const ParamSpec& spec, Index n_particles);
   std::optional<double> read_number(const YAML::Node& n, const std::string& path,
                                     const ParamSpec& spec);
+  std::optional<ParamValue> read_named_reals(const YAML::Node& n, const std::string& path,
+                                             const ParamSpec& spec);
   std::optional<std::int64_t> read_integer(const YAML::Node& n, const std::string& path,
                                            const ParamSpec& spec);
   std::optional<Index> read_index(const YAML::Node& n, const std::string& path, Index n_particles);
@@ -487,8 +491,58 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     case ParamType::IndexTriples:
       if (auto t = read_tuples<3>(n, path, n_particles)) return ParamValue(std::move(*t));
       return std::nullopt;
+    case ParamType::StringList:
+      return list_of([&](const YAML::Node& e, const std::string& p) -> std::optional<std::string> {
+        if (e.IsScalar()) return e.Scalar();
+        error(e, p, fmt::format("{}: is not a string (expected {})", p, expectation(spec)));
+        return std::nullopt;
+      });
+    case ParamType::NamedReals:
+      return read_named_reals(n, path, spec);
   }
   return std::nullopt;
+}
+
+// { name: number, ... }: names are identifiers, so that a plugin can use
+// them as variables (an expression's constants, say).
+std::optional<ParamValue> Loader::read_named_reals(const YAML::Node& n, const std::string& path,
+                                                   const ParamSpec& spec) {
+  if (!n.IsMap()) {
+    error(n, path, fmt::format("{}: is not a mapping (expected {})", path, expectation(spec)));
+    return std::nullopt;
+  }
+  ParamSpec element = spec;
+  element.type = ParamType::Real;
+  NamedReals out;
+  bool ok = true;
+  for (const auto& kv : n) {
+    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "";
+    const std::string kp = fmt::format("{}.{}", path, key);
+    const bool identifier =
+        !key.empty() && !std::isdigit(static_cast<unsigned char>(key[0])) &&
+        std::all_of(key.begin(), key.end(),
+                    [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    if (!identifier) {
+      error(kv.first, kp,
+            fmt::format("{}: '{}' is not a name (expected letters, digits and '_', not starting "
+                        "with a digit)",
+                        path, kv.first.IsScalar() ? key : "a list or mapping"));
+      ok = false;
+      continue;
+    }
+    auto x = read_number(kv.second, kp, element);
+    if (!x) {
+      ok = false;
+      continue;
+    }
+    if (!out.emplace(key, *x).second) {
+      error(kv.first, kp,
+            fmt::format("{}: duplicate name '{}' (expected each name once)", path, key));
+      ok = false;
+    }
+  }
+  if (!ok) return std::nullopt;
+  return ParamValue(std::move(out));
 }
 
 std::optional<Params> Loader::read_params(const YAML::Node& map, const std::string& path,

@@ -45,9 +45,10 @@ struct Options {
 std::vector<CheckResult> run_checks(const PluginDescriptor& descriptor, const Options& options);
 
 /// Parameters to construct the plugin with, for a system of `n` (>= 4)
-/// particles: every default, and a sample value for each required parameter
-/// without one (index lists: a few valid particle indices; numbers: a value
-/// inside the declared range). Optional parameters without a default are left out.
+/// particles: a parameter's declared sample (ParamSpec::sample) if it has
+/// one, else its default, else for a required parameter a sample value
+/// (index lists: a few valid particle indices; numbers: a value inside the
+/// declared range). Optional parameters without either are left out.
 Params sample_params(const PluginDescriptor& descriptor, Index n);
 
 /// True when no check failed (skipped checks do not count).

@@ -28,11 +28,16 @@ enum class ParamType {
   IndexList,     ///< [i, j, ...] particle indices, checked against N
   IndexPairs,    ///< [[i, j], ...] particle indices, checked against N
   IndexTriples,  ///< [[i, j, k], ...] particle indices, checked against N
+  StringList,    ///< ["a", "b", ...] strings (e.g. expressions)
+  NamedReals,    ///< { name: number, ... } names [A-Za-z_][A-Za-z0-9_]*, each once
 };
+
+/// The value of a NamedReals parameter: name -> number, in name order.
+using NamedReals = std::map<std::string, double, std::less<>>;
 
 using ParamValue = std::variant<double, std::int64_t, bool, std::string, Vec3, std::vector<double>,
                                 std::vector<Vec3>, std::vector<Index>, std::vector<IndexPair>,
-                                std::vector<IndexTriple>>;
+                                std::vector<IndexTriple>, std::vector<std::string>, NamedReals>;
 
 /// How one parameter is spelled, typed, bounded and documented.
 struct ParamSpec {
@@ -45,12 +50,17 @@ struct ParamSpec {
   std::optional<double> min, max;     ///< bounds on a number or on each element
   bool min_exclusive = false;         ///< min is a strict bound (> instead of >=)
   bool nonzero = false;               ///< for Vec3: the zero vector is refused
+  /// A typical value, used instead of the default by the conformance kit
+  /// (`pdyn check`) to build the plugin, e.g. for a required expression
+  /// that has no sensible default. Bounds are not checked against it.
+  std::optional<ParamValue> sample;
 
   /// Fluent bounds: `param::real("ks", 1.0, "N/m", "...").at_least(0)`.
   ParamSpec& at_least(double lo) { min = lo; min_exclusive = false; return *this; }
   ParamSpec& greater_than(double lo) { min = lo; min_exclusive = true; return *this; }
   ParamSpec& at_most(double hi) { max = hi; return *this; }
   ParamSpec& not_zero() { nonzero = true; return *this; }
+  ParamSpec& with_sample(ParamValue v) { sample = std::move(v); return *this; }
 };
 
 /// Short constructors for ParamSpec. A spec with a default is optional; one
@@ -82,6 +92,8 @@ class Params {
   const std::vector<Index>& indices(std::string_view name) const;
   const std::vector<IndexPair>& pairs(std::string_view name) const;
   const std::vector<IndexTriple>& triples(std::string_view name) const;
+  const std::vector<std::string>& strings(std::string_view name) const;
+  const NamedReals& named_reals(std::string_view name) const;
 
   /// Host side: stores a checked value.
   void set(std::string name, ParamValue value);

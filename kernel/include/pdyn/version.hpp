@@ -7,7 +7,7 @@
 /// built against another version is refused before any of its code runs
 /// beyond the version query. Bump it whenever a public header changes a type
 /// layout or a virtual function.
-#define PDYN_ABI_VERSION 2u
+#define PDYN_ABI_VERSION 3u
 
 namespace pdyn {
 inline constexpr std::uint32_t kAbiVersion = PDYN_ABI_VERSION;

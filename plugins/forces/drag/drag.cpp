@@ -1,26 +1,36 @@
 // drag: linear viscous drag, f = -k v (Witkin, SIGGRAPH '97 notes,
 // "Viscous Drag"). It removes energy, so it declares itself dissipative.
 #include <pdyn/plugin.hpp>
+#include <pdyn/selection.hpp>
 
 namespace {
 
 class Drag final : public pdyn::Force {
  public:
-  explicit Drag(double k) : k_(k) {}
+  Drag(double k, pdyn::Selection selection) : k_(k), selection_(std::move(selection)) {}
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
-    f.noalias() -= k_ * p.v;
+    if (selection_.all()) {
+      f.noalias() -= k_ * p.v;
+      return;
+    }
+    for (const pdyn::Index i : selection_.ids()) f.col(i) -= k_ * p.v.col(i);
   }
 
-  // df_i/dv_i = -k I for every particle; no position dependence.
+  // df_i/dv_i = -k I for every selected particle; no position dependence.
   bool add_jacobians(const pdyn::ParticleView& p, pdyn::JacobianSink& sink) override {
     const Eigen::Matrix3d block = -k_ * Eigen::Matrix3d::Identity();
-    for (pdyn::Index i = 0; i < p.size(); ++i) sink.add_dfdv(i, i, block);
+    if (selection_.all()) {
+      for (pdyn::Index i = 0; i < p.size(); ++i) sink.add_dfdv(i, i, block);
+    } else {
+      for (const pdyn::Index i : selection_.ids()) sink.add_dfdv(i, i, block);
+    }
     return true;
   }
 
  private:
   double k_;
+  pdyn::Selection selection_;
 };
 
 pdyn::PluginDescriptor describe() {
@@ -28,11 +38,12 @@ pdyn::PluginDescriptor describe() {
   d.kind = pdyn::PluginKind::Force;
   d.name = "drag";
   d.version = "1.0.0";
-  d.description = "linear viscous drag on every particle: f = -k v";
+  d.description = "linear viscous drag on every particle (or a group, or ids): f = -k v";
   d.params = {pdyn::param::real("k", 0.1, "kg/s", "drag coefficient").at_least(0)};
+  for (auto& s : pdyn::selection_params()) d.params.push_back(std::move(s));
   d.force_traits.dissipative = true;
-  d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext&) {
-    return std::make_unique<Drag>(p.real("k"));
+  d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext& ctx) {
+    return std::make_unique<Drag>(p.real("k"), pdyn::Selection::from_params(p, ctx));
   };
   return d;
 }

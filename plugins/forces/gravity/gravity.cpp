@@ -1,15 +1,21 @@
 // gravity: constant gravitational acceleration, f = m g
 // (Witkin, SIGGRAPH '97 notes, "Gravity").
 #include <pdyn/plugin.hpp>
+#include <pdyn/selection.hpp>
 
 namespace {
 
 class Gravity final : public pdyn::Force {
  public:
-  explicit Gravity(const pdyn::Vec3& g) : g_(g) {}
+  Gravity(const pdyn::Vec3& g, pdyn::Selection selection)
+      : g_(g), selection_(std::move(selection)) {}
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
-    f.noalias() += g_ * p.mass.transpose();
+    if (selection_.all()) {
+      f.noalias() += g_ * p.mass.transpose();
+      return;
+    }
+    for (const pdyn::Index i : selection_.ids()) f.col(i) += p.mass(i) * g_;
   }
 
   // A constant force: both Jacobians are zero, so there is nothing to add,
@@ -18,11 +24,15 @@ class Gravity final : public pdyn::Force {
 
   // U = -sum m g.x, so that f = -grad U = m g.
   std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
-    return -(g_.transpose() * p.x * p.mass)(0);
+    if (selection_.all()) return -(g_.transpose() * p.x * p.mass)(0);
+    double u = 0.0;
+    for (const pdyn::Index i : selection_.ids()) u -= p.mass(i) * g_.dot(p.x.col(i));
+    return u;
   }
 
  private:
   pdyn::Vec3 g_;
+  pdyn::Selection selection_;
 };
 
 pdyn::PluginDescriptor describe() {
@@ -30,10 +40,11 @@ pdyn::PluginDescriptor describe() {
   d.kind = pdyn::PluginKind::Force;
   d.name = "gravity";
   d.version = "1.0.0";
-  d.description = "constant gravity on every particle: f = m g";
+  d.description = "constant gravity on every particle (or a group, or ids): f = m g";
   d.params = {pdyn::param::vec3("g", {0, 0, -9.81}, "m/s^2", "gravitational acceleration")};
-  d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext&) {
-    return std::make_unique<Gravity>(p.vec3("g"));
+  for (auto& s : pdyn::selection_params()) d.params.push_back(std::move(s));
+  d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext& ctx) {
+    return std::make_unique<Gravity>(p.vec3("g"), pdyn::Selection::from_params(p, ctx));
   };
   return d;
 }

@@ -1,0 +1,230 @@
+// field: a force field given by three expressions, f = (fx, fy, fz)(x, y, z,
+// vx, vy, vz, t, m), evaluated for each selected particle, with named
+// constants and an optional potential U(x, y, z, t, m) so that the energy is
+// reported (and `pdyn check` verifies f = -grad U).
+//
+// Expressions are compiled once, by muParser (Berg, muparser.beltoforion.de),
+// into its bytecode; each derivative evaluation then only binds the
+// particle's variables and runs the bytecode. muParser's bulk mode is not
+// used: Debian builds it with OpenMP, so it would start worker threads
+// inside a force (the kernel's forces run on the caller's thread), and its
+// per-variable arrays would need the 3 x N state copied into 8 arrays on
+// every evaluation; the per-particle loop is fast enough for the gallery's
+// thousand-particle scenes.
+#include <fmt/format.h>
+#include <muParser.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <memory>
+#include <pdyn/plugin.hpp>
+#include <pdyn/selection.hpp>
+
+namespace {
+
+using pdyn::Index;
+using pdyn::ParamError;
+
+// The variables an expression may use, in the order of Field::vars_.
+constexpr std::array<const char*, 8> kVariables = {"x", "y", "z", "vx", "vy", "vz", "t", "m"};
+constexpr const char* kVariableList = "x, y, z, vx, vy, vz, t, m";
+
+bool is_name(const std::string& s) {
+  return !s.empty() && !std::isdigit(static_cast<unsigned char>(s[0])) &&
+         std::all_of(s.begin(), s.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+// "unexpected operator '*' at position 3 in "-k**y" (expected ...)": what
+// muParser found, where (0-based character offset, as muParser counts), and
+// what the expression may contain.
+std::string explain(const mu::ParserError& e, const std::string& expr,
+                    const std::string& constants) {
+  const std::string& tok = e.GetToken();
+  const std::string names =
+      fmt::format("the variables {}{}", kVariableList,
+                  constants.empty() ? "" : fmt::format(" or the constants {}", constants));
+  std::string what, expected = fmt::format("an expression in {} and functions such as sin, "
+                                           "exp, sqrt",
+                                           names);
+  switch (e.GetCode()) {
+    case mu::ecUNEXPECTED_OPERATOR: what = fmt::format("unexpected operator '{}'", tok); break;
+    case mu::ecUNASSIGNABLE_TOKEN:
+      if (is_name(tok)) {
+        what = fmt::format("unknown variable '{}'", tok);
+        expected = "one of " + names;
+      } else {
+        what = fmt::format("unexpected '{}'", tok);
+      }
+      break;
+    case mu::ecUNEXPECTED_EOF: what = "unexpected end of the expression"; break;
+    case mu::ecUNEXPECTED_ARG_SEP: what = "unexpected ','"; break;
+    case mu::ecUNEXPECTED_PARENS: what = fmt::format("unexpected parenthesis '{}'", tok); break;
+    case mu::ecMISSING_PARENS: what = "missing parenthesis ')'"; break;
+    case mu::ecUNEXPECTED_VAL: what = fmt::format("unexpected value '{}'", tok); break;
+    case mu::ecUNEXPECTED_VAR: what = fmt::format("unexpected variable '{}'", tok); break;
+    case mu::ecUNEXPECTED_FUN: what = fmt::format("unexpected function '{}'", tok); break;
+    case mu::ecTOO_MANY_PARAMS: what = fmt::format("too many arguments to '{}'", tok); break;
+    case mu::ecTOO_FEW_PARAMS: what = fmt::format("too few arguments to '{}'", tok); break;
+    default: {
+      what = e.GetMsg();
+      // muParser's own text ends "... at position N."; the position follows.
+      if (const auto at = what.find(" at position"); at != std::string::npos) what.resize(at);
+      if (const auto found = what.rfind(" found"); found != std::string::npos &&
+                                                  found + 6 == what.size()) {
+        what.resize(found);
+      }
+      if (!what.empty()) what[0] = static_cast<char>(std::tolower(what[0]));
+    }
+  }
+  if (expr.find_first_not_of(" \t") == std::string::npos) {
+    return fmt::format("the expression is empty (expected {})", expected);
+  }
+  if (e.GetPos() < 0) return fmt::format("{} in \"{}\" (expected {})", what, expr, expected);
+  return fmt::format("{} at position {} in \"{}\" (expected {})", what, e.GetPos(), expr,
+                     expected);
+}
+
+class Field final : public pdyn::Force {
+ public:
+  Field(const Field&) = delete;
+  Field& operator=(const Field&) = delete;
+
+  // Throws ParamError naming the parameter (and component) that is wrong.
+  Field(const std::vector<std::string>& force, const std::string* potential,
+        const pdyn::NamedReals& constants, pdyn::Selection selection)
+      : selection_(std::move(selection)) {
+    std::string constant_names;
+    for (const auto& [name, value] : constants) {
+      for (const char* v : kVariables) {
+        if (name == v) {
+          throw ParamError("constants",
+                           fmt::format("constant '{}' is named like a variable (expected names "
+                                       "other than {})",
+                                       name, kVariableList));
+        }
+      }
+      constant_names += (constant_names.empty() ? "" : ", ") + name;
+    }
+    auto compile = [&](mu::Parser& parser, const std::string& expr, const char* param,
+                       long element) {
+      try {
+        for (std::size_t k = 0; k < kVariables.size(); ++k) {
+          parser.DefineVar(kVariables[k], &vars_[k]);
+        }
+        for (const auto& [name, value] : constants) parser.DefineConst(name, value);
+      } catch (const mu::ParserError& e) {
+        // e.g. a constant named like a built-in function or constant (_pi).
+        throw ParamError("constants", fmt::format("{} (expected names of your own, other than "
+                                                  "muParser's functions and constants)",
+                                                  e.GetMsg()));
+      }
+      try {
+        parser.SetExpr(expr);
+        parser.Eval();  // parses and compiles now, so errors are found at load time
+      } catch (const mu::ParserError& e) {
+        throw ParamError(param, explain(e, expr, constant_names), element);
+      }
+      if (parser.GetNumResults() != 1) {
+        throw ParamError(param,
+                         fmt::format("\"{}\" gives {} values (expected one number, without ',')",
+                                     expr, parser.GetNumResults()),
+                         element);
+      }
+    };
+    if (force.size() != 3) {
+      throw ParamError("force", fmt::format("has {} expressions (expected 3: [fx, fy, fz], in N)",
+                                            force.size()));
+    }
+    for (int c = 0; c < 3; ++c) compile(component_[c], force[c], "force", c);
+    if (potential) {
+      potential_ = std::make_unique<mu::Parser>();
+      compile(*potential_, *potential, "potential", -1);
+    }
+  }
+
+  void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
+    vars_[6] = p.t;
+    auto one = [&](Index i) {
+      bind(p, i);
+      for (int c = 0; c < 3; ++c) f(c, i) += component_[c].Eval();
+    };
+    if (selection_.all()) {
+      for (Index i = 0; i < p.size(); ++i) one(i);
+    } else {
+      for (const Index i : selection_.ids()) one(i);
+    }
+  }
+
+  std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
+    if (!potential_) return std::nullopt;
+    vars_[6] = p.t;
+    double u = 0.0;
+    auto one = [&](Index i) {
+      bind(p, i);
+      u += potential_->Eval();
+    };
+    if (selection_.all()) {
+      for (Index i = 0; i < p.size(); ++i) one(i);
+    } else {
+      for (const Index i : selection_.ids()) one(i);
+    }
+    return u;
+  }
+
+ private:
+  void bind(const pdyn::ParticleView& p, Index i) const {
+    for (int c = 0; c < 3; ++c) {
+      vars_[c] = p.x(c, i);
+      vars_[3 + c] = p.v(c, i);
+    }
+    vars_[7] = p.mass(i);
+  }
+
+  // The parsers hold the addresses of these: x, y, z, vx, vy, vz, t, m.
+  // Mutable because potential_energy() is const but must bind them.
+  mutable std::array<double, 8> vars_{};
+  std::array<mu::Parser, 3> component_;
+  std::unique_ptr<mu::Parser> potential_;
+  pdyn::Selection selection_;
+};
+
+std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
+  pdyn::Selection selection = pdyn::Selection::from_params(p, ctx);
+  const std::string* potential = p.has("potential") ? &p.string("potential") : nullptr;
+  return std::make_unique<Field>(p.strings("force"), potential, p.named_reals("constants"),
+                                 std::move(selection));
+}
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Force;
+  d.name = "field";
+  d.version = "1.0.0";
+  d.description =
+      "force field from expressions: f = [fx, fy, fz](x, y, z, vx, vy, vz, t, m), with named "
+      "constants and an optional potential U";
+  pdyn::ParamSpec constants =
+      pdyn::param::optional("constants", pdyn::ParamType::NamedReals, "",
+                            "named constants for the expressions, e.g. { k: 4.0, w: 2.0 }");
+  constants.fallback = pdyn::NamedReals{};
+  d.params = {
+      pdyn::param::required("force", pdyn::ParamType::StringList, "N",
+                            "three expressions [fx, fy, fz] in x y z (m), vx vy vz (m/s), t (s), "
+                            "m (kg) and the constants")
+          .with_sample(std::vector<std::string>{"-k*x", "-k*y + w*m", "-k*z"}),
+      constants.with_sample(pdyn::NamedReals{{"k", 4.0}, {"w", 2.0}}),
+      pdyn::param::optional("potential", pdyn::ParamType::String, "J",
+                            "potential energy per particle U(x, y, z, t, m), if f = -grad U; "
+                            "default: none reported")
+          .with_sample(std::string("k*(x^2 + y^2 + z^2)/2 - w*m*y")),
+  };
+  for (auto& s : pdyn::selection_params()) d.params.push_back(std::move(s));
+  d.create_force = create;
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)
