@@ -711,14 +711,30 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
                   "normal impact at 5 m/s, no 'restitution' parameter: |v_out|/|v_in| <= bound");
   });
 
+  // The tangential change is measured against the surface normal where each
+  // drop hit, which a curved or faceted obstacle (sphere, box) varies: the
+  // direction in which respond() puts back a particle at rest just inside
+  // that point.
+  auto local_normal = [&](const Drop& dr) -> std::optional<Vec3> {
+    State s = make_state(1);
+    s.x.col(0) = dr.contact_point + 1e-3 * dr.direction;
+    const Vec3 before = s.x.col(0);
+    MutableParticleView view = s.mutable_view();
+    c->respond(view, 1e-3);
+    const Vec3 moved = Vec3(s.x.col(0)) - before;
+    if (moved.norm() <= kInsideTolerance) return std::nullopt;
+    return moved.normalized();
+  };
   guarded(out, "collider.frictionless_tangential", [&] {
     double worst = 0;
     int oblique = 0;
     for (const auto& dr : drops) {
-      if (!dr.hit || std::abs(dr.direction.dot(n)) > 1 - 1e-9 || dr.direction.dot(n) >= 0) continue;
+      if (!dr.hit) continue;
+      const auto m = local_normal(dr);
+      if (!m || std::abs(dr.direction.dot(*m)) > 1 - 1e-9 || dr.direction.dot(*m) >= 0) continue;
       ++oblique;
       const Vec3 dv = dr.v_out - dr.v_in;
-      worst = std::max(worst, (dv - dv.dot(n) * n).norm());
+      worst = std::max(worst, (dv - dv.dot(*m) * *m).norm());
     }
     if (oblique == 0) return skip("collider.frictionless_tangential", "no oblique impact");
     return result("collider.frictionless_tangential", worst <= 1e-12 * 5.0, worst, 1e-12 * 5.0,

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "scene.hpp"
+#include "scene_builders.hpp"
 #include "text.hpp"
 
 namespace pdyn {
@@ -162,7 +163,7 @@ struct PendingPlugin {
   std::string path;
 };
 
-class Loader {
+class Loader final : public BuilderHost {
  public:
   Loader(std::string file, const PluginRegistry& registry, std::vector<Override> overrides)
       : file_(std::move(file)), registry_(registry), overrides_(std::move(overrides)) {}
@@ -172,11 +173,11 @@ class Loader {
  private:
   // ---- diagnostics ----
   std::string where(const YAML::Node& at, const std::string& path) const;
-  void error(const YAML::Node& at, const std::string& path, std::string message);
+  void error(const YAML::Node& at, const std::string& path, std::string message) override;
   [[noreturn]] void fail();
 
   // ---- generic readers ----
-  bool check_map(const YAML::Node& n, const std::string& path, const char* what);
+  bool check_map(const YAML::Node& n, const std::string& path, const char* what) override;
   void check_keys(const YAML::Node& map, const std::string& path,
                   const std::vector<std::string>& allowed);
   std::optional<ParamValue> read_value(const YAML::Node& n, const std::string& path,
@@ -200,6 +201,27 @@ class Loader {
   std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
                                     const std::vector<ParamSpec>& specs,
                                     const std::vector<std::string>& extra, Index n_particles);
+
+  // ---- BuilderHost: what the builders of scene_builders.cpp may use ----
+  std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
+                                    const std::vector<ParamSpec>& specs,
+                                    const std::vector<std::string>& extra) override {
+    return read_params(map, path, specs, extra, -1);
+  }
+  Index particle_count() const override { return static_cast<Index>(x_.size()); }
+  bool can_add(std::int64_t count, const YAML::Node& at, const std::string& path) override;
+  void add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed) override {
+    x_.push_back(x);
+    v_.push_back(v);
+    m_.push_back(mass);
+    fixed_.push_back(fixed ? 1 : 0);
+  }
+  void set_fixed(Index id) override { fixed_[static_cast<std::size_t>(id)] = 1; }
+  Vec3 position(Index id) const override { return x_[static_cast<std::size_t>(id)]; }
+  void add_group(const std::string& name, std::vector<Index> members, const YAML::Node& at,
+                 const std::string& path) override;
+  void add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
+                 const Params& generated, const Params& defaults, bool create) override;
 
   // ---- sections ----
   void apply_overrides(YAML::Node& root);
@@ -735,6 +757,19 @@ void Loader::read_particles(const YAML::Node& n) {
     if (!check_map(item, path, "{ position: [x, y, z], mass: m } or a builder such as grid")) {
       continue;
     }
+    const auto& builders = builder_names();
+    const auto builder = std::find_if(builders.begin(), builders.end(),
+                                      [&](const std::string& b) { return item[b].IsDefined(); });
+    if (builder != builders.end()) {
+      if (item.size() != 1) {
+        error(item, path, fmt::format("{}: a builder entry holds only its builder (expected "
+                                      "{{ {}: {{ ... }} }})",
+                                      path, *builder));
+        continue;
+      }
+      read_builder(*this, *builder, item[*builder], path + "." + *builder);
+      continue;
+    }
     if (item["grid"].IsDefined()) {
       if (item.size() != 1) {
         error(item, path, fmt::format("{}: a builder entry holds only its builder (expected "
@@ -862,6 +897,51 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
     params->set("pairs", std::move(pairs));
     builder_forces_.push_back({spring, std::move(*params), s, fp});
   }
+}
+
+// ---------------------------------------------------------------------------
+// BuilderHost
+
+bool Loader::can_add(std::int64_t count, const YAML::Node& at, const std::string& path) {
+  if (count <= kMaxParticles && static_cast<std::int64_t>(x_.size()) + count <= kMaxParticles) {
+    return true;
+  }
+  error(at, path, fmt::format("{}: {} particles is too many (expected at most {} particles in a "
+                              "scene)",
+                              path, count, kMaxParticles));
+  return false;
+}
+
+void Loader::add_group(const std::string& name, std::vector<Index> members, const YAML::Node& at,
+                       const std::string& path) {
+  if (!groups_.emplace(name, std::move(members)).second) {
+    error(at, path,
+          fmt::format("{}: group '{}' is already defined (expected a unique name)", path, name));
+  }
+}
+
+void Loader::add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
+                       const Params& generated, const Params& defaults, bool create) {
+  registry_.require_healthy(plugin);
+  const PluginRecord* rec = registry_.find(PluginKind::Force, plugin);
+  if (!rec) {
+    error(node, path,
+          fmt::format("{}: needs the '{}' force plugin, which was not found (expected it on the "
+                      "plugin path)",
+                      path, plugin));
+    return;
+  }
+  std::vector<std::string> names;
+  for (const auto& kv : generated.values()) names.push_back(kv.first);
+  // A family left out entirely has no keys to check.
+  const YAML::Node keys = node.IsDefined() && node.IsMap() ? node : YAML::Node(YAML::NodeType::Map);
+  auto params = read_plugin_params(keys, path, *rec, names);
+  if (!params || !create) return;
+  for (const auto& [key, value] : defaults.values()) {
+    if (!keys[key].IsDefined() || keys[key].IsNull()) params->set(key, value);
+  }
+  for (const auto& [key, value] : generated.values()) params->set(key, value);
+  builder_forces_.push_back({rec, std::move(*params), keys, path});
 }
 
 const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::string& path,

@@ -1,0 +1,66 @@
+// Particle builders of the scene loader (chain, lattice, cloud, ring,
+// polygon): each turns one `particles:` entry into a block of particles and
+// the force objects that hold them together.
+//
+// The builders see the loader only through BuilderHost, so that they check
+// their keys with the same ParamSpec reader as everything else, report in
+// the same FILE:LINE:COLUMN format, and create their springs through the
+// registry's plugins (`spring`, `angle`, `area`) by name, as the grid does.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pdyn/params.hpp"
+#include "pdyn/types.hpp"
+
+namespace pdyn {
+
+class BuilderHost {
+ public:
+  virtual ~BuilderHost() = default;
+
+  /// Reports a problem at `at` (or, for a --set value, at the override).
+  virtual void error(const YAML::Node& at, const std::string& path, std::string message) = 0;
+  /// Reports and returns false unless `n` is a mapping.
+  virtual bool check_map(const YAML::Node& n, const std::string& path, const char* what) = 0;
+  /// Reads the keys of `map` described by `specs`; `extra` keys are allowed
+  /// and left to the caller. Nothing: a problem was reported.
+  virtual std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
+                                            const std::vector<ParamSpec>& specs,
+                                            const std::vector<std::string>& extra) = 0;
+  /// Particles declared so far: the first id of the next builder.
+  virtual Index particle_count() const = 0;
+  /// Reports and returns false if `count` more particles would exceed the
+  /// scene's limit.
+  virtual bool can_add(std::int64_t count, const YAML::Node& at, const std::string& path) = 0;
+  virtual void add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed) = 0;
+  virtual void set_fixed(Index id) = 0;
+  /// Position of a particle declared so far, m.
+  virtual Vec3 position(Index id) const = 0;
+  /// Makes `members` the group `name` (the builder's `name:` key, at `at`);
+  /// reports a duplicate.
+  virtual void add_group(const std::string& name, std::vector<Index> members,
+                         const YAML::Node& at, const std::string& path) = 0;
+  /// Queues one force object of plugin `plugin` whose parameters are the
+  /// keys of `node` (a mapping, or undefined for none) plus `generated` (the
+  /// particle lists the builder made). Keys of `defaults` that `node` does
+  /// not give replace the plugin's own defaults. With `create` false the
+  /// keys are only checked (a family that yields no pairs).
+  virtual void add_force(const std::string& plugin, const YAML::Node& node,
+                         const std::string& path, const Params& generated,
+                         const Params& defaults, bool create) = 0;
+};
+
+/// The builder keys that read_builder() accepts as a particles entry.
+const std::vector<std::string>& builder_names();
+
+/// Reads the builder `name` (one of builder_names()) from `node`, a
+/// particles entry's value, at `path` (e.g. "particles[2].chain").
+void read_builder(BuilderHost& host, const std::string& name, const YAML::Node& node,
+                  const std::string& path);
+
+}  // namespace pdyn
