@@ -22,6 +22,7 @@ packages=(
   nlohmann-json3-dev               # pdyn plugins --json
   libgtest-dev libgmock-dev        # tests
   clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
+  python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -945,8 +945,8 @@ auto Loader::create(const PendingPlugin& p, Create&& create_fn) -> decltype(crea
     throw;
   } catch (const std::exception& e) {
     error(p.node, p.path,
-          fmt::format("{}: plugin '{}' refused its parameters: {}", p.path,
-                      p.record->descriptor->name, e.what()));
+          fmt::format("{}: plugin '{}' ({}) refused its parameters: {}", p.path,
+                      p.record->descriptor->name, p.record->library.string(), e.what()));
   }
   return nullptr;
 }
