@@ -44,12 +44,13 @@ TEST(Schema, BuiltInSectionsComeFromTheLoadersTables) {
 
   // One particle, then one alternative per builder the loader lists.
   const json& items = s["properties"]["particles"]["items"]["oneOf"];
-  ASSERT_EQ(items.size(), 1 + builder_specs().size());
+  const auto builders = builder_specs();
+  ASSERT_EQ(items.size(), 1 + builders.size());
   EXPECT_EQ(items[0]["required"], json({"position", "mass"}));
   EXPECT_EQ(items[0]["properties"]["mass"]["exclusiveMinimum"], 0);
   EXPECT_EQ(items[0]["properties"]["velocity"]["default"], json({0.0, 0.0, 0.0}));
-  for (std::size_t i = 0; i < builder_specs().size(); ++i) {
-    const auto& b = builder_specs()[i];
+  for (std::size_t i = 0; i < builders.size(); ++i) {
+    const auto& b = builders[i];
     const json& props = items[i + 1]["properties"][b.key]["properties"];
     for (const auto& p : b.params) EXPECT_TRUE(props.contains(p.name)) << b.key << "." << p.name;
   }

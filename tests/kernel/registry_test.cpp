@@ -489,7 +489,8 @@ TEST(Registry, MissingLibraryIsOneLineNamingItsPath) {
   EXPECT_EQ(r.status, 3) << r.err;
   const auto lines = split_lines(r.err);
   ASSERT_EQ(lines.size(), 1u) << r.err;
-  EXPECT_EQ(lines[0].rfind(lib + ": plugin 'ghost': cannot load library: ", 0), 0u) << r.err;
+  EXPECT_EQ(lines[0].rfind("pdyn: " + lib + ": plugin 'ghost': cannot load library: ", 0), 0u)
+      << r.err;
 }
 
 TEST(Registry, ThrowingDescriptorIsAFaultNotACrash) {
