@@ -100,6 +100,8 @@ SdkCommand add_check_command(CLI::App& app) {
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_check(*a, out, err); }};
 }
 
-std::vector<SdkCommand> add_sdk_commands(CLI::App& app) { return {add_check_command(app)}; }
+std::vector<SdkCommand> add_sdk_commands(CLI::App& app) {
+  return {add_check_command(app), add_new_command(app), add_schema_command(app)};
+}
 
 }  // namespace pdyn::cli

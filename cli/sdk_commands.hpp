@@ -1,5 +1,6 @@
-// The plugin-author commands: `pdyn check` (conformance kit), and the SDK
-// helpers. Each lives in its own file; commands.cpp only registers them.
+// The plugin-author commands: `pdyn check` (conformance kit, check.cpp),
+// `pdyn new` (project templates, new.cpp) and `pdyn schema` (schema.cpp).
+// Each lives in its own file; commands.cpp only registers them.
 #pragma once
 
 #include <functional>
@@ -21,6 +22,12 @@ struct SdkCommand {
 
 /// `pdyn check NAME [--plugin-path DIR] [--junit FILE] [--seed N]`.
 SdkCommand add_check_command(CLI::App& app);
+
+/// `pdyn new force|solver|collider NAME [DIR]`.
+SdkCommand add_new_command(CLI::App& app);
+
+/// `pdyn schema [--plugin-path DIR] [--output FILE]`.
+SdkCommand add_schema_command(CLI::App& app);
 
 /// Every SDK command, in the order of `pdyn --help`.
 std::vector<SdkCommand> add_sdk_commands(CLI::App& app);

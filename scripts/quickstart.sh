@@ -24,6 +24,7 @@ packages=(
   pkg-config libcairo2-dev         # pdyn render (PNG pictures)
   libgtest-dev libgmock-dev        # tests
   clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
+  python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
 )
 missing=()
 for p in "${packages[@]}"; do

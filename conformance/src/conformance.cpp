@@ -10,9 +10,12 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <latch>
 #include <memory>
 #include <random>
+#include <thread>
 
+#include "checks.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn::conformance {
@@ -761,6 +764,107 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
   });
 }
 
+
+// ---- every kind: two threads, two systems ----
+//
+// Scenes are independent, so a host may run two of them at once (a parameter
+// sweep, a GUI next to a batch run). A plugin that keeps mutable state outside
+// its objects (a static scratch buffer, a global cache) breaks that silently.
+// Each run builds its own System and plugin object from its own seed; the two
+// seeds differ so that shared state shows up as a difference.
+
+constexpr int kThreadSteps = 100;
+constexpr double kThreadStep = 0.005;  // s
+constexpr int kThreadRounds = 3;
+
+Eigen::VectorXd separate_run(const PluginDescriptor& d, const Params& params, std::uint64_t seed) {
+  std::mt19937_64 r(seed);
+  State s = random_state(r);
+  if (d.kind == PluginKind::Collider) s.x *= 0.5;  // near the origin, where default obstacles are
+  auto sys = std::make_unique<System>();
+  sys->set_particles(s.x, s.v, s.mass, s.fixed);
+  const SceneContext ctx{sys->view(), nullptr};
+  // Forces and colliders are stepped with symplectic Euler, the kit's own.
+  auto kit_step = [&] {
+    const Matrix3X& a = sys->compute_accelerations();
+    sys->velocities() += kThreadStep * a;
+    sys->positions() += kThreadStep * sys->velocities();
+    sys->set_time(sys->time() + kThreadStep);
+  };
+  switch (d.kind) {
+    case PluginKind::Force:
+      sys->add_force(std::shared_ptr<Force>(d.create_force(params, ctx)), "under test");
+      for (int k = 0; k < kThreadSteps; ++k) kit_step();
+      break;
+    case PluginKind::Solver: {
+      sys->add_force(std::make_shared<Anchor>(), "conformance anchor");
+      sys->add_force(std::make_shared<Constant>(Vec3(0, 0, -9.81)), "conformance gravity");
+      auto solver = d.create_solver(params, ctx);
+      for (int k = 0; k < kThreadSteps; ++k) solver->step(*sys, kThreadStep);
+      break;
+    }
+    case PluginKind::Collider:
+      sys->add_force(std::make_shared<Constant>(Vec3(0.5, -0.3, -9.81)), "conformance gravity");
+      sys->add_collider(std::shared_ptr<Collider>(d.create_collider(params, ctx)), "under test");
+      for (int k = 0; k < kThreadSteps; ++k) {
+        kit_step();
+        sys->respond_to_collisions(kThreadStep);
+      }
+      break;
+  }
+  return sys->state();
+}
+
+bool bit_equal(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+CheckResult check_threads(const PluginDescriptor& d, const Options& o) {
+  const Params params = sample_params(d, kParticles);
+  const std::uint64_t seeds[2] = {o.seed * 7919 + 101, o.seed * 7919 + 202};
+  const Eigen::VectorXd expected[2] = {separate_run(d, params, seeds[0]),
+                                       separate_run(d, params, seeds[1])};
+  int differing = 0;
+  double worst = 0;
+  for (int round = 0; round < kThreadRounds; ++round) {
+    Eigen::VectorXd got[2];
+    std::exception_ptr error[2];
+    std::latch start(2);  // both runs begin together, so that they overlap
+    {
+      std::jthread threads[2];
+      for (int k = 0; k < 2; ++k) {
+        threads[k] = std::jthread([&, k] {
+          start.arrive_and_wait();
+          try {
+            got[k] = separate_run(d, params, seeds[k]);
+          } catch (...) {
+            error[k] = std::current_exception();
+          }
+        });
+      }
+    }
+    for (const auto& e : error) {
+      if (e) std::rethrow_exception(e);
+    }
+    for (int k = 0; k < 2; ++k) {
+      if (bit_equal(got[k], expected[k])) continue;
+      ++differing;
+      worst = std::max(worst, got[k].size() == expected[k].size()
+                                  ? (got[k] - expected[k]).cwiseAbs().maxCoeff()
+                                  : std::numeric_limits<double>::infinity());
+    }
+  }
+  return result("threads.two_systems", differing == 0, worst, 0,
+                differing == 0
+                    ? fmt::format("{} rounds of two threads, each with its own system and object, "
+                                  "{} steps of {} s: states bit-identical to one thread's",
+                                  kThreadRounds, kThreadSteps, kThreadStep)
+                    : fmt::format("{} of {} concurrent runs differ from the same run alone "
+                                  "(max |difference| of the state): shared mutable state?",
+                                  differing, 2 * kThreadRounds));
+}
+
 }  // namespace
 
 const char* verdict_name(Verdict v) {
@@ -818,6 +922,18 @@ std::vector<CheckResult> run_checks(const PluginDescriptor& d, const Options& o)
       case PluginKind::Force: force_checks(d, o, out); break;
       case PluginKind::Solver: solver_checks(d, o, out); break;
       case PluginKind::Collider: collider_checks(d, o, out); break;
+    }
+    // Only for a plugin that can be built at all: the rest would fail for
+    // the same reason as construct.defaults.
+    const bool constructed = std::any_of(out.begin(), out.end(), [](const CheckResult& r) {
+      return r.name == "construct.defaults" && r.verdict == Verdict::Pass;
+    });
+    if (constructed) {
+      guarded(out, "params.bad_rejected", [&] {
+        std::mt19937_64 rng(o.seed);
+        return detail::check_bad_params(d, sample_params(d, kParticles), random_state(rng).x);
+      });
+      guarded(out, "threads.two_systems", [&] { return check_threads(d, o); });
     }
   } catch (const std::exception& e) {
     out.push_back(result("run", false, 0, 0, fmt::format("threw: {}", e.what())));

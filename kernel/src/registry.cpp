@@ -178,16 +178,25 @@ bool PluginRegistry::load_library(const fs::path& file) {
     fault(file, hint, "descriptor is null");
     return false;
   }
-  if (auto problem = descriptor_problem(*d); !problem.empty()) {
-    fault(file, is_valid_plugin_name(d->name) ? d->name : hint, problem);
+  return admit(*d, file, hint, std::static_pointer_cast<void>(lib));
+}
+
+bool PluginRegistry::add(const PluginDescriptor& descriptor, const fs::path& origin) {
+  return admit(descriptor, origin, descriptor.name, nullptr);
+}
+
+bool PluginRegistry::admit(const PluginDescriptor& d, const fs::path& file, const std::string& hint,
+                           std::shared_ptr<void> handle) {
+  if (auto problem = descriptor_problem(d); !problem.empty()) {
+    fault(file, is_valid_plugin_name(d.name) ? d.name : hint, problem);
     return false;
   }
-  if (const PluginRecord* other = find_any(d->name)) {
-    fault(file, d->name,
-          fmt::format("plugin '{}' is already provided by {}", d->name, other->library.string()));
+  if (const PluginRecord* other = find_any(d.name)) {
+    fault(file, d.name,
+          fmt::format("plugin '{}' is already provided by {}", d.name, other->library.string()));
     return false;
   }
-  plugins_.push_back({d, file, std::static_pointer_cast<void>(lib)});
+  plugins_.push_back({&d, file, std::move(handle)});
   return true;
 }
 

@@ -59,6 +59,12 @@ class PluginRegistry {
   void discover(const std::vector<std::filesystem::path>& dirs);
   /// Loads one library file; returns false and records a fault on failure.
   bool load_library(const std::filesystem::path& file);
+  /// Registers a descriptor that is already in memory (the conformance kit
+  /// feeds the plugin under test to the scene loader this way), with the
+  /// same checks as a loaded library; `origin` names it in messages. The
+  /// descriptor must outlive the registry. Returns false and records a fault
+  /// if it is refused.
+  bool add(const PluginDescriptor& descriptor, const std::filesystem::path& origin);
 
   /// The plugin of that kind and name, or nullptr.
   const PluginRecord* find(PluginKind kind, std::string_view name) const;
@@ -84,6 +90,9 @@ class PluginRegistry {
 
  private:
   void fault(const std::filesystem::path& lib, std::string plugin, std::string message);
+  // The checks shared by load_library() and add(), then the listing.
+  bool admit(const PluginDescriptor& d, const std::filesystem::path& file, const std::string& hint,
+             std::shared_ptr<void> handle);
   std::vector<PluginRecord> plugins_;
   std::vector<PluginFault> faults_;
   std::vector<std::filesystem::path> searched_;

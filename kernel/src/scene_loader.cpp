@@ -19,6 +19,7 @@
 
 #include "scene.hpp"
 #include "scene_builders.hpp"
+#include "scene_specs.hpp"
 #include "text.hpp"
 
 namespace pdyn {
@@ -44,16 +45,17 @@ Override parse_override(const std::string& text) {
   return {text.substr(0, eq), text.substr(eq + 1)};
 }
 
-namespace {
-
 // ---------------------------------------------------------------------------
-// Specifications of the built-in sections.
+// Specifications of the built-in sections (scene_specs.hpp: `pdyn schema`
+// reads them too).
 
 std::vector<ParamSpec> simulation_specs() {
   return {
       param::required_real("dt", "s", "time step").greater_than(0),
-      param::optional("steps", ParamType::Integer, "", "number of steps (or give duration)"),
-      param::optional("duration", ParamType::Real, "s", "simulated time (or give steps)"),
+      param::optional("steps", ParamType::Integer, "", "number of steps (or give duration)")
+          .at_least(0),
+      param::optional("duration", ParamType::Real, "s", "simulated time (or give steps)")
+          .at_least(0),
   };
 }
 
@@ -100,6 +102,13 @@ std::vector<ParamSpec> checkpoint_specs() {
   every.at_least(0);
   return {param::required("path", ParamType::String, "", "checkpoint file"), every};
 }
+
+std::vector<BuilderSpec> builder_specs() {
+  return {{"grid", "a rectangular sheet of nx x ny particles, optionally joined by springs",
+           grid_specs(), {"structural", "shear", "bend"}}};
+}
+
+namespace {
 
 // The most particles a scene may hold: about 3.5 GB of kernel state, far
 // beyond any interactive scene, and a clear refusal instead of an
@@ -346,7 +355,8 @@ std::optional<std::int64_t> Loader::read_integer(const YAML::Node& n, const std:
                                n.IsScalar() ? n.Scalar() : "a list or mapping", expectation(spec)));
     return std::nullopt;
   }
-  if ((spec.min && x < *spec.min) || (spec.max && x > *spec.max)) {
+  const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
+  if (below || (spec.max && x > *spec.max)) {
     error(n, path, fmt::format("{}: {} is out of range (expected {})", path, x,
                                expectation(spec)));
     return std::nullopt;
@@ -691,10 +701,7 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   if (!check_map(n, "simulation", "simulation: { dt: ..., steps: ..., solver: { type: ... } }")) {
     return;
   }
-  auto specs = simulation_specs();
-  specs[1].at_least(0);
-  specs[2].at_least(0);
-  auto p = read_params(n, "simulation", specs, {"solver"}, -1);
+  auto p = read_params(n, "simulation", simulation_specs(), {"solver"}, -1);
   if (p) {
     scene.dt = p->real("dt");
     const bool has_steps = p->has("steps"), has_duration = p->has("duration");
@@ -1072,8 +1079,8 @@ auto Loader::create(const PendingPlugin& p, Create&& create_fn) -> decltype(crea
     throw;
   } catch (const std::exception& e) {
     error(p.node, p.path,
-          fmt::format("{}: plugin '{}' refused its parameters: {}", p.path,
-                      p.record->descriptor->name, e.what()));
+          fmt::format("{}: plugin '{}' ({}) refused its parameters: {}", p.path,
+                      p.record->descriptor->name, p.record->library.string(), e.what()));
   }
   return nullptr;
 }

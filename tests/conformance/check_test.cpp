@@ -53,7 +53,9 @@ INSTANTIATE_TEST_SUITE_P(
                     BrokenCase{"one_sided", "force.net_torque_zero"},
                     BrokenCase{"bad_potential", "force.gradient_of_potential"},
                     BrokenCase{"fake_rk4", "solver.convergence_order"},
-                    BrokenCase{"leaky_plane", "collider.obstacle_found"}),
+                    BrokenCase{"leaky_plane", "collider.obstacle_found"},
+                    BrokenCase{"shared_scratch", "threads.two_systems"},
+                    BrokenCase{"bad_default", "params.bad_rejected"}),
     [](const auto& param_info) { return std::string(param_info.param.plugin) + "_" + std::to_string(param_info.index); });
 
 TEST(Check, MeasuresTheFakeSolversRealOrder) {

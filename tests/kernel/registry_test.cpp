@@ -9,6 +9,7 @@
 //   text/       pdyn_force_text.so         a text file
 //   dup/        pdyn_force_gravity.so      a second valid `gravity`
 //   push/       pdyn_force_test_push.so    a valid force, test_push
+//   construct/  pdyn_force_throwing_factory.so, pdyn_force_throwing_descriptor.so
 #include "registry.hpp"
 
 #include <dlfcn.h>
@@ -476,6 +477,75 @@ TEST(Registry, SceneObjectsOutliveTheRegistry) {
   Eigen::VectorXd dydt(6);
   scene->system->derivative(dydt);
   EXPECT_EQ(dydt(3), 2.0);  // a = f / m
+}
+
+
+// ---- the rest of the bad libraries: missing, throwing descriptor, throwing
+// factory, and descriptors registered in memory (the conformance kit's way) ----
+
+TEST(Registry, MissingLibraryIsOneLineNamingItsPath) {
+  const std::string lib = "/nonexistent/pdyn_force_ghost.so";
+  const auto r = test::pdyn({"check", lib});
+  EXPECT_EQ(r.status, 3) << r.err;
+  const auto lines = split_lines(r.err);
+  ASSERT_EQ(lines.size(), 1u) << r.err;
+  EXPECT_EQ(lines[0].rfind("pdyn: " + lib + ": plugin 'ghost': cannot load library: ", 0), 0u)
+      << r.err;
+}
+
+TEST(Registry, ThrowingDescriptorIsAFaultNotACrash) {
+  ScopedEnv env("PDYN_PLUGIN_PATH", std::nullopt);
+  PluginRegistry r;
+  r.discover({fixture("construct")});
+  const PluginFault* f = fault_for(r, "throwing_descriptor");
+  ASSERT_NE(f, nullptr);
+  EXPECT_EQ(real_path(f->library), fixture("construct") / "pdyn_force_throwing_descriptor.so");
+  EXPECT_EQ(f->message, "descriptor threw: fixture descriptor failure");
+  const fs::path scene = scene_with_force("descriptor-scene", "throwing_descriptor");
+  const auto res =
+      test::pdyn({"run", scene.string(), "--plugin-path", fixture("construct").string()});
+  EXPECT_EQ(res.status, 3) << res.err;
+  const std::string error = split_lines(res.err).back();
+  EXPECT_EQ(error.rfind((fixture("construct") / "pdyn_force_throwing_descriptor.so").string() +
+                            ": plugin 'throwing_descriptor': descriptor threw: ",
+                        0),
+            0u)
+      << res.err;
+}
+
+TEST(Registry, ThrowingFactoryRefusesTheSceneNamingPluginAndLibrary) {
+  ScopedEnv env("PDYN_PLUGIN_PATH", std::nullopt);
+  const fs::path scene = scene_with_force("factory-scene", "throwing_factory");
+  const auto res =
+      test::pdyn({"run", scene.string(), "--plugin-path", fixture("construct").string()});
+  EXPECT_EQ(res.status, 2) << res.err;
+  std::vector<std::string> errors;
+  for (const auto& l : split_lines(res.err)) {
+    if (l.rfind("pdyn: warning: ", 0) != 0) errors.push_back(l);
+  }
+  ASSERT_EQ(errors.size(), 1u) << res.err;
+  EXPECT_TRUE(contains(errors[0], scene.string() + ":5:5: forces[0]: plugin 'throwing_factory' (" +
+                                      (fixture("construct") / "pdyn_force_throwing_factory.so")
+                                          .string() +
+                                      ") refused its parameters: fixture constructor failure"))
+      << errors[0];
+}
+
+TEST(Registry, DescriptorsInMemoryGetTheSameChecks) {
+  PluginRegistry r;
+  PluginDescriptor d;
+  d.kind = PluginKind::Force;
+  d.name = "in_memory";
+  d.version = "1";
+  EXPECT_FALSE(r.add(d, "(test)")) << "no factory";
+  EXPECT_TRUE(contains(r.faults().back().message, "no force factory"));
+  d.create_force = [](const Params&, const SceneContext&) -> std::unique_ptr<Force> {
+    return nullptr;
+  };
+  ASSERT_TRUE(r.add(d, "(test)"));
+  ASSERT_NE(r.find(PluginKind::Force, "in_memory"), nullptr);
+  EXPECT_FALSE(r.add(d, "(again)"));
+  EXPECT_EQ(r.faults().back().message, "plugin 'in_memory' is already provided by (test)");
 }
 
 }  // namespace

@@ -1,0 +1,171 @@
+// `pdyn new force|solver|collider NAME [DIR]`: writes a ready out-of-tree
+// plugin project (CMakeLists.txt, NAME.cpp, README.md, scene.yaml) that
+// builds against the installed SDK and passes `pdyn check` as generated.
+//   exit 0: written; 2: bad name, kind or folder; 1: a file could not be written.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <ostream>
+#include <random>
+#include <system_error>
+
+#include "commands.hpp"
+#include "registry.hpp"
+#include "sdk_commands.hpp"
+#include "templates.hpp"
+
+namespace pdyn::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct NewArgs {
+  std::string kind;
+  std::string name;
+  std::string dir;
+  std::vector<std::string> plugin_path;
+};
+
+std::string replace_all(std::string s, std::string_view from, std::string_view to) {
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
+    s.replace(at, from.size(), to);
+  }
+  return s;
+}
+
+// CMake reserves these target names; pdyn_add_plugin(NAME ...) would fail.
+bool reserved_by_cmake(const std::string& name) {
+  static const std::array<std::string_view, 9> reserved = {
+      "all", "clean", "help", "install", "test", "package", "edit_cache", "rebuild_cache",
+      "list_install_components"};
+  return std::find(reserved.begin(), reserved.end(), name) != reserved.end();
+}
+
+// A sibling of `target` that does not exist yet: the project is written
+// there, then renamed into place, so that a failure leaves nothing behind.
+fs::path temporary_sibling(const fs::path& target) {
+  std::random_device rd;
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    fs::path p = target;
+    p += fmt::format(".pdyn-new-{:08x}", rd());
+    std::error_code ec;
+    if (!fs::exists(p, ec)) return p;
+  }
+  throw Error(fmt::format("cannot find a free temporary name beside {}", target.string()));
+}
+
+void write_file(const fs::path& file, std::string_view text) {
+  std::ofstream out(file, std::ios::binary);
+  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  out.close();
+  if (!out) throw Error(fmt::format("cannot write {}", file.string()));
+}
+
+int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
+  if (!is_valid_plugin_name(a.name)) {
+    err << fmt::format("pdyn: '{}' is not a valid plugin name (expected [a-z0-9_]+, e.g. "
+                       "my_{})\n",
+                       a.name, a.kind);
+    return kBadInput;
+  }
+  if (reserved_by_cmake(a.name)) {
+    err << fmt::format("pdyn: '{}' is a target name that CMake reserves (expected another name, "
+                       "e.g. my_{})\n",
+                       a.name, a.name);
+    return kBadInput;
+  }
+  // A second plugin of that name would be refused as a duplicate wherever
+  // both are on the search path, so refuse the name now.
+  PluginRegistry registry;
+  registry.discover(PluginRegistry::search_path(
+      std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+  if (const PluginRecord* r = registry.find_any(a.name)) {
+    err << fmt::format("pdyn: a plugin named '{}' already exists ({}) (expected a new name)\n",
+                       a.name, r->library.string());
+    return kBadInput;
+  }
+
+  const fs::path target = a.dir.empty() ? fs::path(a.name) : fs::path(a.dir);
+  std::error_code ec;
+  const auto status = fs::symlink_status(target, ec);
+  const bool exists = fs::exists(status);
+  if (exists && !fs::is_directory(status)) {
+    err << fmt::format("pdyn: {} exists and is not a folder (expected a new or empty folder)\n",
+                       target.string());
+    return kBadInput;
+  }
+  if (exists && !fs::is_empty(target, ec)) {
+    err << fmt::format("pdyn: {} exists and is not empty (expected a new or empty folder)\n",
+                       target.string());
+    return kBadInput;
+  }
+
+  std::vector<std::pair<std::string, std::string_view>> files;  // (relative path, template)
+  for (const auto& t : template_files()) {
+    const auto slash = t.path.find('/');
+    const std::string_view group = t.path.substr(0, slash);
+    if (group == "common" || group == a.kind) {
+      files.emplace_back(replace_all(std::string(t.path.substr(slash + 1)), "@NAME@", a.name),
+                         t.text);
+    }
+  }
+
+  fs::path staging;
+  try {
+    const fs::path absolute = fs::absolute(target).lexically_normal();
+    fs::path parent = absolute.has_filename() ? absolute.parent_path()
+                                              : absolute.parent_path().parent_path();
+    const fs::path final_path = parent / (absolute.has_filename() ? absolute.filename()
+                                                                  : absolute.parent_path().filename());
+    fs::create_directories(parent);
+    staging = temporary_sibling(final_path);
+    fs::create_directory(staging);
+    for (const auto& [path, text] : files) {
+      const fs::path file = staging / path;
+      fs::create_directories(file.parent_path());
+      write_file(file, replace_all(replace_all(std::string(text), "@NAME@", a.name), "@KIND@",
+                                   a.kind));
+    }
+    // rename(2) replaces an empty folder, so an empty target is fine too.
+    fs::rename(staging, final_path);
+    staging.clear();
+  } catch (const std::exception& e) {
+    if (!staging.empty()) fs::remove_all(staging, ec);
+    err << fmt::format("pdyn: cannot create {}: {}\n", target.string(), e.what());
+    return kFailure;
+  }
+
+  out << fmt::format("pdyn: wrote a {} plugin project '{}' in {}:\n", a.kind, a.name,
+                     target.string());
+  for (const auto& f : files) out << "  " << (target / f.first).string() << "\n";
+  out << fmt::format(
+      "next:\n"
+      "  cmake -S {0} -B {0}/build -DCMAKE_PREFIX_PATH=<pdyn install prefix>\n"
+      "  cmake --build {0}/build\n"
+      "  ctest --test-dir {0}/build      # pdyn check {1} and the example scene\n",
+      target.string(), a.name);
+  return kOk;
+}
+
+}  // namespace
+
+SdkCommand add_new_command(CLI::App& app) {
+  auto a = std::make_shared<NewArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "new", "write a new plugin project (CMake, source, README, scene, conformance test)");
+  sub->add_option("kind", a->kind, "force, solver or collider")
+      ->required()
+      ->check(CLI::IsMember({"force", "solver", "collider"}));
+  sub->add_option("name", a->name, "the plugin's name, [a-z0-9_]+")->required();
+  sub->add_option("dir", a->dir, "folder to create (default: ./NAME); must be new or empty");
+  sub->add_option("--plugin-path", a->plugin_path,
+                  "also refuse names of the plugins in this folder (repeatable)");
+  return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_new(*a, out, err); }};
+}
+
+}  // namespace pdyn::cli

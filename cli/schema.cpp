@@ -1,0 +1,262 @@
+// `pdyn schema`: the JSON Schema (draft 2020-12) of the scene format, built
+// from the loader's own ParamSpec tables (scene_specs.hpp) and the
+// descriptors of every plugin found, for editors (yaml-language-server) and
+// for checking scenes outside pdyn.
+//
+// What it cannot say, and `pdyn validate` still checks: particle indices below
+// the scene's particle count, group names, a factory's own refusals.
+//   exit 0: written; 1: the output file could not be written.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <ostream>
+
+#include "commands.hpp"
+#include "registry.hpp"
+#include "scene_specs.hpp"
+#include "sdk_commands.hpp"
+
+namespace pdyn::cli {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::ordered_json;
+
+namespace {
+
+struct SchemaArgs {
+  std::vector<std::string> plugin_path;
+  std::string output;
+};
+
+Json number(const ParamSpec& s, const char* type) {
+  Json j{{"type", type}};
+  if (s.min) j[s.min_exclusive ? "exclusiveMinimum" : "minimum"] = *s.min;
+  if (s.max) j["maximum"] = *s.max;
+  return j;
+}
+
+Json vec3(const ParamSpec& s) {
+  Json j{{"type", "array"}, {"items", number(s, "number")}, {"minItems", 3}, {"maxItems", 3}};
+  if (s.nonzero) j["not"] = Json{{"const", Json::array({0, 0, 0})}};
+  return j;
+}
+
+// `checked`: indices are checked against the particle count (plugin
+// parameters); builders' own index lists (grid pins) may count from the end.
+Json tuples(std::size_t k, bool checked) {
+  Json index{{"type", "integer"}};
+  if (checked) index["minimum"] = 0;
+  Json tuple{{"type", "array"}, {"items", index}};
+  if (k > 0) {
+    tuple["minItems"] = k;
+    tuple["maxItems"] = k;
+  }
+  return tuple;
+}
+
+Json value_json(const ParamValue& v) {
+  struct Visitor {
+    Json operator()(double x) const { return std::isfinite(x) ? Json(x) : Json(); }
+    Json operator()(std::int64_t x) const { return x; }
+    Json operator()(bool x) const { return x; }
+    Json operator()(const std::string& x) const { return x; }
+    Json operator()(const Vec3& x) const { return Json::array({x.x(), x.y(), x.z()}); }
+    Json operator()(const std::vector<double>& xs) const { return xs; }
+    Json operator()(const std::vector<Vec3>& xs) const {
+      Json a = Json::array();
+      for (const auto& x : xs) a.push_back((*this)(x));
+      return a;
+    }
+    Json operator()(const std::vector<Index>& xs) const { return xs; }
+    Json operator()(const std::vector<IndexPair>& xs) const { return xs; }
+    Json operator()(const std::vector<IndexTriple>& xs) const { return xs; }
+  };
+  return std::visit(Visitor{}, v);
+}
+
+Json param_schema(const ParamSpec& s, bool indices_checked) {
+  Json j;
+  switch (s.type) {
+    case ParamType::Real: j = number(s, "number"); break;
+    case ParamType::Integer: j = number(s, "integer"); break;
+    case ParamType::Boolean: j = {{"type", "boolean"}}; break;
+    case ParamType::String: j = {{"type", "string"}}; break;
+    case ParamType::Vector: j = vec3(s); break;
+    case ParamType::RealList: j = {{"type", "array"}, {"items", number(s, "number")}}; break;
+    case ParamType::VectorList: j = {{"type", "array"}, {"items", vec3(s)}}; break;
+    case ParamType::IndexList: j = tuples(0, indices_checked)["items"]; break;
+    case ParamType::IndexPairs: j = {{"type", "array"}, {"items", tuples(2, indices_checked)}}; break;
+    case ParamType::IndexTriples:
+      j = {{"type", "array"}, {"items", tuples(3, indices_checked)}};
+      break;
+  }
+  if (s.type == ParamType::IndexList) j = {{"type", "array"}, {"items", j}};
+  std::string doc = s.doc;
+  if (!s.unit.empty()) doc += fmt::format(" [{}]", s.unit);
+  if (!doc.empty()) j["description"] = doc;
+  if (s.fallback) {
+    if (Json d = value_json(*s.fallback); !d.is_null()) j["default"] = d;
+  }
+  return j;
+}
+
+// A mapping of exactly these keys (plus `extra`, described by the caller).
+Json object(const std::vector<ParamSpec>& specs, bool indices_checked, Json extra = Json::object()) {
+  Json props = Json::object();
+  Json required = Json::array();
+  for (const auto& s : specs) {
+    props[s.name] = param_schema(s, indices_checked);
+    if (s.required) required.push_back(s.name);
+  }
+  for (auto& [k, v] : extra.items()) props[k] = v;
+  Json j{{"type", "object"}, {"properties", props}, {"additionalProperties", false}};
+  if (!required.empty()) j["required"] = required;
+  return j;
+}
+
+std::string def_name(const PluginDescriptor& d) {
+  return fmt::format("{}.{}", kind_name(d.kind), d.name);
+}
+
+// One entry of forces/colliders or simulation.solver: `type` picks the
+// plugin, whose parameters then apply (if/then per plugin, so that a
+// validator reports the parameter that is wrong rather than "no oneOf branch").
+Json plugin_entry(const PluginRegistry& registry, PluginKind kind) {
+  Json names = Json::array();
+  Json branches = Json::array();
+  for (const auto& name : registry.names(kind)) {
+    names.push_back(name);
+    branches.push_back(
+        {{"if", {{"properties", {{"type", {{"const", name}}}}}, {"required", {"type"}}}},
+         {"then", {{"$ref", "#/$defs/" + def_name(*registry.find(kind, name)->descriptor)}}}});
+  }
+  Json j{{"type", "object"},
+         {"description", fmt::format("a {} plugin: `type` names it, the other keys are its "
+                                     "parameters",
+                                     kind_name(kind))},
+         {"required", {"type"}},
+         {"properties", {{"type", {{"enum", names}}}}}};
+  if (!branches.empty()) j["allOf"] = branches;
+  return j;
+}
+
+Json make_schema(const PluginRegistry& registry) {
+  Json defs = Json::object();
+  for (const auto& r : registry.plugins()) {
+    const PluginDescriptor& d = *r.descriptor;
+    Json type{{"const", d.name}};
+    Json j = object(d.params, true, Json{{"type", type}});
+    j["description"] = fmt::format("{} {} {}: {}", kind_name(d.kind), d.name, d.version,
+                                   d.description);
+    defs[def_name(d)] = j;
+  }
+  defs["force"] = plugin_entry(registry, PluginKind::Force);
+  defs["collider"] = plugin_entry(registry, PluginKind::Collider);
+  defs["solver"] = plugin_entry(registry, PluginKind::Solver);
+
+  Json simulation = object(simulation_specs(), false, Json{{"solver", {{"$ref", "#/$defs/solver"}}}});
+  simulation["description"] = "time step, run length and solver (default rk4)";
+  simulation["oneOf"] = Json::array({{{"required", {"steps"}}}, {{"required", {"duration"}}}});
+
+  Json checkpoint = object(checkpoint_specs(), false);
+  Json output = object(output_specs(), false, Json{{"checkpoint", checkpoint}});
+  output["type"] = Json::array({"object", "null"});
+  output["description"] = "what is written: frames, energies, checkpoints";
+
+  Json particle = object(particle_specs(), false);
+  particle["description"] = "one particle";
+  Json items = Json::array({particle});
+  const PluginRecord* spring = registry.find(PluginKind::Force, "spring");
+  for (const auto& b : builder_specs()) {
+    Json extra = Json::object();
+    if (!b.spring_families.empty()) {
+      std::vector<ParamSpec> spring_specs;
+      if (spring) {
+        for (const auto& s : spring->descriptor->params) {
+          if (s.name != "pairs") spring_specs.push_back(s);
+        }
+      }
+      Json family = spring ? object(spring_specs, true) : Json{{"type", "object"}};
+      family["type"] = Json::array({"object", "null"});
+      Json families = Json::object();
+      for (const auto& f : b.spring_families) families[f] = family;
+      extra["springs"] = {{"type", Json::array({"object", "null"})},
+                          {"description", "springs of the `spring` plugin between neighbours"},
+                          {"properties", families},
+                          {"additionalProperties", false}};
+    }
+    Json builder = object(b.params, false, extra);
+    builder["description"] = b.doc;
+    items.push_back({{"type", "object"},
+                     {"properties", {{b.key, builder}}},
+                     {"required", {b.key}},
+                     {"additionalProperties", false}});
+  }
+
+  auto plugin_list = [](const char* def) {
+    return Json{{"type", Json::array({"array", "null"})}, {"items", {{"$ref", std::string("#/$defs/") + def}}}};
+  };
+  Json schema{
+      {"$schema", "https://json-schema.org/draft/2020-12/schema"},
+      {"title", "pdyn scene"},
+      {"description", "A pdyn scene (docs/scenes.md), generated by `pdyn schema` from the loader's "
+                      "tables and the plugins found"},
+      {"type", "object"},
+      {"required", {"simulation", "particles"}},
+      {"properties",
+       {{"simulation", simulation},
+        {"output", output},
+        {"particles", {{"type", "array"}, {"minItems", 1}, {"items", {{"oneOf", items}}}}},
+        {"forces", plugin_list("force")},
+        {"colliders", plugin_list("collider")}}},
+      {"additionalProperties", false},
+      {"$defs", defs}};
+  return schema;
+}
+
+int cmd_schema(const SchemaArgs& a, std::ostream& out, std::ostream& err) {
+  PluginRegistry registry;
+  registry.discover(PluginRegistry::search_path(
+      std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+  for (const auto& f : registry.faults()) {
+    err << fmt::format("pdyn: warning: {}: plugin '{}' left out of the schema: {}\n",
+                       f.library.string(), f.plugin, f.message);
+  }
+  const std::string text = make_schema(registry).dump(2) + "\n";
+  if (a.output.empty()) {
+    out << text;
+    return kOk;
+  }
+  // Written beside the target and renamed: never a half-written schema.
+  const fs::path target(a.output), tmp = fs::path(a.output + ".tmp");
+  std::ofstream file(tmp, std::ios::binary);
+  file << text;
+  file.close();
+  std::error_code ec;
+  if (!file || (fs::rename(tmp, target, ec), ec)) {
+    fs::remove(tmp, ec);
+    err << fmt::format("pdyn: cannot write {}\n", a.output);
+    return kFailure;
+  }
+  return kOk;
+}
+
+}  // namespace
+
+SdkCommand add_schema_command(CLI::App& app) {
+  auto a = std::make_shared<SchemaArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "schema", "print the JSON Schema (draft 2020-12) of scenes with the plugins found");
+  sub->add_option("--plugin-path", a->plugin_path,
+                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
+                  "(repeatable)");
+  sub->add_option("--output,-o", a->output, "write to this file instead of standard output");
+  return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_schema(*a, out, err); }};
+}
+
+}  // namespace pdyn::cli

@@ -1,0 +1,109 @@
+// `pdyn new`: what it writes and what it refuses. Building the projects it
+// writes is the CTest test sdk.new (tests/sdk/check_new.cmake).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "support/test_support.hpp"
+
+namespace pdyn {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::size_t entries(const fs::path& dir) {
+  return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), {}));
+}
+
+TEST(New, WritesAProjectForEachKind) {
+  const fs::path root = test::temp_dir("new-kinds");
+  for (const std::string kind : {"force", "solver", "collider"}) {
+    const std::string name = "my_" + kind;
+    const fs::path dir = root / name;
+    const auto r = test::pdyn({"new", kind, name, dir.string()});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(entries(dir), 4u);
+    const std::string cmake = read(dir / "CMakeLists.txt");
+    EXPECT_NE(cmake.find("find_package(pdyn 0.1 REQUIRED)"), std::string::npos) << cmake;
+    EXPECT_NE(cmake.find("pdyn_add_plugin(" + name + " KIND " + kind + " SOURCES " + name + ".cpp)"),
+              std::string::npos)
+        << cmake;
+    EXPECT_NE(cmake.find("${PDYN_EXECUTABLE} check " + name), std::string::npos) << cmake;
+    const std::string source = read(dir / (name + ".cpp"));
+    EXPECT_NE(source.find("d.name = \"" + name + "\";"), std::string::npos);
+    EXPECT_NE(read(dir / "scene.yaml").find("type: " + name), std::string::npos);
+    EXPECT_NE(read(dir / "README.md").find("pdyn new " + kind + " " + name), std::string::npos);
+    // Every placeholder was replaced.
+    for (const auto& e : fs::directory_iterator(dir)) {
+      EXPECT_EQ(read(e.path()).find('@'), std::string::npos) << e.path();
+    }
+  }
+  EXPECT_EQ(entries(root), 3u) << "no temporary folder left behind";
+}
+
+TEST(New, DefaultFolderIsTheNameAndAnEmptyFolderIsFine) {
+  const fs::path root = test::temp_dir("new-default");
+  const fs::path empty = root / "empty";
+  fs::create_directory(empty);
+  EXPECT_EQ(test::pdyn({"new", "solver", "heun2", empty.string()}).status, 0);
+  EXPECT_TRUE(fs::exists(empty / "heun2.cpp"));
+  const fs::path before = fs::current_path();
+  fs::current_path(root);
+  const auto r = test::pdyn({"new", "collider", "floor2"});
+  fs::current_path(before);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(root / "floor2" / "floor2.cpp"));
+}
+
+struct Refusal {
+  std::vector<std::string> args;  // after "new"; DIR is appended
+  std::string message;
+};
+
+TEST(New, RefusesBadNamesKindsAndFoldersWithExit2) {
+  const fs::path root = test::temp_dir("new-refusals");
+  test::write_file(root / "full" / "keep.txt", "x");
+  test::write_file(root / "a_file", "x");
+  const std::vector<Refusal> cases = {
+      {{"force", "Wind"}, "'Wind' is not a valid plugin name (expected [a-z0-9_]+"},
+      {{"force", "my-wind"}, "'my-wind' is not a valid plugin name"},
+      {{"force", ""}, "'' is not a valid plugin name"},
+      {{"force", "test"}, "'test' is a target name that CMake reserves"},
+      {{"force", "gravity"}, "a plugin named 'gravity' already exists"},
+      {{"solver", "fine", (root / "full").string()}, "full exists and is not empty"},
+      {{"solver", "fine", (root / "a_file").string()}, "a_file exists and is not a folder"},
+      {{"spring", "fine"}, "kind"},
+  };
+  for (const auto& c : cases) {
+    std::vector<std::string> args = {"new"};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    if (c.args.size() == 2) args.push_back((root / "target").string());
+    const auto r = test::pdyn(args);
+    EXPECT_EQ(r.status, 2) << c.message << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(root / "target"));
+  EXPECT_EQ(entries(root / "full"), 1u);
+  EXPECT_EQ(entries(root), 2u) << "nothing written by a refused command";
+}
+
+TEST(New, AnUnwritableParentLeavesNothingBehind) {
+  const fs::path root = test::temp_dir("new-unwritable");
+  test::write_file(root / "a_file", "x");
+  const auto r = test::pdyn({"new", "force", "wind", (root / "a_file" / "wind").string()});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("pdyn: cannot create "), std::string::npos) << r.err;
+  EXPECT_EQ(entries(root), 1u);
+}
+
+}  // namespace
+}  // namespace pdyn

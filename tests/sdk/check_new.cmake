@@ -1,0 +1,63 @@
+# `pdyn new` from the outside: the installed pdyn (prefix made by
+# install_sdk.cmake) writes a force, a solver and a collider project; each is
+# configured and built against the prefix, runs its scene with the installed
+# pdyn, passes its own CTest tests (the conformance kit and the scene) and
+# `pdyn check`. Refusals are checked first: they are fast.
+#   cmake -DPREFIX=... -DWORK=... -DGENERATOR=... -DCXX=... -P check_new.cmake
+cmake_minimum_required(VERSION 3.25)
+include(${CMAKE_CURRENT_LIST_DIR}/sdk_common.cmake)
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+set(pdyn "${PREFIX}/bin/pdyn")
+set(ENV{PDYN_PLUGIN_PATH} "")
+
+run_refused("pdyn new with a bad name" 2 "'Bad-Name' is not a valid plugin name"
+            "${pdyn}" new force Bad-Name "${WORK}/bad")
+run_refused("pdyn new with a shipped plugin's name" 2 "a plugin named 'gravity' already exists"
+            "${pdyn}" new force gravity "${WORK}/gravity")
+file(WRITE "${WORK}/full/keep.txt" "not empty\n")
+run_refused("pdyn new into a non-empty folder" 2 "full exists and is not empty"
+            "${pdyn}" new solver fine "${WORK}/full")
+run_refused("pdyn new with a bad kind" 2 "kind" "${pdyn}" new thing fine "${WORK}/thing")
+foreach(leftover bad gravity thing)
+  if(EXISTS "${WORK}/${leftover}")
+    message(FATAL_ERROR "a refused pdyn new left ${WORK}/${leftover} behind")
+  endif()
+endforeach()
+
+foreach(kind force solver collider)
+  set(name "my_${kind}")
+  set(project "${WORK}/${name}")
+  # The default folder is ./NAME.
+  execute_process(COMMAND "${pdyn}" new ${kind} ${name} WORKING_DIRECTORY "${WORK}"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "pdyn new ${kind} ${name} failed (${rc}):\n${out}\n${err}")
+  endif()
+  foreach(f CMakeLists.txt ${name}.cpp README.md scene.yaml)
+    if(NOT EXISTS "${project}/${f}")
+      message(FATAL_ERROR "pdyn new ${kind} did not write ${project}/${f}:\n${out}")
+    endif()
+  endforeach()
+  file(GLOB leftovers "${WORK}/*.pdyn-new-*")
+  if(leftovers)
+    message(FATAL_ERROR "pdyn new left temporary folders: ${leftovers}")
+  endif()
+
+  build_project("${project}" "${project}/build")
+  if(NOT EXISTS "${project}/build/pdyn_${kind}_${name}.so")
+    message(FATAL_ERROR "${project} did not build pdyn_${kind}_${name}.so")
+  endif()
+  execute_process(COMMAND "${pdyn}" run "${project}/scene.yaml" --plugin-path "${project}/build"
+                          --quiet
+                  WORKING_DIRECTORY "${project}" RESULT_VARIABLE rc ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT EXISTS "${project}/out/${name}.csv")
+    message(FATAL_ERROR "installed pdyn run of ${project}/scene.yaml failed (${rc}):\n${err}")
+  endif()
+  check_schema("${project}/scene.yaml" "${project}/build" "${project}/build")
+  run("ctest in ${project}" ${CMAKE_CTEST_COMMAND} --test-dir "${project}/build"
+      --output-on-failure)
+  run("pdyn check ${name}" "${pdyn}" check ${name} --plugin-path "${project}/build")
+  message(STATUS "${last_output}")
+endforeach()
+message(STATUS "pdyn new force, solver and collider: built against ${PREFIX}, ran, passed pdyn check")
