@@ -22,6 +22,8 @@ packages=(
   nlohmann-json3-dev               # pdyn plugins --json
   libgtest-dev libgmock-dev        # tests
   clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
+  libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
+  libbenchmark-dev                 # bench/ (Google Benchmark)
 )
 missing=()
 for p in "${packages[@]}"; do

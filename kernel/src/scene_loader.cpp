@@ -51,6 +51,11 @@ std::vector<ParamSpec> simulation_specs() {
       param::required_real("dt", "s", "time step").greater_than(0),
       param::optional("steps", ParamType::Integer, "", "number of steps (or give duration)"),
       param::optional("duration", ParamType::Real, "s", "simulated time (or give steps)"),
+      param::optional("threads", ParamType::Integer, "",
+                      "threads for forces and solvers (default: all cores; pdyn run --threads "
+                      "overrides it); results do not depend on it")
+          .at_least(1)
+          .at_most(1024),
   };
 }
 
@@ -621,6 +626,7 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   auto p = read_params(n, "simulation", specs, {"solver"}, -1);
   if (p) {
     scene.dt = p->real("dt");
+    if (p->has("threads")) scene.threads = static_cast<int>(p->integer("threads"));
     const bool has_steps = p->has("steps"), has_duration = p->has("duration");
     if (has_steps && has_duration) {
       // Point at the one a --set added, else at the one given last.
@@ -973,11 +979,12 @@ Scene Loader::load(const std::string& text) {
   root_.reset(root);
   {
     // What a checkpoint must match: the scene after overrides, less the run
-    // length, which a resumed run may extend.
+    // length, which a resumed run may extend, and the thread count.
     YAML::Node canonical = YAML::Clone(root);
     if (canonical["simulation"].IsMap()) {
       canonical["simulation"].remove("steps");
       canonical["simulation"].remove("duration");
+      canonical["simulation"].remove("threads");  // bit-identical results for any count
     }
     YAML::Emitter emitter;
     emitter << canonical;
