@@ -1,5 +1,6 @@
 // gravity: constant gravitational acceleration, f = m g
 // (Witkin, SIGGRAPH '97 notes, "Gravity").
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 
 namespace {
@@ -9,7 +10,10 @@ class Gravity final : public pdyn::Force {
   explicit Gravity(const pdyn::Vec3& g) : g_(g) {}
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
-    f.noalias() += g_ * p.mass.transpose();
+    // Column ranges on the host's threads; columns are independent.
+    pdyn::parallel_ranges(p.size(), [&](pdyn::Index b, pdyn::Index e) {
+      f.middleCols(b, e - b).noalias() += g_ * p.mass.segment(b, e - b).transpose();
+    });
   }
 
   // A constant force: both Jacobians are zero, so there is nothing to add,
