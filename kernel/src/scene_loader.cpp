@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "scene.hpp"
+#include "side_files.hpp"
 #include "text.hpp"
 
 namespace pdyn {
@@ -207,6 +208,10 @@ class Loader {
   void read_simulation(const YAML::Node& n, Scene& scene);
   void read_particles(const YAML::Node& n);
   void read_grid(const YAML::Node& n, const std::string& path);
+  // ---- side files (side_files.hpp) ----
+  std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
+                                    const char* expected);
+  void read_particle_file(const YAML::Node& item, const std::string& path);
   const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path,
                                   PluginKind kind);
   void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
@@ -378,8 +383,15 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML:
                                                                      Index n_particles) {
   const char* expected = K == 2 ? "a list of particle index pairs [[i, j], ...]"
                                 : "a list of particle index triples [[i, j, k], ...]";
+  if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file
+    const auto file = side_file(n, path, K == 2 ? "{ file: pairs.csv } with header i,j"
+                                                : "{ file: triples.csv } with header i,j,k");
+    if (!file) return std::nullopt;
+    return side_files::read_tuples<K>(*file, file->string(), n_particles, diags_);
+  }
   if (!n.IsSequence()) {
-    error(n, path, fmt::format("{}: is not a list (expected {})", path, expected));
+    error(n, path, fmt::format("{}: is not a list (expected {} or {{ file: NAME.csv }})", path,
+                               expected));
     return std::nullopt;
   }
   std::vector<std::array<Index, K>> out;
@@ -687,6 +699,10 @@ void Loader::read_particles(const YAML::Node& n) {
     if (!check_map(item, path, "{ position: [x, y, z], mass: m } or a builder such as grid")) {
       continue;
     }
+    if (item["file"].IsDefined()) {  // a CSV side file (side_files.hpp)
+      read_particle_file(item, path);
+      continue;
+    }
     if (item["grid"].IsDefined()) {
       if (item.size() != 1) {
         error(item, path, fmt::format("{}: a builder entry holds only its builder (expected "
@@ -710,6 +726,37 @@ void Loader::read_particles(const YAML::Node& n) {
                           "particle or builder)");
     particles_ok_ = false;
   }
+}
+
+// The `file` of a side-file mapping, relative to the scene's folder.
+std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::string& path,
+                                          const char* expected) {
+  check_keys(map, path, {"file"});
+  const YAML::Node f = map["file"];
+  if (!f.IsScalar() || f.Scalar().empty()) {
+    error(f.IsDefined() ? f : map, path + ".file",
+          fmt::format("{}.file: is not a file name (expected {})", path, expected));
+    return std::nullopt;
+  }
+  const fs::path name(f.Scalar());
+  return name.is_absolute() ? name : fs::path(file_).parent_path() / name;
+}
+
+void Loader::read_particle_file(const YAML::Node& item, const std::string& path) {
+  const auto file = side_file(item, path, "{ file: particles.csv } with header x,y,z,mass");
+  if (!file) return;
+  auto rows = side_files::read_particles(*file, file->string(), diags_);
+  if (!rows) return;
+  if (static_cast<std::int64_t>(x_.size() + rows->x.size()) > kMaxParticles) {
+    error(item, path, fmt::format("{}: {} particles is too many (expected at most {} particles "
+                                  "in a scene)",
+                                  path, x_.size() + rows->x.size(), kMaxParticles));
+    return;
+  }
+  x_.insert(x_.end(), rows->x.begin(), rows->x.end());
+  v_.insert(v_.end(), rows->v.begin(), rows->v.end());
+  m_.insert(m_.end(), rows->mass.begin(), rows->mass.end());
+  fixed_.insert(fixed_.end(), rows->fixed.begin(), rows->fixed.end());
 }
 
 // A rectangular sheet of nx x ny particles at origin + i u + j v; particle
