@@ -57,6 +57,7 @@ struct RunArgs {
   std::optional<double> duration;
   std::string resume;    // checkpoint to continue from
   bool force = false;    // resume even if the scene changed
+  int threads = 0;       // --threads; 0: the scene's simulation.threads, else all cores
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
 
@@ -149,6 +150,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     options.progress = terminal && !c.quiet;
     options.log = &err;
     options.handle_signals = true;
+    options.threads = a.threads;
     std::optional<Checkpoint> checkpoint;
     if (!a.resume.empty()) {
       checkpoint = read_checkpoint(a.resume);
@@ -349,6 +351,10 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   run->add_option("--duration", run_args.duration, "simulated time in s (replaces the scene's)")
       ->check(CLI::NonNegativeNumber)
       ->excludes(steps);
+  run->add_option("--threads", run_args.threads,
+                  "threads for forces and solvers (default: simulation.threads, else all "
+                  "cores); results are bit-identical for every count")
+      ->check(CLI::Range(1, 1024));
   run->add_option("--resume", run_args.resume,
                   "continue from a checkpoint written by an earlier run of this scene");
   run->add_flag("--force", run_args.force,

@@ -25,6 +25,8 @@ packages=(
   libgtest-dev libgmock-dev        # tests
   clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
   python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
+  libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
+  libbenchmark-dev                 # bench/ (Google Benchmark)
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -3,6 +3,7 @@
 #include "runner.hpp"
 
 #include <fmt/format.h>
+#include <pdyn/parallel.hpp>
 #include <unistd.h>
 
 #include <atomic>
@@ -342,7 +343,10 @@ struct Loop {
 
   // One step or accepted adaptive step: returns its length, or nothing if
   // the run must stop (result says why; the last good state is restored).
-  std::optional<double> guarded_step(const std::function<double()>& take, std::int64_t k) {
+  // `take` is a template parameter, not a std::function: converting the
+  // step lambda to one allocates on every step.
+  template <class Take>
+  std::optional<double> guarded_step(const Take& take, std::int64_t k) {
     System& sys = *scene.system;
     previous = sys.state();
     t_previous = sys.time();
@@ -387,7 +391,8 @@ struct Loop {
   // or off, and returns what the first plugin that threw (PluginRuntimeError,
   // which names it) said, if one did. With finite checks on, that names the
   // force object that first produced a NaN or infinity. Writes no frames.
-  std::optional<std::string> replay(const std::function<double()>& take, bool finite_checks) {
+  template <class Take>
+  std::optional<std::string> replay(const Take& take, bool finite_checks) {
     System& sys = *scene.system;
     const Eigen::VectorXd bad_state = sys.state();
     const double bad_time = sys.time();
@@ -530,6 +535,9 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
 
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
+  set_threads(options.threads > 0     ? options.threads
+              : scene.threads > 0     ? scene.threads
+                                      : available_threads());
   RunResult result;
   SignalGuard signals(options.handle_signals);
   Output out(scene, options.resume);

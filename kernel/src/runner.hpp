@@ -23,6 +23,10 @@ struct RunOptions {
   /// Continue from this checkpoint (already checked against the scene and
   /// applied by restore_checkpoint); its output files are continued.
   const Checkpoint* resume = nullptr;
+  /// Threads for forces and solvers (pdyn run --threads); 0: the scene's
+  /// simulation.threads, else every core (pdyn::available_threads()). The
+  /// results are bit-identical for every count.
+  int threads = 0;
 };
 
 struct RunResult {

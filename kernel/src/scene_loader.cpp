@@ -20,6 +20,7 @@
 #include "scene.hpp"
 #include "scene_builders.hpp"
 #include "scene_specs.hpp"
+#include "side_files.hpp"
 #include "text.hpp"
 
 namespace pdyn {
@@ -56,6 +57,11 @@ std::vector<ParamSpec> simulation_specs() {
           .at_least(0),
       param::optional("duration", ParamType::Real, "s", "simulated time (or give steps)")
           .at_least(0),
+      param::optional("threads", ParamType::Integer, "",
+                      "threads for forces and solvers (default: all cores; pdyn run --threads "
+                      "overrides it); results do not depend on it")
+          .at_least(1)
+          .at_most(1024),
   };
 }
 
@@ -237,6 +243,10 @@ class Loader final : public BuilderHost {
   void read_simulation(const YAML::Node& n, Scene& scene);
   void read_particles(const YAML::Node& n);
   void read_grid(const YAML::Node& n, const std::string& path);
+  // ---- side files (side_files.hpp) ----
+  std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
+                                    const char* expected);
+  void read_particle_file(const YAML::Node& item, const std::string& path);
   const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path,
                                   PluginKind kind);
   void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
@@ -409,8 +419,15 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML:
                                                                      Index n_particles) {
   const char* expected = K == 2 ? "a list of particle index pairs [[i, j], ...]"
                                 : "a list of particle index triples [[i, j, k], ...]";
+  if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file
+    const auto file = side_file(n, path, K == 2 ? "{ file: pairs.csv } with header i,j"
+                                                : "{ file: triples.csv } with header i,j,k");
+    if (!file) return std::nullopt;
+    return side_files::read_tuples<K>(*file, file->string(), n_particles, diags_);
+  }
   if (!n.IsSequence()) {
-    error(n, path, fmt::format("{}: is not a list (expected {})", path, expected));
+    error(n, path, fmt::format("{}: is not a list (expected {} or {{ file: NAME.csv }})", path,
+                               expected));
     return std::nullopt;
   }
   std::vector<std::array<Index, K>> out;
@@ -704,6 +721,7 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   auto p = read_params(n, "simulation", simulation_specs(), {"solver"}, -1);
   if (p) {
     scene.dt = p->real("dt");
+    if (p->has("threads")) scene.threads = static_cast<int>(p->integer("threads"));
     const bool has_steps = p->has("steps"), has_duration = p->has("duration");
     if (has_steps && has_duration) {
       // Point at the one a --set added, else at the one given last.
@@ -764,6 +782,10 @@ void Loader::read_particles(const YAML::Node& n) {
     if (!check_map(item, path, "{ position: [x, y, z], mass: m } or a builder such as grid")) {
       continue;
     }
+    if (item["file"].IsDefined()) {  // a CSV side file (side_files.hpp)
+      read_particle_file(item, path);
+      continue;
+    }
     const auto& builders = builder_names();
     const auto builder = std::find_if(builders.begin(), builders.end(),
                                       [&](const std::string& b) { return item[b].IsDefined(); });
@@ -800,6 +822,37 @@ void Loader::read_particles(const YAML::Node& n) {
                           "particle or builder)");
     particles_ok_ = false;
   }
+}
+
+// The `file` of a side-file mapping, relative to the scene's folder.
+std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::string& path,
+                                          const char* expected) {
+  check_keys(map, path, {"file"});
+  const YAML::Node f = map["file"];
+  if (!f.IsScalar() || f.Scalar().empty()) {
+    error(f.IsDefined() ? f : map, path + ".file",
+          fmt::format("{}.file: is not a file name (expected {})", path, expected));
+    return std::nullopt;
+  }
+  const fs::path name(f.Scalar());
+  return name.is_absolute() ? name : fs::path(file_).parent_path() / name;
+}
+
+void Loader::read_particle_file(const YAML::Node& item, const std::string& path) {
+  const auto file = side_file(item, path, "{ file: particles.csv } with header x,y,z,mass");
+  if (!file) return;
+  auto rows = side_files::read_particles(*file, file->string(), diags_);
+  if (!rows) return;
+  if (static_cast<std::int64_t>(x_.size() + rows->x.size()) > kMaxParticles) {
+    error(item, path, fmt::format("{}: {} particles is too many (expected at most {} particles "
+                                  "in a scene)",
+                                  path, x_.size() + rows->x.size(), kMaxParticles));
+    return;
+  }
+  x_.insert(x_.end(), rows->x.begin(), rows->x.end());
+  v_.insert(v_.end(), rows->v.begin(), rows->v.end());
+  m_.insert(m_.end(), rows->mass.begin(), rows->mass.end());
+  fixed_.insert(fixed_.end(), rows->fixed.begin(), rows->fixed.end());
 }
 
 // A rectangular sheet of nx x ny particles at origin + i u + j v; particle
@@ -1114,11 +1167,12 @@ Scene Loader::load(const std::string& text) {
   root_.reset(root);
   {
     // What a checkpoint must match: the scene after overrides, less the run
-    // length, which a resumed run may extend.
+    // length, which a resumed run may extend, and the thread count.
     YAML::Node canonical = YAML::Clone(root);
     if (canonical["simulation"].IsMap()) {
       canonical["simulation"].remove("steps");
       canonical["simulation"].remove("duration");
+      canonical["simulation"].remove("threads");  // bit-identical results for any count
     }
     YAML::Emitter emitter;
     emitter << canonical;

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include "pdyn/error.hpp"
+#include "pdyn/parallel.hpp"
 #include "registry.hpp"
 
 namespace pdyn {
@@ -23,7 +24,7 @@ void System::set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::Ve
     if (fixed_[i]) velocities().col(i).setZero();
   }
   force_.setZero(3, n);
-  accel_.setZero(3, n);
+  accel_.resize(3, 0);  // sized by the first compute_accelerations(): rk4 never needs it
   update_inverse_mass();
 }
 
@@ -111,7 +112,7 @@ void check_finite(const Matrix3X& f, const std::string& label) {
 // Witkin's loop, steps 1 and 2 (clear accumulators, invoke force objects),
 // followed by the colliders' contact forces, which must see the total force.
 void System::evaluate_forces() {
-  force_.setZero();
+  parallel_ranges(size(), [&](Index b, Index e) { force_.middleCols(b, e - b).setZero(); });
   const ParticleView p = view();
   for (auto& entry : forces_) {
     guarded(entry.label, "add_forces", [&] { entry.force->add_forces(p, force_); });
@@ -130,9 +131,16 @@ void System::evaluate_forces() {
 void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   evaluate_forces();
   const Index n = size();
-  dydt.head(3 * n) = state_.tail(3 * n);
-  Eigen::Map<Matrix3X> a(dydt.data() + 3 * n, 3, n);
-  a = force_ * inv_mass_.asDiagonal();
+  // One pass over the particles writes both halves (both streams are
+  // memory-bound at large N; one pass reads the state and f once). Each
+  // column is independent, so the split over threads cannot change a bit.
+  Eigen::Map<Matrix3X> vel(dydt.data(), 3, n), a(dydt.data() + 3 * n, 3, n);
+  const auto v = velocities();
+  parallel_ranges(n, [&](Index b, Index e) {
+    vel.middleCols(b, e - b) = v.middleCols(b, e - b);
+    a.middleCols(b, e - b) =
+        force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
+  });
   // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
   // blew up, so the blow-up is reported at the particle that moved.
   for (const Index i : fixed_ids_) a.col(i).setZero();
@@ -140,7 +148,11 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
 
 const Matrix3X& System::compute_accelerations() {
   evaluate_forces();
-  accel_ = force_ * inv_mass_.asDiagonal();
+  accel_.resize(3, size());  // allocates on the first call only
+  parallel_ranges(size(), [&](Index b, Index e) {
+    accel_.middleCols(b, e - b) =
+        force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
+  });
   for (const Index i : fixed_ids_) accel_.col(i).setZero();
   return accel_;
 }

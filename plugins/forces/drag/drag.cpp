@@ -1,5 +1,6 @@
 // drag: linear viscous drag, f = -k v (Witkin, SIGGRAPH '97 notes,
 // "Viscous Drag"). It removes energy, so it declares itself dissipative.
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 
@@ -11,7 +12,10 @@ class Drag final : public pdyn::Force {
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
     if (selection_.all()) {
-      f.noalias() -= k_ * p.v;
+      // Column ranges on the host's threads; columns are independent.
+      pdyn::parallel_ranges(p.size(), [&](pdyn::Index b, pdyn::Index e) {
+        f.middleCols(b, e - b).noalias() -= k_ * p.v.middleCols(b, e - b);
+      });
       return;
     }
     for (const pdyn::Index i : selection_.ids()) f.col(i) -= k_ * p.v.col(i);

@@ -1,5 +1,6 @@
 // gravity: constant gravitational acceleration, f = m g
 // (Witkin, SIGGRAPH '97 notes, "Gravity").
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 
@@ -12,7 +13,10 @@ class Gravity final : public pdyn::Force {
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
     if (selection_.all()) {
-      f.noalias() += g_ * p.mass.transpose();
+      // Column ranges on the host's threads; columns are independent.
+      pdyn::parallel_ranges(p.size(), [&](pdyn::Index b, pdyn::Index e) {
+        f.middleCols(b, e - b).noalias() += g_ * p.mass.segment(b, e - b).transpose();
+      });
       return;
     }
     for (const pdyn::Index i : selection_.ids()) f.col(i) += p.mass(i) * g_;

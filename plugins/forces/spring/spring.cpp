@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 
 namespace {
@@ -21,20 +22,44 @@ class Spring final : public pdyn::Force {
   Spring(std::vector<IndexPair> pairs, std::vector<double> rest, double ks, double kd)
       : pairs_(std::move(pairs)), rest_(std::move(rest)), ks_(ks), kd_(kd) {}
 
+  // One thread: each spring adds into both ends directly, the fastest form
+  // (one pass over the springs; the ends' columns are still in cache from
+  // the neighbouring springs of a grid). Several threads: two ends of
+  // different springs may be the same particle, so scattering in parallel
+  // would race, and atomics would make the order of the additions (hence
+  // the rounding) depend on timing. Instead the springs' forces go into a
+  // per-spring buffer in parallel, and then each particle, in parallel,
+  // adds the forces of its springs in increasing spring order, read from a
+  // precomputed CSR incidence list. That is exactly the sequence of
+  // additions the serial scatter applies to that particle's accumulator,
+  // so the result is bit-identical for every thread count, 1 included.
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
-    for (std::size_t s = 0; s < pairs_.size(); ++s) {
-      const Index i = pairs_[s][0], j = pairs_[s][1];
-      const pdyn::Vec3 dx = p.x.col(i) - p.x.col(j);
-      const double len = dx.norm();
-      // Coincident ends have no direction: the spring adds nothing rather
-      // than NaN (a zero-length spring at rest exerts no force anyway).
-      if (len == 0.0) continue;
-      const pdyn::Vec3 dv = p.v.col(i) - p.v.col(j);
-      const double magnitude = ks_ * (len - rest_[s]) + kd_ * dv.dot(dx) / len;
-      const pdyn::Vec3 fi = -(magnitude / len) * dx;
-      f.col(i) += fi;
-      f.col(j) -= fi;
+    const Index n_springs = static_cast<Index>(pairs_.size());
+    if (pdyn::max_threads() == 1 || n_springs < pdyn::kParallelMinElements) {
+      for (Index s = 0; s < n_springs; ++s) {
+        const pdyn::Vec3 fi = force_on_first(p, s);
+        f.col(pairs_[s][0]) += fi;
+        f.col(pairs_[s][1]) -= fi;
+      }
+      return;
     }
+    prepare_gather(p.size());  // allocates on the first call only
+    pdyn::parallel_ranges(n_springs, [&](Index b, Index e) {
+      for (Index s = b; s < e; ++s) buffer_.col(s) = force_on_first(p, s);
+    });
+    pdyn::parallel_ranges(p.size(), [&](Index b, Index e) {
+      for (Index i = b; i < e; ++i) {
+        for (Index k = offsets_[i]; k < offsets_[i + 1]; ++k) {
+          // incident_ holds 2 s for the spring's first end, 2 s + 1 for its second.
+          const Index s = incident_[k] >> 1;
+          if (incident_[k] & 1) {
+            f.col(i) -= buffer_.col(s);
+          } else {
+            f.col(i) += buffer_.col(s);
+          }
+        }
+      }
+    });
   }
 
   // Jacobians for implicit solvers. With n = dx/L and P = I - n n^T,
@@ -88,9 +113,50 @@ class Spring final : public pdyn::Force {
   }
 
  private:
+  // The force on the first end of spring s. Coincident ends have no
+  // direction: the spring adds zero rather than NaN (a zero-length spring
+  // at rest exerts no force anyway). Zero is added, not skipped, so that
+  // both paths of add_forces do the same additions.
+  pdyn::Vec3 force_on_first(const pdyn::ParticleView& p, Index s) const {
+    const Index i = pairs_[s][0], j = pairs_[s][1];
+    const pdyn::Vec3 dx = p.x.col(i) - p.x.col(j);
+    const double len = dx.norm();
+    if (len == 0.0) return pdyn::Vec3::Zero();
+    const pdyn::Vec3 dv = p.v.col(i) - p.v.col(j);
+    const double magnitude = ks_ * (len - rest_[s]) + kd_ * dv.dot(dx) / len;
+    return -(magnitude / len) * dx;
+  }
+
+  // Builds the CSR incidence list of the parallel path: particle i's
+  // springs are incident_[offsets_[i] .. offsets_[i + 1]), in increasing
+  // spring order (a counting sort over the springs, which visits them in
+  // order). Costs 8 bytes per particle and 16 + 24 bytes per spring, so it
+  // is only built when more than one thread runs.
+  void prepare_gather(Index n) {
+    if (static_cast<Index>(offsets_.size()) == n + 1) return;
+    const Index n_springs = static_cast<Index>(pairs_.size());
+    offsets_.assign(static_cast<std::size_t>(n + 1), 0);
+    for (const auto& pr : pairs_) {
+      ++offsets_[pr[0] + 1];
+      ++offsets_[pr[1] + 1];
+    }
+    for (Index i = 0; i < n; ++i) offsets_[i + 1] += offsets_[i];
+    incident_.resize(static_cast<std::size_t>(2 * n_springs));
+    std::vector<Index> next(offsets_.begin(), offsets_.end() - 1);
+    for (Index s = 0; s < n_springs; ++s) {
+      incident_[next[pairs_[s][0]]++] = 2 * s;
+      incident_[next[pairs_[s][1]]++] = 2 * s + 1;
+    }
+    buffer_.resize(3, n_springs);
+  }
+
   std::vector<IndexPair> pairs_;
   std::vector<double> rest_;  // rest length of each pair, m
   double ks_, kd_;
+  // Parallel path only (see add_forces).
+  std::vector<Index> offsets_;   // N + 1
+  std::vector<Index> incident_;  // 2 per spring: 2 s (first end) or 2 s + 1 (second end)
+  pdyn::Matrix3X buffer_;        // force on each spring's first end, N
 };
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
@@ -112,7 +178,8 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
           "rest", fmt::format("has {} values for {} pairs (expected 1 value for all, or {})",
                               given.size(), pairs.size(), pairs.size()));
     }
-    for (std::size_t s = 0; s < pairs.size(); ++s) rest[s] = given.size() == 1 ? given[0] : given[s];
+    for (std::size_t s = 0; s < pairs.size(); ++s)
+      rest[s] = given.size() == 1 ? given[0] : given[s];
   } else {
     for (std::size_t s = 0; s < pairs.size(); ++s) {
       rest[s] = (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();

@@ -1,5 +1,6 @@
 // euler: the explicit (forward) Euler method, y1 = y0 + h f(t0, y0).
 // First order; Witkin's notes use it to introduce the solver interface.
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 
@@ -10,7 +11,11 @@ class Euler final : public pdyn::Solver {
   void step(pdyn::System& sys, double h) override {
     dydt_.resize(sys.dimension());  // no-op after the first step
     sys.derivative(dydt_);
-    sys.state() += h * dydt_;
+    auto y = sys.state();
+    // Split over the host's threads; element-wise, so thread-count independent.
+    pdyn::parallel_ranges(y.size(), [&](pdyn::Index b, pdyn::Index e) {
+      y.segment(b, e - b) += h * dydt_.segment(b, e - b);
+    });
     sys.set_time(sys.time() + h);
   }
 

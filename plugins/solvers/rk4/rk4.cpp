@@ -4,37 +4,62 @@
 //   y1 = y0 + h/6 (k1 + 2 k2 + 2 k3 + k4).
 // Stage states are written straight into the system's state (no set_state
 // copy); the weighted sum is accumulated in `sum_` as the stages arrive so
-// only one derivative buffer is live at a time.
+// only one derivative buffer is live at a time. Each vector update is one
+// fused pass (sum and next stage state together): at large N the step is
+// memory-bound, so passes, not flops, are what cost. The passes are split
+// over the host's threads; every element is computed alike whatever the
+// split, so the result does not depend on the thread count.
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 
 namespace {
 
+using pdyn::Index;
+
 class Rk4 final : public pdyn::Solver {
  public:
   void step(pdyn::System& sys, double h) override {
     const double t0 = sys.time();
-    y0_ = sys.state();
-    k_.resize(sys.dimension());
-    sum_.resize(sys.dimension());
+    const Index n = sys.dimension();
+    y0_.resize(n);  // these allocate on the first step only
+    k_.resize(n);
+    sum_.resize(n);
+    auto y = sys.state();
+    // Applies update(segment of y, of y0, of k, of sum) over [0, n) in parallel.
+    auto update = [&](auto&& op) {
+      pdyn::parallel_ranges(n, [&](Index b, Index e) {
+        op(y.segment(b, e - b), y0_.segment(b, e - b), k_.segment(b, e - b),
+           sum_.segment(b, e - b));
+      });
+    };
+    update([](auto yy, auto y0, auto, auto) { y0 = yy; });
 
     sys.derivative(k_);  // k1
-    sum_ = k_;
-    sys.state() = y0_ + (0.5 * h) * k_;
+    update([h](auto yy, auto y0, auto k, auto sum) {
+      sum = k;
+      yy = y0 + (0.5 * h) * k;
+    });
     sys.set_time(t0 + 0.5 * h);
 
     sys.derivative(k_);  // k2
-    sum_ += 2.0 * k_;
-    sys.state() = y0_ + (0.5 * h) * k_;
+    update([h](auto yy, auto y0, auto k, auto sum) {
+      sum += 2.0 * k;
+      yy = y0 + (0.5 * h) * k;
+    });
 
     sys.derivative(k_);  // k3
-    sum_ += 2.0 * k_;
-    sys.state() = y0_ + h * k_;
+    update([h](auto yy, auto y0, auto k, auto sum) {
+      sum += 2.0 * k;
+      yy = y0 + h * k;
+    });
     sys.set_time(t0 + h);
 
     sys.derivative(k_);  // k4
-    sum_ += k_;
-    sys.state() = y0_ + (h / 6.0) * sum_;
+    update([h](auto yy, auto y0, auto k, auto sum) {
+      sum += k;
+      yy = y0 + (h / 6.0) * sum;
+    });
   }
 
  private:

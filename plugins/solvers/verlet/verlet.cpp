@@ -23,6 +23,7 @@
 //   the state between steps (checkpoints, interactive edits). Reusing a1 is
 //   only valid when none of that happens and the forces ignore v, which a
 //   solver cannot know, so this costs two force evaluations per step.
+#include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 
@@ -35,14 +36,25 @@ class Verlet final : public pdyn::Solver {
     auto x = sys.positions();
     auto v = sys.velocities();
 
-    a0_ = sys.compute_accelerations();
-    half_ = v + (0.5 * h) * a0_;  // v_half
-    x += h * half_;
-    v += h * a0_;  // velocity predictor, only seen by a1's forces
+    const pdyn::Index n = sys.size();
+    a0_.resize(3, n);  // no-op after the first step
+    half_.resize(3, n);
+    // Column ranges split over the host's threads; columns are independent,
+    // so the result does not depend on the thread count.
+    const pdyn::Matrix3X& a = sys.compute_accelerations();
+    pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
+      const pdyn::Index m = e - b;
+      a0_.middleCols(b, m) = a.middleCols(b, m);
+      half_.middleCols(b, m) = v.middleCols(b, m) + (0.5 * h) * a0_.middleCols(b, m);  // v_half
+      x.middleCols(b, m) += h * half_.middleCols(b, m);
+      v.middleCols(b, m) += h * a0_.middleCols(b, m);  // velocity predictor, only seen by a1's forces
+    });
     sys.set_time(t0 + h);
 
     const pdyn::Matrix3X& a1 = sys.compute_accelerations();
-    v = half_ + (0.5 * h) * a1;
+    pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
+      v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
+    });
   }
 
  private:

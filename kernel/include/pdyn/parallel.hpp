@@ -1,0 +1,70 @@
+// pdyn/parallel.hpp — splitting per-particle and per-element loops over threads.
+//
+// pdyn runs with OpenMP (GCC's libgomp). The thread count is set once per
+// process by the host: pdyn::set_threads (the runner calls it with the
+// scene's `simulation.threads` or `pdyn run --threads N`), which calls
+// omp_set_num_threads. A plugin built with -fopenmp (every shipped one is)
+// sees that count through OpenMP's own default team size, so nothing needs
+// to be passed to it; a plugin built without OpenMP runs its loops on one
+// thread and is still correct.
+//
+// Determinism: results must be bit-identical for every thread count. The
+// helpers below are for loops whose iterations are independent and write
+// disjoint elements (y = a + h k, f += m g, ...): every element is computed
+// by the same operations whatever thread runs it, so any split gives the
+// same bits. A loop that accumulates into shared elements (springs adding
+// into both ends) must not race or use atomics: see the spring plugin,
+// which writes per-spring forces into a buffer and gathers them per
+// particle in a fixed order.
+#pragma once
+
+#include <algorithm>
+
+#include "pdyn/types.hpp"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace pdyn {
+
+/// Below this many elements (particles, springs or doubles) a loop runs on
+/// the calling thread: waking a team costs a few microseconds, about what
+/// streaming a few thousand doubles does.
+inline constexpr Index kParallelMinElements = 4096;
+
+/// Number of threads parallel loops use: the process's OpenMP default team
+/// size, as set by set_threads (answered by the kernel, so it is right even
+/// in code built without OpenMP).
+int max_threads() noexcept;
+
+/// Host side: sets the number of threads (>= 1) every later parallel loop in
+/// the process uses, kernel and plugins alike (omp_set_num_threads). Without
+/// OpenMP it does nothing. The runner calls it; plugins never need to.
+void set_threads(int n);
+
+/// The number of cores this process may use (omp_get_num_procs): the
+/// default thread count.
+int available_threads() noexcept;
+
+/// Calls body(begin, end) on contiguous, disjoint ranges that cover [0, n),
+/// one per thread (one range, on the calling thread, when n is small, when
+/// one thread is configured, or when already inside a parallel region).
+/// `body` must not throw: an exception cannot leave an OpenMP region.
+template <class Body>
+void parallel_ranges(Index n, Body&& body) {
+#ifdef _OPENMP
+  if (n >= kParallelMinElements && omp_get_max_threads() > 1 && !omp_in_parallel()) {
+#pragma omp parallel
+    {
+      const Index t = omp_get_thread_num(), nt = omp_get_num_threads();
+      const Index begin = n * t / nt, end = n * (t + 1) / nt;
+      if (begin < end) body(begin, end);
+    }
+    return;
+  }
+#endif
+  if (n > 0) body(Index{0}, n);
+}
+
+}  // namespace pdyn

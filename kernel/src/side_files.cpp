@@ -1,0 +1,327 @@
+// CSV side files (see side_files.hpp). One pass over the file held in
+// memory, fields split at commas, numbers parsed with std::from_chars: no
+// streams, no locale, no allocation per field.
+#include "side_files.hpp"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string_view>
+
+namespace pdyn::side_files {
+
+namespace {
+
+// The problems of one file, capped.
+class Problems {
+ public:
+  Problems(std::string shown, std::vector<Diagnostic>& out) : shown_(std::move(shown)), out_(out) {}
+  void add(std::size_t line, std::size_t column, std::string message) {
+    if (count_++ < kMaxProblemsPerFile) {
+      out_.push_back({fmt::format("{}:{}:{}", shown_, line, column), std::move(message)});
+    }
+  }
+  void add_file(std::string message) { out_.push_back({shown_, std::move(message)}); ++count_; }
+  bool any() const { return count_ > 0; }
+  void finish() {
+    if (count_ > kMaxProblemsPerFile) {
+      out_.push_back({shown_, fmt::format("{} more problems not shown (expected a valid file)",
+                                          count_ - kMaxProblemsPerFile)});
+    }
+  }
+
+ private:
+  std::string shown_;
+  std::vector<Diagnostic>& out_;
+  std::size_t count_ = 0;
+};
+
+std::optional<std::string> slurp(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::string s;
+  in.seekg(0, std::ios::end);
+  s.resize(static_cast<std::size_t>(in.tellg()));
+  in.seekg(0);
+  in.read(s.data(), static_cast<std::streamsize>(s.size()));
+  return s;
+}
+
+struct Field {
+  std::string_view text;  // without surrounding blanks
+  std::size_t column;     // 1-based character column of the field's start
+};
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+// Splits `line` at commas into `fields` (reused, so no allocation per line).
+void split(std::string_view line, std::vector<Field>& fields) {
+  fields.clear();
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    const std::size_t end = comma == std::string_view::npos ? line.size() : comma;
+    std::string_view raw = line.substr(start, end - start);
+    std::size_t lead = 0;
+    while (lead < raw.size() && (raw[lead] == ' ' || raw[lead] == '\t')) ++lead;
+    fields.push_back({trim(raw), start + lead + 1});
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+}
+
+// Calls row(line_number, fields) for every non-empty line after the header,
+// after header(fields) accepted the first line.
+template <class Header, class Row>
+void for_each_row(const std::string& text, Problems& problems, Header&& header, Row&& row) {
+  std::vector<Field> fields;
+  std::size_t pos = 0, line = 0;
+  bool have_header = false;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view l(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++line;
+    if (trim(l).empty()) continue;
+    split(l, fields);
+    if (!have_header) {
+      if (!header(line, fields)) return;
+      have_header = true;
+      continue;
+    }
+    row(line, fields);
+  }
+  if (!have_header) problems.add(1, 1, "the file is empty (expected a header row, then records)");
+}
+
+std::string quoted(std::string_view s) {
+  return s.empty() ? std::string("an empty field") : fmt::format("'{}'", s);
+}
+
+std::optional<double> parse_real(const Field& f, std::size_t line, std::string_view name,
+                                 Problems& problems) {
+  double x = 0.0;
+  const char* b = f.text.data();
+  const char* e = b + f.text.size();
+  if (!f.text.empty() && *b == '+') ++b;  // from_chars refuses a leading '+'
+  const auto [end, ec] = std::from_chars(b, e, x);
+  if (ec != std::errc() || end != e || f.text.empty()) {
+    problems.add(line, f.column,
+                 fmt::format("{}: {} is not a number (expected a real number, e.g. 0.25)", name,
+                             quoted(f.text)));
+    return std::nullopt;
+  }
+  if (!std::isfinite(x)) {
+    problems.add(line, f.column,
+                 fmt::format("{}: {} is not finite (expected a finite number)", name, f.text));
+    return std::nullopt;
+  }
+  return x;
+}
+
+std::string column_count_message(std::size_t got, std::size_t want, const std::string& header) {
+  return fmt::format("has {} fields, the header has {} (expected {} comma-separated values: {})",
+                     got, want, want, header);
+}
+
+}  // namespace
+
+std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
+                                           const std::string& shown,
+                                           std::vector<Diagnostic>& out) {
+  Problems problems(shown, out);
+  const auto text = slurp(file);
+  if (!text) {
+    problems.add_file("cannot read the particle file (expected a readable CSV file)");
+    return std::nullopt;
+  }
+  enum Col { X, Y, Z, VX, VY, VZ, MASS, FIXED, N_COLS };
+  static const char* const kNames[N_COLS] = {"x", "y", "z", "vx", "vy", "vz", "mass", "fixed"};
+  std::array<int, N_COLS> at{};  // field index of each column, -1 if absent
+  at.fill(-1);
+  std::size_t width = 0;
+  std::string header_text;
+  ParticleRows rows;
+  const std::size_t estimate = text->size() / 40;  // typical record length
+  rows.x.reserve(estimate);
+  rows.v.reserve(estimate);
+  rows.mass.reserve(estimate);
+  rows.fixed.reserve(estimate);
+  auto header = [&](std::size_t line, const std::vector<Field>& fields) {
+    width = fields.size();
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      header_text += (k ? "," : "") + std::string(fields[k].text);
+      int c = 0;
+      while (c < N_COLS && fields[k].text != kNames[c]) ++c;
+      if (c == N_COLS) {
+        problems.add(line, fields[k].column,
+                     fmt::format("unknown column {} (expected x, y, z, vx, vy, vz, mass, fixed)",
+                                 quoted(fields[k].text)));
+      } else if (at[c] >= 0) {
+        problems.add(line, fields[k].column,
+                     fmt::format("column '{}' appears twice (expected each column once)",
+                                 kNames[c]));
+      } else {
+        at[c] = static_cast<int>(k);
+      }
+    }
+    for (int c : {X, Y, Z, MASS}) {
+      if (at[c] < 0) {
+        problems.add(line, 1,
+                     fmt::format("the header has no column '{}' (expected x,y,z[,vx,vy,vz],mass"
+                                 "[,fixed])",
+                                 kNames[c]));
+      }
+    }
+    const int velocities = (at[VX] >= 0) + (at[VY] >= 0) + (at[VZ] >= 0);
+    if (velocities != 0 && velocities != 3) {
+      problems.add(line, 1,
+                   "the header has only some of vx, vy, vz (expected all three or none)");
+    }
+    return !problems.any();
+  };
+  auto row = [&](std::size_t line, const std::vector<Field>& fields) {
+    if (fields.size() != width) {
+      problems.add(line, fields.back().column + fields.back().text.size(),
+                   column_count_message(fields.size(), width, header_text));
+      return;
+    }
+    bool ok = true;
+    double value[N_COLS] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (int c = X; c <= MASS; ++c) {
+      if (at[c] < 0) continue;
+      const auto x = parse_real(fields[static_cast<std::size_t>(at[c])], line, kNames[c], problems);
+      ok = ok && x;
+      if (x) value[c] = *x;
+    }
+    if (ok && !(value[MASS] > 0.0)) {
+      problems.add(line, fields[static_cast<std::size_t>(at[MASS])].column,
+                   fmt::format("mass: {} is not positive (expected a mass > 0 kg)",
+                               fields[static_cast<std::size_t>(at[MASS])].text));
+      ok = false;
+    }
+    std::uint8_t fixed = 0;
+    if (at[FIXED] >= 0) {
+      const Field& f = fields[static_cast<std::size_t>(at[FIXED])];
+      if (f.text == "1" || f.text == "true") {
+        fixed = 1;
+      } else if (!(f.text == "0" || f.text == "false")) {
+        problems.add(line, f.column,
+                     fmt::format("fixed: {} is not a flag (expected 0, 1, true or false)",
+                                 quoted(f.text)));
+        ok = false;
+      }
+    }
+    if (!ok) return;
+    rows.x.emplace_back(value[X], value[Y], value[Z]);
+    // A nailed particle does not move: its velocity is zeroed on assembly.
+    rows.v.emplace_back(value[VX], value[VY], value[VZ]);
+    rows.mass.push_back(value[MASS]);
+    rows.fixed.push_back(fixed);
+  };
+  for_each_row(*text, problems, header, row);
+  if (problems.any()) {
+    problems.finish();
+    return std::nullopt;
+  }
+  if (rows.x.empty()) {
+    problems.add_file("the file has a header but no particles (expected at least one record)");
+    return std::nullopt;
+  }
+  return rows;
+}
+
+template <std::size_t K>
+std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesystem::path& file,
+                                                             const std::string& shown,
+                                                             Index n_particles,
+                                                             std::vector<Diagnostic>& out) {
+  Problems problems(shown, out);
+  const auto text = slurp(file);
+  if (!text) {
+    problems.add_file("cannot read the index file (expected a readable CSV file)");
+    return std::nullopt;
+  }
+  static const char* const kNames[3] = {"i", "j", "k"};
+  const std::string header_text = K == 2 ? "i,j" : "i,j,k";
+  std::vector<std::array<Index, K>> tuples;
+  tuples.reserve(text->size() / (4 * K));
+  auto header = [&](std::size_t line, const std::vector<Field>& fields) {
+    bool ok = fields.size() == K;
+    for (std::size_t k = 0; ok && k < K; ++k) ok = fields[k].text == kNames[k];
+    if (!ok) {
+      problems.add(line, 1, fmt::format("the header is not {} (expected the columns {})",
+                                        header_text, header_text));
+    }
+    return ok;
+  };
+  auto row = [&](std::size_t line, const std::vector<Field>& fields) {
+    if (fields.size() != K) {
+      problems.add(line, fields.back().column + fields.back().text.size(),
+                   column_count_message(fields.size(), K, header_text));
+      return;
+    }
+    std::array<Index, K> t{};
+    for (std::size_t k = 0; k < K; ++k) {
+      const Field& f = fields[k];
+      long long i = 0;
+      const auto [end, ec] = std::from_chars(f.text.data(), f.text.data() + f.text.size(), i);
+      if (ec != std::errc() || end != f.text.data() + f.text.size() || f.text.empty()) {
+        problems.add(line, f.column,
+                     fmt::format("{}: {} is not a particle index (expected a whole number)",
+                                 kNames[k], quoted(f.text)));
+        return;
+      }
+      if (n_particles >= 0 && (i < 0 || i >= n_particles)) {
+        problems.add(line, f.column,
+                     fmt::format("{}: particle index {} is out of range (expected 0..{}: the "
+                                 "scene has {} particles)",
+                                 kNames[k], i, n_particles - 1, n_particles));
+        return;
+      }
+      t[k] = i;
+    }
+    tuples.push_back(t);
+  };
+  for_each_row(*text, problems, header, row);
+  if (problems.any()) {
+    problems.finish();
+    return std::nullopt;
+  }
+  return tuples;
+}
+
+template std::optional<std::vector<std::array<Index, 2>>> read_tuples<2>(
+    const std::filesystem::path&, const std::string&, Index, std::vector<Diagnostic>&);
+template std::optional<std::vector<std::array<Index, 3>>> read_tuples<3>(
+    const std::filesystem::path&, const std::string&, Index, std::vector<Diagnostic>&);
+
+void write_particles(const std::filesystem::path& file, const ParticleRows& rows) {
+  fmt::memory_buffer buf;
+  fmt::format_to(std::back_inserter(buf), "x,y,z,vx,vy,vz,mass,fixed\n");
+  for (std::size_t i = 0; i < rows.x.size(); ++i) {
+    fmt::format_to(std::back_inserter(buf), "{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{}\n",
+                   rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(),
+                   rows.v[i].z(), rows.mass[i], int{rows.fixed[i]});
+  }
+  std::ofstream(file, std::ios::binary).write(buf.data(), static_cast<std::streamsize>(buf.size()));
+}
+
+void write_pairs(const std::filesystem::path& file, const std::vector<IndexPair>& pairs) {
+  fmt::memory_buffer buf;
+  fmt::format_to(std::back_inserter(buf), "i,j\n");
+  for (const auto& p : pairs) fmt::format_to(std::back_inserter(buf), "{},{}\n", p[0], p[1]);
+  std::ofstream(file, std::ios::binary).write(buf.data(), static_cast<std::streamsize>(buf.size()));
+}
+
+}  // namespace pdyn::side_files
