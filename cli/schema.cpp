@@ -75,6 +75,12 @@ Json value_json(const ParamValue& v) {
     Json operator()(const std::vector<Index>& xs) const { return xs; }
     Json operator()(const std::vector<IndexPair>& xs) const { return xs; }
     Json operator()(const std::vector<IndexTriple>& xs) const { return xs; }
+    Json operator()(const std::vector<std::string>& xs) const { return xs; }
+    Json operator()(const NamedReals& xs) const {
+      Json o = Json::object();
+      for (const auto& [name, x] : xs) o[name] = (*this)(x);
+      return o;
+    }
   };
   return std::visit(Visitor{}, v);
 }
@@ -93,6 +99,13 @@ Json param_schema(const ParamSpec& s, bool indices_checked) {
     case ParamType::IndexPairs: j = {{"type", "array"}, {"items", tuples(2, indices_checked)}}; break;
     case ParamType::IndexTriples:
       j = {{"type", "array"}, {"items", tuples(3, indices_checked)}};
+      break;
+    case ParamType::StringList: j = {{"type", "array"}, {"items", {{"type", "string"}}}}; break;
+    case ParamType::NamedReals:
+      // Names are identifiers (the loader's rule), each mapped to a number.
+      j = {{"type", "object"},
+           {"propertyNames", {{"pattern", "^[A-Za-z_][A-Za-z0-9_]*$"}}},
+           {"additionalProperties", number(s, "number")}};
       break;
   }
   if (s.type == ParamType::IndexList) j = {{"type", "array"}, {"items", j}};
