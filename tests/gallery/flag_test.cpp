@@ -33,7 +33,8 @@ TEST(GalleryFlag, ClothIsBlownDownwindAndStaysAttached) {
   // Neighbours along the flag stay near their 4 cm spacing (no blow-up).
   for (Index j = 0; j < 10; ++j) {
     for (Index i = 0; i + 1 < 15; ++i) {
-      const double d = (sys.positions().col(j * 15 + i + 1) - sys.positions().col(j * 15 + i)).norm();
+      const double d =
+          (sys.positions().col(j * 15 + i + 1) - sys.positions().col(j * 15 + i)).norm();
       max_stretch = std::max(max_stretch, d / 0.04);
     }
   }

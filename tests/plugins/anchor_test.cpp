@@ -48,8 +48,7 @@ TEST(AnchorForce, MovedTargetPullsTheParticleThere) {
   // after 3 s it has settled at the new target; the other one never moved.
   for (int s = 12; s <= 310; ++s) test::TakeStep(scene, s, 0.01);
   const double miss = (Vec3(scene.system->positions().col(0)) - Vec3(0.5, 0, 0)).norm();
-  std::cout << "anchor: after moving the target by 0.5 m, |x - target| at 3 s = " << miss
-            << " m\n";
+  std::cout << "anchor: after moving the target by 0.5 m, |x - target| at 3 s = " << miss << " m\n";
   EXPECT_LE(miss, 1e-4);
   EXPECT_EQ(Vec3(scene.system->positions().col(1)), Vec3(0, 1, 0));
   EXPECT_THROW(targets.set_target(2, Vec3::Zero()), Error);
