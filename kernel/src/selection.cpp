@@ -44,15 +44,16 @@ Selection Selection::from_params(const Params& params, const SceneContext& ctx) 
                                             name));
     }
     const std::string guess = closest_match(name, names);
-    throw ParamError("group",
-                     fmt::format("unknown group '{}' ({}expected one of: {})", name,
-                                 guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess),
-                                 join(names)));
+    throw ParamError(
+        "group",
+        fmt::format("unknown group '{}' ({}expected one of: {})", name,
+                    guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess), join(names)));
   } else if (has_ids) {
     const auto& ids = params.indices("ids");
     if (ids.empty()) {
-      throw ParamError("ids", "is empty (expected at least one particle index; leave 'ids' out "
-                              "for every particle)");
+      throw ParamError("ids",
+                       "is empty (expected at least one particle index; leave 'ids' out "
+                       "for every particle)");
     }
     std::unordered_set<Index> seen;
     for (std::size_t e = 0; e < ids.size(); ++e) {

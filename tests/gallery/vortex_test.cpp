@@ -20,8 +20,7 @@ TEST(GalleryVortex, ParticlesAreSpunUpAndCirculate) {
   auto lz = [&] {
     double l = 0.0;
     for (Index i = 0; i < sys.size(); ++i) {
-      l += sys.masses()(i) *
-           Vec3(sys.positions().col(i)).cross(Vec3(sys.velocities().col(i))).z();
+      l += sys.masses()(i) * Vec3(sys.positions().col(i)).cross(Vec3(sys.velocities().col(i))).z();
     }
     return l;
   };
@@ -44,8 +43,8 @@ TEST(GalleryVortex, ParticlesAreSpunUpAndCirculate) {
       if (x.cross(v).z() > 0.0) ++anticlockwise;
     }
   }
-  std::cout << "vortex: L_z(3 s) = " << lz() << " kg m^2/s, sum m W r^2 = " << rigid
-            << ", ratio " << lz() / rigid << "; " << anticlockwise << " of " << off_centre
+  std::cout << "vortex: L_z(3 s) = " << lz() << " kg m^2/s, sum m W r^2 = " << rigid << ", ratio "
+            << lz() / rigid << "; " << anticlockwise << " of " << off_centre
             << " off-axis particles circulate anticlockwise\n";
   EXPECT_TRUE(monotonic) << "the flow only ever adds angular momentum";
   // The particles lag the flow (drag must also supply the centripetal

@@ -5,7 +5,7 @@
 //    pulled towards the new point and, damped, settles there;
 //  - save_state()/restore_state() carry the moved targets: a system
 //    restored from them continues bit-identically, and without them it
-//    would not;
+//    would not; the same through a checkpoint file written by the runner;
 //  - the force law on one particle with a known stretch.
 #include <gtest/gtest.h>
 
@@ -13,6 +13,7 @@
 
 #include "pdyn/targets.hpp"
 #include "plugins/force_support.hpp"
+#include "runner.hpp"
 
 namespace pdyn {
 namespace {
@@ -48,8 +49,7 @@ TEST(AnchorForce, MovedTargetPullsTheParticleThere) {
   // after 3 s it has settled at the new target; the other one never moved.
   for (int s = 12; s <= 310; ++s) test::TakeStep(scene, s, 0.01);
   const double miss = (Vec3(scene.system->positions().col(0)) - Vec3(0.5, 0, 0)).norm();
-  std::cout << "anchor: after moving the target by 0.5 m, |x - target| at 3 s = " << miss
-            << " m\n";
+  std::cout << "anchor: after moving the target by 0.5 m, |x - target| at 3 s = " << miss << " m\n";
   EXPECT_LE(miss, 1e-4);
   EXPECT_EQ(Vec3(scene.system->positions().col(1)), Vec3(0, 1, 0));
   EXPECT_THROW(targets.set_target(2, Vec3::Zero()), Error);
@@ -79,6 +79,29 @@ TEST(AnchorForce, SaveAndRestoreCarryMovedTargets) {
   EXPECT_NE(a.system->state(), c.system->state()) << "without the targets it would differ";
   const std::vector<std::uint8_t> short_bytes(bytes.begin(), bytes.end() - 1);
   EXPECT_THROW(b.system->force_objects().at(0).force->restore_state(short_bytes), Error);
+}
+
+// The runner writes the anchor's moved targets into its checkpoint; a fresh
+// scene restored from the file has them and continues exactly like a run
+// that was never stopped.
+TEST(AnchorForce, CheckpointCarriesMovedTargets) {
+  const auto dir = test::temp_dir("anchor-checkpoint");
+  const std::string ckpt = (dir / "run.ckpt").string();
+  const std::vector<Override> first = {{"simulation.steps", "20"},
+                                       {"output", "{checkpoint: {path: " + ckpt + "}}"}};
+  Scene a = test::load_text(kScene, first);
+  TargetsOf(a).set_target(0, Vec3(0.3, -0.2, 0.1));
+  ASSERT_EQ(run_scene(a).exit_code, 0);
+  Scene whole = test::load_text(kScene);  // the uninterrupted run
+  TargetsOf(whole).set_target(0, Vec3(0.3, -0.2, 0.1));
+  for (int s = 1; s <= 40; ++s) test::TakeStep(whole, s, 0.01);
+  Scene b = test::load_text(
+      kScene, {{"simulation.steps", "40"}, {"output", "{checkpoint: {path: " + ckpt + "}}"}});
+  restore_checkpoint(b, read_checkpoint(ckpt), false);
+  EXPECT_EQ(TargetsOf(b).target(0), Vec3(0.3, -0.2, 0.1));
+  EXPECT_EQ(b.system->time(), 0.2);
+  for (int s = 21; s <= 40; ++s) test::TakeStep(b, s, 0.01);
+  EXPECT_EQ(b.system->state(), whole.system->state()) << "resumed: bit-identical";
 }
 
 // d = (3, 4, 0) m from the target, rest 1 m, ks = 2 N/m: |f| = ks (5 - 1) =

@@ -24,8 +24,9 @@ TEST(AngleForce, UndampedForceIsMinusTheGradientOfItsPotential) {
   for (unsigned seed : {11u, 12u, 13u}) {
     Cloud cloud(7, seed);
     // Rest angles away from the initial ones: a stretched, loaded state.
-    Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: angle, triples: " +
-                                  cloud.Triples(9) + ", k: 5, rest: [1.1] }\n");
+    Scene scene =
+        test::load_text(cloud.Yaml() + "forces:\n  - { type: angle, triples: " + cloud.Triples(9) +
+                        ", k: 5, rest: [1.1] }\n");
     System& sys = *scene.system;
     const Matrix3X f = test::ForcesOf(sys, 0);
     ASSERT_GT(test::MaxNorm(f), 0.1);
@@ -38,8 +39,9 @@ TEST(AngleForce, UndampedForceIsMinusTheGradientOfItsPotential) {
 TEST(AngleForce, ZeroNetForceAndTorque) {
   for (unsigned seed : {14u, 15u, 16u}) {
     Cloud cloud(7, seed);
-    Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: angle, triples: " +
-                                  cloud.Triples(9) + ", k: 5, kd: 0.7, rest: [2.0] }\n");
+    Scene scene =
+        test::load_text(cloud.Yaml() + "forces:\n  - { type: angle, triples: " + cloud.Triples(9) +
+                        ", k: 5, kd: 0.7, rest: [2.0] }\n");
     const Matrix3X f = test::ForcesOf(*scene.system, 0);
     const auto b = test::NetForceAndTorque(*scene.system, f);
     std::cout << "angle, seed " << seed << ": |sum f|/sum|f| = " << b.force
@@ -52,8 +54,9 @@ TEST(AngleForce, ZeroNetForceAndTorque) {
 TEST(AngleForce, DampingAloneDoesNoPositiveWork) {
   for (unsigned seed : {17u, 18u}) {
     Cloud cloud(7, seed);
-    Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: angle, triples: " +
-                                  cloud.Triples(9) + ", k: 0, kd: 0.7 }\n");
+    Scene scene =
+        test::load_text(cloud.Yaml() + "forces:\n  - { type: angle, triples: " + cloud.Triples(9) +
+                        ", k: 0, kd: 0.7 }\n");
     const Matrix3X f = test::ForcesOf(*scene.system, 0);
     const double power = (f.array() * scene.system->velocities().array()).sum();
     std::cout << "angle damping, seed " << seed << ": sum f.v = " << power << " W\n";

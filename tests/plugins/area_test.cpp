@@ -20,8 +20,9 @@ using test::Cloud;
 TEST(AreaForce, UndampedForceIsMinusTheGradientOfItsPotential) {
   for (unsigned seed : {21u, 22u, 23u}) {
     Cloud cloud(7, seed);
-    Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: area, triples: " +
-                                  cloud.Triples(9) + ", k: 50, rest: [0.4] }\n");
+    Scene scene =
+        test::load_text(cloud.Yaml() + "forces:\n  - { type: area, triples: " + cloud.Triples(9) +
+                        ", k: 50, rest: [0.4] }\n");
     System& sys = *scene.system;
     const Matrix3X f = test::ForcesOf(sys, 0);
     ASSERT_GT(test::MaxNorm(f), 0.1);
@@ -34,8 +35,9 @@ TEST(AreaForce, UndampedForceIsMinusTheGradientOfItsPotential) {
 TEST(AreaForce, ZeroNetForceAndTorque) {
   for (unsigned seed : {24u, 25u, 26u}) {
     Cloud cloud(7, seed);
-    Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: area, triples: " +
-                                  cloud.Triples(9) + ", k: 50, kd: 3, rest: [0.05] }\n");
+    Scene scene =
+        test::load_text(cloud.Yaml() + "forces:\n  - { type: area, triples: " + cloud.Triples(9) +
+                        ", k: 50, kd: 3, rest: [0.05] }\n");
     const Matrix3X f = test::ForcesOf(*scene.system, 0);
     const auto b = test::NetForceAndTorque(*scene.system, f);
     std::cout << "area, seed " << seed << ": |sum f|/sum|f| = " << b.force
@@ -48,8 +50,9 @@ TEST(AreaForce, ZeroNetForceAndTorque) {
 TEST(AreaForce, DampingAloneDoesNoPositiveWork) {
   for (unsigned seed : {27u, 28u}) {
     Cloud cloud(7, seed);
-    Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: area, triples: " +
-                                  cloud.Triples(9) + ", k: 0, kd: 3 }\n");
+    Scene scene =
+        test::load_text(cloud.Yaml() + "forces:\n  - { type: area, triples: " + cloud.Triples(9) +
+                        ", k: 0, kd: 3 }\n");
     const Matrix3X f = test::ForcesOf(*scene.system, 0);
     const double power = (f.array() * scene.system->velocities().array()).sum();
     std::cout << "area damping, seed " << seed << ": sum f.v = " << power << " W\n";
@@ -86,7 +89,8 @@ particles:
   - { position: [2, 0, 0], mass: 1 }
   - { position: [2, 0, 0], mass: 1 }
 forces:
-  - { type: area, triples: [[0, 1, 2], [1, 2, 3]], k: 5, kd: 0.5)") + rest + " }\n");
+  - { type: area, triples: [[0, 1, 2], [1, 2, 3]], k: 5, kd: 0.5)") +
+                                  rest + " }\n");
     System& sys = *scene.system;
     const Matrix3X f = test::ForcesOf(sys, 0);
     EXPECT_TRUE(f.allFinite()) << rest;

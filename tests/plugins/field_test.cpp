@@ -34,7 +34,8 @@ TEST(FieldForce, HarmonicFieldMatchesTheAnalyticOscillator) {
   const Vec3 x0(1.0, 0.0, -0.5), v0(0.0, 0.6, 0.2);
   Scene scene = test::load_text(
       "simulation: { dt: 0.01, steps: 1000, solver: { type: rk4 } }\n"
-      "particles:\n  - { position: " + test::Vec(x0) + ", velocity: " + test::Vec(v0) +
+      "particles:\n  - { position: " +
+      test::Vec(x0) + ", velocity: " + test::Vec(v0) +
       ", mass: 0.5 }\n"
       "forces:\n  - { type: field, constants: { k: 2 }, force: [\"-k*x\", \"-k*y\", \"-k*z\"],"
       " potential: \"k*(x^2 + y^2 + z^2)/2\" }\n");
@@ -106,8 +107,9 @@ forces:
   EXPECT_NEAR(scene.system->velocities()(0, 0), 2.0 * std::exp(-0.25 * 1.0 / 0.5), 1e-9);
 }
 
-const char* kOne = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n  - { position: [0, 0, 0], "
-                   "mass: 1 }\nforces:\n";
+const char* kOne =
+    "simulation: { dt: 0.01, steps: 1 }\nparticles:\n  - { position: [0, 0, 0], "
+    "mass: 1 }\nforces:\n";
 
 TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
   EXPECT_EQ(Message(std::string(kOne) +
@@ -118,22 +120,28 @@ TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
   EXPECT_EQ(Message(std::string(kOne) + "  - { type: field, force: [\"q*x\", \"0\", \"0\"] }\n"),
             "test.yaml:5:28: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
             "(expected one of the variables x, y, z, vx, vy, vz, t, m)");
-  const std::string few = Message(std::string(kOne) + "  - { type: field, force: [\"x\", \"y\"] }\n");
+  const std::string few =
+      Message(std::string(kOne) + "  - { type: field, force: [\"x\", \"y\"] }\n");
   EXPECT_NE(few.find("forces[0].force: has 2 expressions (expected 3: [fx, fy, fz], in N)"),
             std::string::npos)
       << few;
-  const std::string clash = Message(std::string(kOne) +
-                                    "  - { type: field, constants: { x: 1 }, force: [\"x\", \"0\", \"0\"] }\n");
-  EXPECT_NE(clash.find("test.yaml:5:31: forces[0].constants: constant 'x' is named like a variable"),
-            std::string::npos)
+  const std::string clash =
+      Message(std::string(kOne) +
+              "  - { type: field, constants: { x: 1 }, force: [\"x\", \"0\", \"0\"] }\n");
+  EXPECT_NE(
+      clash.find("test.yaml:5:31: forces[0].constants: constant 'x' is named like a variable"),
+      std::string::npos)
       << clash;
-  const std::string open = Message(std::string(kOne) + "  - { type: field, force: [\"sin(x\", \"0\", \"0\"] }\n");
+  const std::string open =
+      Message(std::string(kOne) + "  - { type: field, force: [\"sin(x\", \"0\", \"0\"] }\n");
   EXPECT_NE(open.find("forces[0].force[0]: "), std::string::npos) << open;
   EXPECT_NE(open.find("in \"sin(x\""), std::string::npos) << open;
-  const std::string two = Message(std::string(kOne) + "  - { type: field, force: [\"1, 2\", \"0\", \"0\"] }\n");
+  const std::string two =
+      Message(std::string(kOne) + "  - { type: field, force: [\"1, 2\", \"0\", \"0\"] }\n");
   EXPECT_NE(two.find("forces[0].force[0]: \"1, 2\" gives 2 values"), std::string::npos) << two;
-  const std::string key = Message(std::string(kOne) +
-                                  "  - { type: field, constants: { 2k: 1 }, force: [\"0\", \"0\", \"0\"] }\n");
+  const std::string key =
+      Message(std::string(kOne) +
+              "  - { type: field, constants: { 2k: 1 }, force: [\"0\", \"0\", \"0\"] }\n");
   EXPECT_NE(key.find("forces[0].constants: '2k' is not a name"), std::string::npos) << key;
 }
 

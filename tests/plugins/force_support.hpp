@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/system.hpp"
 #include "physics/physics_support.hpp"
 #include "support/test_support.hpp"
-#include "pdyn/system.hpp"
 
 namespace pdyn::test {
 

@@ -81,9 +81,10 @@ class Anchor final : public pdyn::Force, public pdyn::MovableTargets {
   void set_target(std::size_t k, const Vec3& point) override {
     check(k);
     if (!point.allFinite()) {
-      throw pdyn::Error(fmt::format("anchor: target {} moved to a point that is not finite "
-                                    "(expected finite coordinates in m)",
-                                    k));
+      throw pdyn::Error(
+          fmt::format("anchor: target {} moved to a point that is not finite "
+                      "(expected finite coordinates in m)",
+                      k));
     }
     targets_[k] = point;
   }
@@ -150,12 +151,13 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
     }
   }
   if (points.size() != 1 && points.size() != ids.size()) {
-    throw pdyn::ParamError(
-        "points", fmt::format("has {} points for {} ids (expected 1 point for all, or {})",
-                              points.size(), ids.size(), ids.size()));
+    throw pdyn::ParamError("points",
+                           fmt::format("has {} points for {} ids (expected 1 point for all, or {})",
+                                       points.size(), ids.size(), ids.size()));
   }
   std::vector<Vec3> targets(ids.size());
-  for (std::size_t k = 0; k < ids.size(); ++k) targets[k] = points.size() == 1 ? points[0] : points[k];
+  for (std::size_t k = 0; k < ids.size(); ++k)
+    targets[k] = points.size() == 1 ? points[0] : points[k];
   return std::make_unique<Anchor>(ids, std::move(targets), p.real("ks"), p.real("kd"),
                                   p.real("rest"));
 }

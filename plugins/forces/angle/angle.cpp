@@ -102,8 +102,8 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
     if (i == j || j == k || i == k) {
       throw pdyn::ParamError(
           "triples",
-          fmt::format("[{}, {}, {}] repeats a particle (expected three different particles)", i,
-                      j, k),
+          fmt::format("[{}, {}, {}] repeats a particle (expected three different particles)", i, j,
+                      k),
           static_cast<long>(s));
     }
   }

@@ -93,8 +93,8 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
     if (i == j || j == k || i == k) {
       throw pdyn::ParamError(
           "triples",
-          fmt::format("[{}, {}, {}] repeats a particle (expected three different particles)", i,
-                      j, k),
+          fmt::format("[{}, {}, {}] repeats a particle (expected three different particles)", i, j,
+                      k),
           static_cast<long>(s));
     }
   }
@@ -131,8 +131,7 @@ pdyn::PluginDescriptor describe() {
       pdyn::param::required("triples", pdyn::ParamType::IndexTriples, "",
                             "triangles [[i, j, k], ...] of particle indices"),
       pdyn::param::real("k", 1.0, "N/m^3", "area stiffness (U = k/2 (A - A0)^2)").at_least(0),
-      pdyn::param::real("kd", 0.0, "N s/m^3", "damping of the rate of change of area")
-          .at_least(0),
+      pdyn::param::real("kd", 0.0, "N s/m^3", "damping of the rate of change of area").at_least(0),
       pdyn::param::optional("rest", pdyn::ParamType::RealList, "m^2",
                             "rest areas: one for all triangles or one per triangle; default: the "
                             "initial areas")

@@ -52,7 +52,8 @@ class Attractor final : public pdyn::Force {
     each(p, [&](Index i) {
       const double q = (p.x.col(i) - center_).squaredNorm() + eps2_;
       if (!(q > 0.0)) return;
-      const double shape = p_ == 1.0 ? 0.5 * std::log(q) : -std::pow(q, 0.5 * (1.0 - p_)) / (p_ - 1.0);
+      const double shape =
+          p_ == 1.0 ? 0.5 * std::log(q) : -std::pow(q, 0.5 * (1.0 - p_)) / (p_ - 1.0);
       u += strength_ * p.mass(i) * shape;
     });
     return u;
@@ -66,7 +67,8 @@ class Attractor final : public pdyn::Force {
       if (!(q > 0.0)) return;
       const double a = std::pow(q, -0.5 * (p_ + 1.0));
       const Eigen::Matrix3d block =
-          -strength_ * p.mass(i) * (a * Eigen::Matrix3d::Identity() - (p_ + 1.0) * a / q * d * d.transpose());
+          -strength_ * p.mass(i) *
+          (a * Eigen::Matrix3d::Identity() - (p_ + 1.0) * a / q * d * d.transpose());
       sink.add_dfdx(i, i, block);
     });
     return true;

@@ -32,8 +32,9 @@ constexpr const char* kVariableList = "x, y, z, vx, vy, vz, t, m";
 
 bool is_name(const std::string& s) {
   return !s.empty() && !std::isdigit(static_cast<unsigned char>(s[0])) &&
-         std::all_of(s.begin(), s.end(),
-                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+         std::all_of(s.begin(), s.end(), [](char c) {
+           return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+         });
 }
 
 // "unexpected operator '*' at position 3 in "-k**y" (expected ...)": what
@@ -45,11 +46,14 @@ std::string explain(const mu::ParserError& e, const std::string& expr,
   const std::string names =
       fmt::format("the variables {}{}", kVariableList,
                   constants.empty() ? "" : fmt::format(" or the constants {}", constants));
-  std::string what, expected = fmt::format("an expression in {} and functions such as sin, "
-                                           "exp, sqrt",
-                                           names);
+  std::string what, expected = fmt::format(
+                        "an expression in {} and functions such as sin, "
+                        "exp, sqrt",
+                        names);
   switch (e.GetCode()) {
-    case mu::ecUNEXPECTED_OPERATOR: what = fmt::format("unexpected operator '{}'", tok); break;
+    case mu::ecUNEXPECTED_OPERATOR:
+      what = fmt::format("unexpected operator '{}'", tok);
+      break;
     case mu::ecUNASSIGNABLE_TOKEN:
       if (is_name(tok)) {
         what = fmt::format("unknown variable '{}'", tok);
@@ -58,21 +62,39 @@ std::string explain(const mu::ParserError& e, const std::string& expr,
         what = fmt::format("unexpected '{}'", tok);
       }
       break;
-    case mu::ecUNEXPECTED_EOF: what = "unexpected end of the expression"; break;
-    case mu::ecUNEXPECTED_ARG_SEP: what = "unexpected ','"; break;
-    case mu::ecUNEXPECTED_PARENS: what = fmt::format("unexpected parenthesis '{}'", tok); break;
-    case mu::ecMISSING_PARENS: what = "missing parenthesis ')'"; break;
-    case mu::ecUNEXPECTED_VAL: what = fmt::format("unexpected value '{}'", tok); break;
-    case mu::ecUNEXPECTED_VAR: what = fmt::format("unexpected variable '{}'", tok); break;
-    case mu::ecUNEXPECTED_FUN: what = fmt::format("unexpected function '{}'", tok); break;
-    case mu::ecTOO_MANY_PARAMS: what = fmt::format("too many arguments to '{}'", tok); break;
-    case mu::ecTOO_FEW_PARAMS: what = fmt::format("too few arguments to '{}'", tok); break;
+    case mu::ecUNEXPECTED_EOF:
+      what = "unexpected end of the expression";
+      break;
+    case mu::ecUNEXPECTED_ARG_SEP:
+      what = "unexpected ','";
+      break;
+    case mu::ecUNEXPECTED_PARENS:
+      what = fmt::format("unexpected parenthesis '{}'", tok);
+      break;
+    case mu::ecMISSING_PARENS:
+      what = "missing parenthesis ')'";
+      break;
+    case mu::ecUNEXPECTED_VAL:
+      what = fmt::format("unexpected value '{}'", tok);
+      break;
+    case mu::ecUNEXPECTED_VAR:
+      what = fmt::format("unexpected variable '{}'", tok);
+      break;
+    case mu::ecUNEXPECTED_FUN:
+      what = fmt::format("unexpected function '{}'", tok);
+      break;
+    case mu::ecTOO_MANY_PARAMS:
+      what = fmt::format("too many arguments to '{}'", tok);
+      break;
+    case mu::ecTOO_FEW_PARAMS:
+      what = fmt::format("too few arguments to '{}'", tok);
+      break;
     default: {
       what = e.GetMsg();
       // muParser's own text ends "... at position N."; the position follows.
       if (const auto at = what.find(" at position"); at != std::string::npos) what.resize(at);
-      if (const auto found = what.rfind(" found"); found != std::string::npos &&
-                                                  found + 6 == what.size()) {
+      if (const auto found = what.rfind(" found");
+          found != std::string::npos && found + 6 == what.size()) {
         what.resize(found);
       }
       if (!what.empty()) what[0] = static_cast<char>(std::tolower(what[0]));
@@ -82,8 +104,7 @@ std::string explain(const mu::ParserError& e, const std::string& expr,
     return fmt::format("the expression is empty (expected {})", expected);
   }
   if (e.GetPos() < 0) return fmt::format("{} in \"{}\" (expected {})", what, expr, expected);
-  return fmt::format("{} at position {} in \"{}\" (expected {})", what, e.GetPos(), expr,
-                     expected);
+  return fmt::format("{} at position {} in \"{}\" (expected {})", what, e.GetPos(), expr, expected);
 }
 
 class Field final : public pdyn::Force {
