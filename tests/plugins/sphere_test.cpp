@@ -62,12 +62,15 @@ TEST(SphereCollider, NoParticleEndsAStepOutsideWhenKeptInside) {
 }
 
 Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {
-  return test::load_text("simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
-                         "particles:\n"
-                         "  - { position: " + test::Vec(x) + ", velocity: " + test::Vec(v) +
-                         ", mass: 0.1 }\n"
-                         "colliders:\n"
-                         "  - " + collider + "\n");
+  return test::load_text(
+      "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
+      "particles:\n"
+      "  - { position: " +
+      test::Vec(x) + ", velocity: " + test::Vec(v) +
+      ", mass: 0.1 }\n"
+      "colliders:\n"
+      "  - " +
+      collider + "\n");
 }
 
 TEST(SphereCollider, NormalImpactFromOutsideLeavesWithKrTimesTheSpeed) {
@@ -100,9 +103,9 @@ TEST(SphereCollider, ObliqueImpactReflectsAboutTheLocalNormalAndKeepsTheTangent)
   ASSERT_GT(hit.ratio, 0.0) << "no impact";
   const Vec3 u = hit.x.normalized();
   const Vec3 tin = hit.v_in - hit.v_in.dot(u) * u, tout = hit.v_out - hit.v_out.dot(u) * u;
-  std::cout << "sphere oblique impact: |x| - R = " << hit.x.norm() - kR
-            << " m, normal speed ratio " << -hit.v_out.dot(u) / hit.v_in.dot(u)
-            << ", tangential change " << (tout - tin).norm() << " m/s\n";
+  std::cout << "sphere oblique impact: |x| - R = " << hit.x.norm() - kR << " m, normal speed ratio "
+            << -hit.v_out.dot(u) / hit.v_in.dot(u) << ", tangential change " << (tout - tin).norm()
+            << " m/s\n";
   EXPECT_NEAR(hit.x.norm(), kR, 1e-12);
   EXPECT_NEAR(-hit.v_out.dot(u) / hit.v_in.dot(u), 0.7, 1e-12);
   EXPECT_LT((tout - tin).norm(), 1e-12);
