@@ -1,7 +1,8 @@
 // configs/orbit.yaml: four particles on circular orbits around a softened
 // attractor (G M = 10 m^3/s^2), velocity Verlet with h = 0.002 s for 8 s.
 // Verlet is symplectic: the total energy oscillates without drifting, and
-// each orbit keeps its radius.
+// each orbit keeps its radius (up to the slight eccentricity that the
+// softening gives the scene's circular speeds).
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -29,8 +30,13 @@ TEST(GalleryOrbit, EnergyAndRadiiStayWithinBounds) {
   });
   std::cout << "orbit: over 8 s, max |E - E0|/|E0| = " << e_dev << ", max |r - r0|/r0 = " << r_dev
             << "\n";
-  EXPECT_LE(e_dev, 1e-6);
-  EXPECT_LE(r_dev, 1e-4);
+  // Verlet's energy error on near-circular orbits is tiny (measured 2.8e-9).
+  EXPECT_LE(e_dev, 1e-7);
+  // The scene's speeds are the unsoftened circular ones; the 1 cm softening
+  // weakens the pull by 1.5 eps^2 / r^2 = 1.5e-4 at r = 1 m, so the orbits
+  // are slightly eccentric and r varies by up to about 2 x 1.5e-4 (measured
+  // 3.2e-4); integration error alone is far smaller.
+  EXPECT_LE(r_dev, 5e-4);
 }
 
 }  // namespace

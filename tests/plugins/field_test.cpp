@@ -73,7 +73,7 @@ forces:
 
 TEST(FieldForce, TimeDependentFieldMatchesTheHandIntegration) {
   const double A = 3.0, w = 2.0, m = 1.5, h = 0.005;
-  Scene scene = test::load_text(R"(
+  Scene scene = test::load_text(R"yaml(
 simulation: { dt: 0.005, steps: 800, solver: { type: rk4 } }
 particles:
   - { position: [0, 0, 0], mass: 1.5 }
@@ -81,7 +81,7 @@ forces:
   - type: field
     constants: { A: 3, w: 2 }
     force: ["A*sin(w*t)", "0", "0"]
-)");
+)yaml");
   double worst = 0.0;
   for (int s = 1; s <= 800; ++s) {
     test::TakeStep(scene, s, h);
@@ -116,7 +116,7 @@ TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
             "\"-k**y\" (expected an expression in the variables x, y, z, vx, vy, vz, t, m or the "
             "constants k and functions such as sin, exp, sqrt)");
   EXPECT_EQ(Message(std::string(kOne) + "  - { type: field, force: [\"q*x\", \"0\", \"0\"] }\n"),
-            "test.yaml:5:27: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
+            "test.yaml:5:28: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
             "(expected one of the variables x, y, z, vx, vy, vz, t, m)");
   const std::string few = Message(std::string(kOne) + "  - { type: field, force: [\"x\", \"y\"] }\n");
   EXPECT_NE(few.find("forces[0].force: has 2 expressions (expected 3: [fx, fy, fz], in N)"),
@@ -124,7 +124,7 @@ TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
       << few;
   const std::string clash = Message(std::string(kOne) +
                                     "  - { type: field, constants: { x: 1 }, force: [\"x\", \"0\", \"0\"] }\n");
-  EXPECT_NE(clash.find("test.yaml:5:30: forces[0].constants: constant 'x' is named like a variable"),
+  EXPECT_NE(clash.find("test.yaml:5:31: forces[0].constants: constant 'x' is named like a variable"),
             std::string::npos)
       << clash;
   const std::string open = Message(std::string(kOne) + "  - { type: field, force: [\"sin(x\", \"0\", \"0\"] }\n");

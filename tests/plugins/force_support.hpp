@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "physics/physics_support.hpp"
+#include "support/test_support.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn::test {

@@ -60,7 +60,7 @@ TEST(Selection, WithoutGroupOrIdsEveryParticleAsBefore) {
 
 TEST(Selection, RefusesBothKeysUnknownGroupsAndRepeatedIds) {
   EXPECT_NE(Message(kParticles + "  - { type: gravity, group: cloud, ids: [0] }\n")
-                .find("test.yaml:7:44: forces[0].ids: both 'group' and 'ids' are given (expected "
+                .find("test.yaml:7:41: forces[0].ids: both 'group' and 'ids' are given (expected "
                       "at most one of them)"),
             std::string::npos);
   EXPECT_EQ(Message(kParticles + "  - { type: drag, group: clowd }\n"),
