@@ -45,7 +45,7 @@ TEST(BoxCollider, NoThrownParticleEndsAStepInsideTheSolidBox) {
   std::cout << "box outside: worst penetration " << worst << " m, " << contacts
             << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_GT(contacts, 50);  // aimed up to ~22 degrees off centre: most miss, ~70-90 hit
 }
 
 TEST(BoxCollider, NoParticleEndsAStepOutsideTheContainer) {
@@ -64,7 +64,7 @@ TEST(BoxCollider, NoParticleEndsAStepOutsideTheContainer) {
   std::cout << "box inside: worst penetration " << worst << " m, " << contacts
             << " particles reached a wall\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_EQ(contacts, 300);  // every particle reaches the wall
 }
 
 Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {

@@ -37,7 +37,7 @@ TEST(SphereCollider, NoThrownParticleEndsAStepInsideFromOutside) {
   std::cout << "sphere outside: worst penetration " << worst << " m, " << contacts
             << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_GT(contacts, 50);  // aimed up to ~22 degrees off centre: most miss, ~70-90 hit
 }
 
 // 300 particles inside the sphere at 1..5 m/s in random directions bounce
@@ -58,7 +58,7 @@ TEST(SphereCollider, NoParticleEndsAStepOutsideWhenKeptInside) {
   std::cout << "sphere inside: worst penetration " << worst << " m, " << contacts
             << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_EQ(contacts, 300);  // every particle reaches the wall
 }
 
 Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {

@@ -251,45 +251,45 @@ TEST(PolygonBuilder, ClosesTheLoopThroughItsPoints) {
 TEST(Builders, RefuseBadKeysWithLocatedMessages) {
   const std::map<std::string, std::string> cases = {
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 1, mass: 1 }\n",
-       "test.yaml:4:48: particles[0].chain.n: 1 is out of range (expected a whole number >= 2)"},
+       "test.yaml:3:49: particles[0].chain.n: 1 is out of range (expected a whole number >= 2)"},
       {"  - chain: { from: [0, 0, 0], to: [0, 0, 0], n: 3, mass: 1 }\n",
-       "test.yaml:4:34: particles[0].chain.to: is the same point as from (expected the other end "
+       "test.yaml:3:35: particles[0].chain.to: is the same point as from (expected the other end "
        "of a chain of nonzero length)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, spring: { ks: 1 } }\n",
-       "test.yaml:4:59: unknown key 'spring' in particles[0].chain (did you mean 'springs'? "
+       "test.yaml:3:61: unknown key 'spring' in particles[0].chain (did you mean 'springs'? "
        "expected one of: from, to, n, mass, velocity, name, pin, springs, bend)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, pin: [3] }\n",
-       "test.yaml:4:65: particles[0].chain.pin[0]: 3 is outside the chain of 3 particles "
+       "test.yaml:3:67: particles[0].chain.pin[0]: 3 is outside the chain of 3 particles "
        "(expected -3..2)"},
       {"  - lattice: { origin: [0, 0, 0], n: [2, 2.5, 2], spacing: 0.1, mass: 1 }\n",
-       "test.yaml:4:37: particles[0].lattice.n: [2, 2.5, 2] is not three whole numbers (expected "
+       "test.yaml:3:38: particles[0].lattice.n: [2, 2.5, 2] is not three whole numbers (expected "
        "[nx, ny, nz], each a whole number >= 1)"},
       {"  - lattice: { origin: [0, 0, 0], n: [2, 2, 2], spacing: 0.1, mass: 1, springs: { shear: "
        "{ ks: -1 } } }\n",
-       "test.yaml:4:98: particles[0].lattice.springs.shear.ks: -1 is out of range (expected a "
+       "test.yaml:3:96: particles[0].lattice.springs.shear.ks: -1 is out of range (expected a "
        "number >= 0 in N/m)"},
       {"  - cloud: { n: 5, mass: 1 }\n",
-       "test.yaml:4:12: particles[0].cloud: no region is given (expected exactly one region: box: "
+       "test.yaml:3:12: particles[0].cloud: no region is given (expected exactly one region: box: "
        "{ min, max } or sphere: { center, radius })"},
       {"  - cloud: { n: 5, mass: 1, box: { min: [0, 0, 0], max: [1, 1, 1] }, sphere: { center: "
        "[0, 0, 0], radius: 1 } }\n",
-       "test.yaml:4:80: particles[0].cloud.sphere: both 'box' and 'sphere' are given (expected "
+       "test.yaml:3:78: particles[0].cloud.sphere: both 'box' and 'sphere' are given (expected "
        "exactly one region: box: { min, max } or sphere: { center, radius })"},
       {"  - cloud: { n: 5, mass: 1, box: { min: [0, 0, 0], max: [1, -1, 1] } }\n",
-       "test.yaml:4:56: particles[0].cloud.box.max: [1, -1, 1] is below min [0, 0, 0] in some "
+       "test.yaml:3:57: particles[0].cloud.box.max: [1, -1, 1] is below min [0, 0, 0] in some "
        "component (expected max >= min in every component)"},
       {"  - ring: { center: [0, 0, 0], radius: 0, n: 5, mass: 1 }\n",
-       "test.yaml:4:41: particles[0].ring.radius: 0 is out of range (expected a number > 0 in m)"},
+       "test.yaml:3:40: particles[0].ring.radius: 0 is out of range (expected a number > 0 in m)"},
       {"  - ring: { center: [0, 0, 0], radius: 1, n: 5, mass: 1 }\n"
        "  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, name: a }\n"
        "  - ring: { center: [0, 0, 0], radius: 1, n: 5, mass: 1, name: a }\n",
-       "test.yaml:6:65: particles[2].ring.name: group 'a' is already defined (expected a unique "
+       "test.yaml:5:64: particles[2].ring.name: group 'a' is already defined (expected a unique "
        "name)"},
       {"  - polygon: { points: [[0, 0, 0], [1, 0, 0]], mass: 1 }\n",
-       "test.yaml:4:24: particles[0].polygon.points: has 2 points (expected at least 3 for a "
+       "test.yaml:3:24: particles[0].polygon.points: has 2 points (expected at least 3 for a "
        "closed loop)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1 }\n    mass: 2\n",
-       "test.yaml:4:5: particles[0]: a builder entry holds only its builder (expected { chain: { "
+       "test.yaml:3:5: particles[0]: a builder entry holds only its builder (expected { chain: { "
        "... } })"},
   };
   for (const auto& [particles, message] : cases) {
