@@ -49,8 +49,8 @@ ParamSpec name_spec() { return param::optional("name", ParamType::String, "", "g
 // A key holding a mapping (a force family, a region): absent or null is
 // "not given"; anything else must be a mapping.
 enum class Family { Absent, Given, Bad };
-Family family(BuilderHost& host, const YAML::Node& parent, const char* key,
-              const std::string& path, const char* what) {
+Family family(BuilderHost& host, const YAML::Node& parent, const char* key, const std::string& path,
+              const char* what) {
   const YAML::Node n = parent[key];
   if (!n.IsDefined() || n.IsNull()) return Family::Absent;
   return host.check_map(n, path + "." + key, what) ? Family::Given : Family::Bad;
@@ -140,7 +140,8 @@ void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path)
   }
   if (family(host, c, "bend", path, "bend: { k: N m/rad, kd: N m s/rad }") == Family::Given) {
     std::vector<IndexTriple> triples;
-    for (std::int64_t i = 1; i + 1 < n; ++i) triples.push_back({base + i - 1, base + i, base + i + 1});
+    for (std::int64_t i = 1; i + 1 < n; ++i)
+      triples.push_back({base + i - 1, base + i, base + i + 1});
     const bool any = !triples.empty();
     host.add_force("angle", c["bend"], path + ".bend", with_triples(std::move(triples)), Params{},
                    any);
@@ -212,8 +213,8 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
         host.error(l["pin"][q], fmt::format("{}.pin[{}]", path, q),
                    fmt::format("{}.pin[{}]: [{}, {}, {}] is outside the {} x {} x {} lattice "
                                "(expected i in -{}..{}, j in -{}..{}, k in -{}..{})",
-                               path, q, pins[q][0], pins[q][1], pins[q][2], nx, ny, nz, nx,
-                               nx - 1, ny, ny - 1, nz, nz - 1));
+                               path, q, pins[q][0], pins[q][1], pins[q][2], nx, ny, nz, nx, nx - 1,
+                               ny, ny - 1, nz, nz - 1));
         continue;
       }
       host.set_fixed(id(c[0], c[1], c[2]));
@@ -271,8 +272,8 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
           }
         }
     const bool any = !pairs.empty();
-    host.add_force("spring", node, sp + "." + name, with_pairs(std::move(pairs)),
-                   spring_defaults(), any);
+    host.add_force("spring", node, sp + "." + name, with_pairs(std::move(pairs)), spring_defaults(),
+                   any);
   }
 }
 
@@ -287,8 +288,9 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
 double uniform01(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
 
 void read_cloud(BuilderHost& host, const YAML::Node& c, const std::string& path) {
-  if (!host.check_map(c, path, "cloud: { n, box: { min, max } or sphere: { center, radius }, "
-                               "mass, seed }")) {
+  if (!host.check_map(c, path,
+                      "cloud: { n, box: { min, max } or sphere: { center, radius }, "
+                      "mass, seed }")) {
     return;
   }
   ParamSpec seed = param::integer("seed", 0, "seed of the random generator (std::mt19937_64)");
@@ -305,18 +307,19 @@ void read_cloud(BuilderHost& host, const YAML::Node& c, const std::string& path)
                fmt::format("{}: {} (expected exactly one region: box: {{ min, max }} or sphere: "
                            "{{ center, radius }})",
                            both ? path + ".sphere" : path,
-                           both ? "both 'box' and 'sphere' are given"
-                                : "no region is given"));
+                           both ? "both 'box' and 'sphere' are given" : "no region is given"));
     return;
   }
   Vec3 lo, hi, center = Vec3::Zero();
   double radius = 0.0;
   if (box == Family::Given) {
     auto r = host.read_params(c["box"], path + ".box",
-                              {param::required_vec3("min", "m", "corner with the smallest "
-                                                                "coordinates"),
-                               param::required_vec3("max", "m", "corner with the largest "
-                                                                "coordinates")},
+                              {param::required_vec3("min", "m",
+                                                    "corner with the smallest "
+                                                    "coordinates"),
+                               param::required_vec3("max", "m",
+                                                    "corner with the largest "
+                                                    "coordinates")},
                               {});
     if (!r) return;
     lo = r->vec3("min");
@@ -380,8 +383,8 @@ void loop_forces(BuilderHost& host, const YAML::Node& node, const std::string& p
   if (family(host, node, "area", path, "area: { k: N/m^3, kd }") == Family::Given) {
     std::vector<IndexTriple> triples;
     for (std::int64_t i = 1; i + 1 < n; ++i) triples.push_back({base, base + i, base + i + 1});
-    host.add_force("area", node["area"], path + ".area", with_triples(std::move(triples)),
-                   Params{}, true);
+    host.add_force("area", node["area"], path + ".area", with_triples(std::move(triples)), Params{},
+                   true);
   }
 }
 
@@ -403,11 +406,11 @@ void read_ring(BuilderHost& host, const YAML::Node& r, const std::string& path) 
   if (!host.check_map(r, path, "ring: { center, radius, n, mass, ... }")) return;
   auto p = host.read_params(
       r, path,
-      loop_specs({param::required_vec3("center", "m", "centre of the ring"),
-                  param::required_real("radius", "m", "radius of the ring").greater_than(0),
-                  count("n", 3, "number of particles"),
-                  param::vec3("normal", Vec3::UnitZ(), "", "normal of the ring's plane")
-                      .not_zero()}),
+      loop_specs(
+          {param::required_vec3("center", "m", "centre of the ring"),
+           param::required_real("radius", "m", "radius of the ring").greater_than(0),
+           count("n", 3, "number of particles"),
+           param::vec3("normal", Vec3::UnitZ(), "", "normal of the ring's plane").not_zero()}),
       {"springs", "area"});
   if (!p) return;
   const std::int64_t n = p->integer("n");
@@ -429,18 +432,18 @@ void read_ring(BuilderHost& host, const YAML::Node& r, const std::string& path) 
 // Any closed loop through the given points, in order.
 void read_polygon(BuilderHost& host, const YAML::Node& g, const std::string& path) {
   if (!host.check_map(g, path, "polygon: { points: [[x, y, z], ...], mass, ... }")) return;
-  auto p = host.read_params(
-      g, path,
-      loop_specs({param::required("points", ParamType::VectorList, "m",
-                                  "corners of the loop, in order (at least 3)")}),
-      {"springs", "area"});
+  auto p =
+      host.read_params(g, path,
+                       loop_specs({param::required("points", ParamType::VectorList, "m",
+                                                   "corners of the loop, in order (at least 3)")}),
+                       {"springs", "area"});
   if (!p) return;
   const auto& pts = p->vec3s("points");
   const auto n = static_cast<std::int64_t>(pts.size());
   if (n < 3) {
-    host.error(g["points"], path + ".points",
-               fmt::format("{}.points: has {} points (expected at least 3 for a closed loop)",
-                           path, n));
+    host.error(
+        g["points"], path + ".points",
+        fmt::format("{}.points: has {} points (expected at least 3 for a closed loop)", path, n));
     return;
   }
   for (std::int64_t i = 0; i < n; ++i) {
@@ -469,11 +472,16 @@ const std::vector<std::string>& builder_names() {
 
 void read_builder(BuilderHost& host, const std::string& name, const YAML::Node& node,
                   const std::string& path) {
-  if (name == "chain") read_chain(host, node, path);
-  else if (name == "lattice") read_lattice(host, node, path);
-  else if (name == "cloud") read_cloud(host, node, path);
-  else if (name == "ring") read_ring(host, node, path);
-  else if (name == "polygon") read_polygon(host, node, path);
+  if (name == "chain")
+    read_chain(host, node, path);
+  else if (name == "lattice")
+    read_lattice(host, node, path);
+  else if (name == "cloud")
+    read_cloud(host, node, path);
+  else if (name == "ring")
+    read_ring(host, node, path);
+  else if (name == "polygon")
+    read_polygon(host, node, path);
 }
 
 }  // namespace pdyn

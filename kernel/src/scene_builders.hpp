@@ -43,16 +43,15 @@ class BuilderHost {
   virtual Vec3 position(Index id) const = 0;
   /// Makes `members` the group `name` (the builder's `name:` key, at `at`);
   /// reports a duplicate.
-  virtual void add_group(const std::string& name, std::vector<Index> members,
-                         const YAML::Node& at, const std::string& path) = 0;
+  virtual void add_group(const std::string& name, std::vector<Index> members, const YAML::Node& at,
+                         const std::string& path) = 0;
   /// Queues one force object of plugin `plugin` whose parameters are the
   /// keys of `node` (a mapping, or undefined for none) plus `generated` (the
   /// particle lists the builder made). Keys of `defaults` that `node` does
   /// not give replace the plugin's own defaults. With `create` false the
   /// keys are only checked (a family that yields no pairs).
-  virtual void add_force(const std::string& plugin, const YAML::Node& node,
-                         const std::string& path, const Params& generated,
-                         const Params& defaults, bool create) = 0;
+  virtual void add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
+                         const Params& generated, const Params& defaults, bool create) = 0;
 };
 
 /// The builder keys that read_builder() accepts as a particles entry.

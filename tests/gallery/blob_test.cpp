@@ -34,8 +34,7 @@ TEST(Blob, KeepsItsAreaWithinTenPercentOnTheFloor) {
   }
   const double speed = sys.velocities().colwise().norm().maxCoeff();
   std::cout << "blob: rest area " << rest << " m^2, worst area change " << 100 * worst
-            << "%, lowest z " << lowest << " m, fastest particle at the end " << speed
-            << " m/s\n";
+            << "%, lowest z " << lowest << " m, fastest particle at the end " << speed << " m/s\n";
   EXPECT_LT(worst, 0.10);
   EXPECT_GE(lowest, -1e-12);
   EXPECT_NEAR(sys.positions().row(2).minCoeff(), 0.0, 1e-3);  // on the floor

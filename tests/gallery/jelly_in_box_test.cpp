@@ -14,8 +14,7 @@ namespace pdyn {
 namespace {
 
 TEST(JellyInBox, StaysInsideTheBoxAndKeepsItsShape) {
-  Scene scene =
-      load_scene(test::source_path("configs/jelly_in_box.yaml"), test::shipped_plugins());
+  Scene scene = load_scene(test::source_path("configs/jelly_in_box.yaml"), test::shipped_plugins());
   System& sys = *scene.system;
   ASSERT_EQ(sys.size(), 64);
   const Vec3 lo(-0.5, -0.5, 0.0), hi(0.5, 0.5, 1.0);  // the scene's box
@@ -49,8 +48,8 @@ TEST(JellyInBox, StaysInsideTheBoxAndKeepsItsShape) {
     travelled = std::max(travelled, (Vec3(x.rowwise().mean()) - start).norm());
   }
   std::cout << "jelly in box: worst penetration " << outside << " m, " << wall_hits
-            << " particle-steps at a wall, worst corner-distance change "
-            << 100 * distortion << "%, centre moved up to " << travelled << " m\n";
+            << " particle-steps at a wall, worst corner-distance change " << 100 * distortion
+            << "%, centre moved up to " << travelled << " m\n";
   EXPECT_LE(outside, 1e-12);
   EXPECT_GT(wall_hits, 100);  // it did hit the walls
   EXPECT_LT(distortion, 0.15);

@@ -30,8 +30,8 @@ const std::string kBox = "type: box, min: [-0.5, -0.4, -0.3], max: [0.5, 0.4, 0.
 
 // 300 throws at 1..5 m/s from all sides, edges and corners included.
 TEST(BoxCollider, NoThrownParticleEndsAStepInsideTheSolidBox) {
-  Scene scene = test::load_text(
-      test::ThrowScene(300, 5e-3, 9.81, "{ " + kBox + ", restitution: 0.6 }"));
+  Scene scene =
+      test::load_text(test::ThrowScene(300, 5e-3, 9.81, "{ " + kBox + ", restitution: 0.6 }"));
   System& sys = *scene.system;
   std::mt19937_64 g(21);
   for (Index i = 0; i < sys.size(); ++i) {
@@ -45,7 +45,7 @@ TEST(BoxCollider, NoThrownParticleEndsAStepInsideTheSolidBox) {
   std::cout << "box outside: worst penetration " << worst << " m, " << contacts
             << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_GT(contacts, 50);  // aimed up to ~22 degrees off centre: most miss, ~70-90 hit
 }
 
 TEST(BoxCollider, NoParticleEndsAStepOutsideTheContainer) {
@@ -64,23 +64,26 @@ TEST(BoxCollider, NoParticleEndsAStepOutsideTheContainer) {
   std::cout << "box inside: worst penetration " << worst << " m, " << contacts
             << " particles reached a wall\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_EQ(contacts, 300);  // every particle reaches the wall
 }
 
 Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {
-  return test::load_text("simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
-                         "particles:\n"
-                         "  - { position: " + test::Vec(x) + ", velocity: " + test::Vec(v) +
-                         ", mass: 0.1 }\n"
-                         "colliders:\n"
-                         "  - " + collider + "\n");
+  return test::load_text(
+      "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
+      "particles:\n"
+      "  - { position: " +
+      test::Vec(x) + ", velocity: " + test::Vec(v) +
+      ", mass: 0.1 }\n"
+      "colliders:\n"
+      "  - " +
+      collider + "\n");
 }
 
 TEST(BoxCollider, NormalImpactOnAFaceLeavesWithKrTimesTheSpeed) {
   Scene scene = OneParticle({0.1, 0.1, 1}, {0, 0, -2}, "{ " + kBox + ", restitution: 0.7 }");
   const test::Impact hit = test::FirstImpact(scene, 1e-3, 1000);
-  std::cout << "box outside, normal impact on the top face at 2 m/s: |v_out|/|v_in| = "
-            << hit.ratio << " (kr = 0.7), z = " << hit.x.z() << " m\n";
+  std::cout << "box outside, normal impact on the top face at 2 m/s: |v_out|/|v_in| = " << hit.ratio
+            << " (kr = 0.7), z = " << hit.x.z() << " m\n";
   EXPECT_NEAR(hit.ratio, 0.7, 0.007);
   EXPECT_NEAR(hit.x.z(), kMax.z(), 1e-12);
 }

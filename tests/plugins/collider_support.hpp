@@ -29,14 +29,19 @@ inline Vec3 RandomDirection(std::mt19937_64& g) {
 
 /// Scene text: `n` particles of 0.01 kg, gravity g, and the collider line.
 inline std::string ThrowScene(int n, double dt, double g, const std::string& collider) {
-  return "simulation: { dt: " + Num(dt) + ", steps: 1, solver: { type: rk4 } }\n"
+  return "simulation: { dt: " + Num(dt) +
+         ", steps: 1, solver: { type: rk4 } }\n"
          "particles:\n"
-         "  - cloud: { n: " + std::to_string(n) +
+         "  - cloud: { n: " +
+         std::to_string(n) +
          ", box: { min: [-1, -1, -1], max: [1, 1, 1] }, mass: 0.01, seed: 1 }\n"
          "forces:\n"
-         "  - { type: gravity, g: [0, 0, " + Num(-g) + "] }\n"
+         "  - { type: gravity, g: [0, 0, " +
+         Num(-g) +
+         "] }\n"
          "colliders:\n"
-         "  - " + collider + "\n";
+         "  - " +
+         collider + "\n";
 }
 
 /// Runs `steps` steps of `h` and returns the worst penetration found at the
@@ -45,8 +50,7 @@ inline std::string ThrowScene(int n, double dt, double g, const std::string& col
 /// particles that ended some step within 1 mm of the surface (so a test
 /// can check that the throws reached it at all).
 inline double WorstPenetration(Scene& scene, int steps, double h,
-                               const std::function<double(const Vec3&)>& distance,
-                               int& contacts) {
+                               const std::function<double(const Vec3&)>& distance, int& contacts) {
   double worst = -1e300;
   System& sys = *scene.system;
   std::vector<bool> touched(static_cast<std::size_t>(sys.size()), false);

@@ -27,12 +27,16 @@ Scene Slide(const Vec3& v0, double mu, const Vec3& normal, const Vec3& g) {
   return test::load_text(
       "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
       "particles:\n"
-      "  - { position: [0, 0, 0], velocity: " + test::Vec(v0) + ", mass: 0.5 }\n"
+      "  - { position: [0, 0, 0], velocity: " +
+      test::Vec(v0) +
+      ", mass: 0.5 }\n"
       "forces:\n"
-      "  - { type: gravity, g: " + test::Vec(g) + " }\n"
+      "  - { type: gravity, g: " +
+      test::Vec(g) +
+      " }\n"
       "colliders:\n"
-      "  - { type: plane, normal: " + test::Vec(normal) + ", restitution: 0.5, friction: " +
-      test::Num(mu) + " }\n");
+      "  - { type: plane, normal: " +
+      test::Vec(normal) + ", restitution: 0.5, friction: " + test::Num(mu) + " }\n");
 }
 
 TEST(PlaneFriction, SlidingBlockDeceleratesAtMuGThenStopsAndStays) {
@@ -51,14 +55,14 @@ TEST(PlaneFriction, SlidingBlockDeceleratesAtMuGThenStopsAndStays) {
   double drift = 0.0;
   for (; k < 2000; ++k) {
     test::TakeStep(scene, k + 1, kDt);
-    drift = std::max({drift, (Vec3(sys.positions().col(0)) - x_stop).norm(),
-                      sys.velocities().col(0).norm()});
+    drift = std::max(
+        {drift, (Vec3(sys.positions().col(0)) - x_stop).norm(), sys.velocities().col(0).norm()});
   }
   const double t_expected = kV0 / (kMu * kG), x_expected = kV0 * kV0 / (2 * kMu * kG);
-  std::cout << "friction mu = 0.3 from 2 m/s: deceleration " << decel << " m/s^2 (mu g = "
-            << kMu * kG << "), stopped at t = " << stopped_at * kDt << " s (" << t_expected
-            << "), at x = " << x_stop.x() << " m (" << x_expected << "), drift afterwards "
-            << drift << "\n";
+  std::cout << "friction mu = 0.3 from 2 m/s: deceleration " << decel
+            << " m/s^2 (mu g = " << kMu * kG << "), stopped at t = " << stopped_at * kDt << " s ("
+            << t_expected << "), at x = " << x_stop.x() << " m (" << x_expected
+            << "), drift afterwards " << drift << "\n";
   EXPECT_NEAR(decel / (kMu * kG), 1.0, 0.02);
   ASSERT_GT(stopped_at, 0) << "never stopped";
   EXPECT_NEAR(stopped_at * kDt / t_expected, 1.0, 0.02);
@@ -163,9 +167,10 @@ particles:
 forces:
   - { type: gravity, g: [0, 0, -9.81] }
 )";
-  Scene ours = test::load_text(
-      body + "colliders:\n  - { type: plane, point: [0, 0, 0.1], normal: [0, 0.1, 1], "
-             "restitution: 0.6, friction: 0, epsilon: 0.0001 }\n");
+  Scene ours =
+      test::load_text(body +
+                      "colliders:\n  - { type: plane, point: [0, 0, 0.1], normal: [0, 0.1, 1], "
+                      "restitution: 0.6, friction: 0, epsilon: 0.0001 }\n");
   Scene seed = test::load_text(body);
   seed.system->add_collider(
       std::make_shared<SeedPlane>(Vec3(0, 0, 0.1), Vec3(0, 0.1, 1), 0.6, 1e-4), "seed plane");

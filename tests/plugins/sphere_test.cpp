@@ -37,7 +37,7 @@ TEST(SphereCollider, NoThrownParticleEndsAStepInsideFromOutside) {
   std::cout << "sphere outside: worst penetration " << worst << " m, " << contacts
             << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_GT(contacts, 50);  // aimed up to ~22 degrees off centre: most miss, ~70-90 hit
 }
 
 // 300 particles inside the sphere at 1..5 m/s in random directions bounce
@@ -58,16 +58,19 @@ TEST(SphereCollider, NoParticleEndsAStepOutsideWhenKeptInside) {
   std::cout << "sphere inside: worst penetration " << worst << " m, " << contacts
             << " particles reached the surface\n";
   EXPECT_LE(worst, 1e-12);
-  EXPECT_GT(contacts, 300);
+  EXPECT_EQ(contacts, 300);  // every particle reaches the wall
 }
 
 Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {
-  return test::load_text("simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
-                         "particles:\n"
-                         "  - { position: " + test::Vec(x) + ", velocity: " + test::Vec(v) +
-                         ", mass: 0.1 }\n"
-                         "colliders:\n"
-                         "  - " + collider + "\n");
+  return test::load_text(
+      "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
+      "particles:\n"
+      "  - { position: " +
+      test::Vec(x) + ", velocity: " + test::Vec(v) +
+      ", mass: 0.1 }\n"
+      "colliders:\n"
+      "  - " +
+      collider + "\n");
 }
 
 TEST(SphereCollider, NormalImpactFromOutsideLeavesWithKrTimesTheSpeed) {
@@ -100,9 +103,9 @@ TEST(SphereCollider, ObliqueImpactReflectsAboutTheLocalNormalAndKeepsTheTangent)
   ASSERT_GT(hit.ratio, 0.0) << "no impact";
   const Vec3 u = hit.x.normalized();
   const Vec3 tin = hit.v_in - hit.v_in.dot(u) * u, tout = hit.v_out - hit.v_out.dot(u) * u;
-  std::cout << "sphere oblique impact: |x| - R = " << hit.x.norm() - kR
-            << " m, normal speed ratio " << -hit.v_out.dot(u) / hit.v_in.dot(u)
-            << ", tangential change " << (tout - tin).norm() << " m/s\n";
+  std::cout << "sphere oblique impact: |x| - R = " << hit.x.norm() - kR << " m, normal speed ratio "
+            << -hit.v_out.dot(u) / hit.v_in.dot(u) << ", tangential change " << (tout - tin).norm()
+            << " m/s\n";
   EXPECT_NEAR(hit.x.norm(), kR, 1e-12);
   EXPECT_NEAR(-hit.v_out.dot(u) / hit.v_in.dot(u), 0.7, 1e-12);
   EXPECT_LT((tout - tin).norm(), 1e-12);

@@ -94,8 +94,8 @@ TEST(ChainBuilder, MakesNEvenlySpacedParticlesAndNeighbourSprings) {
 TEST(ChainBuilder, BendMakesAngleSpringsOnConsecutiveTriples) {
   constexpr int kN = 20;
   constexpr double kK = 1.0;
-  Scene s = test::load_text(Head(
-      "  - chain: { from: [0, 0, 2], to: [1, 0, 2], n: 20, mass: 0.01, bend: { k: 1 } }\n"));
+  Scene s = test::load_text(
+      Head("  - chain: { from: [0, 0, 2], to: [1, 0, 2], n: 20, mass: 0.01, bend: { k: 1 } }\n"));
   ASSERT_EQ(CountObjects(s, "angle"), 1);
   ASSERT_EQ(CountObjects(s, "spring"), 1);
   EXPECT_NEAR(s.system->potential_energy(), 0.0, 1e-12);
@@ -126,7 +126,7 @@ TEST(LatticeBuilder, MakesStructuralAndShearSpringsByDefault) {
   EXPECT_EQ(std::count(s.system->fixed().begin(), s.system->fixed().end(), 1), 2);
   const auto springs = SpringPairs(s);
   ASSERT_EQ(springs.size(), 2u);
-  EXPECT_EQ(springs[0].size(), 2u * 4 * 5 + 3 * 3 * 5 + 3 * 4 * 4);  // 133
+  EXPECT_EQ(springs[0].size(), 2u * 4 * 5 + 3 * 3 * 5 + 3 * 4 * 4);        // 133
   EXPECT_EQ(springs[1].size(), 2u * (2 * 3 * 5 + 2 * 4 * 4 + 3 * 4 * 3));  // 196
   for (const auto& p : springs[0]) ASSERT_NEAR(Length(s, p), 0.1, 1e-12);
   for (const auto& p : springs[1]) ASSERT_NEAR(Length(s, p), 0.1 * std::sqrt(2.0), 1e-12);
@@ -135,9 +135,9 @@ TEST(LatticeBuilder, MakesStructuralAndShearSpringsByDefault) {
 }
 
 TEST(LatticeBuilder, SpringsListsExactlyTheFamiliesWanted) {
-  Scene s = test::load_text(Head(
-      "  - lattice: { origin: [0, 0, 1], n: [3, 4, 5], spacing: 0.1, mass: 0.01,\n"
-      "               springs: { body: { ks: 5 } } }\n"));
+  Scene s = test::load_text(
+      Head("  - lattice: { origin: [0, 0, 1], n: [3, 4, 5], spacing: 0.1, mass: 0.01,\n"
+           "               springs: { body: { ks: 5 } } }\n"));
   const auto springs = SpringPairs(s);
   ASSERT_EQ(springs.size(), 1u);
   EXPECT_EQ(springs[0].size(), 4u * 2 * 3 * 4);  // 96
@@ -167,9 +167,12 @@ TEST(CloudBuilder, IsReproducibleFromItsSeedAndInsideItsRegion) {
   EXPECT_EQ(CountObjects(a, "spring"), 0);
 
   Scene ball = cloud(7, "sphere: { center: [1, 2, 3], radius: 0.5 }");
-  const double r_max = (ball.system->positions().colwise() - Vec3(1, 2, 3)).colwise().norm().maxCoeff();
+  const double r_max =
+      (ball.system->positions().colwise() - Vec3(1, 2, 3)).colwise().norm().maxCoeff();
   // Uniform in a ball: the fraction within r/2 is 1/8.
-  const auto inner = ((ball.system->positions().colwise() - Vec3(1, 2, 3)).colwise().norm().array() < 0.25).count();
+  const auto inner =
+      ((ball.system->positions().colwise() - Vec3(1, 2, 3)).colwise().norm().array() < 0.25)
+          .count();
   std::cout << "cloud of 1000 in the ball: max radius " << r_max << ", " << inner
             << " within half the radius (expected ~125)\n";
   EXPECT_LE(r_max, 0.5);
@@ -190,8 +193,9 @@ TEST(RingBuilder, MakesAClosedLoopAndAFanOfAreaTriangles) {
   const Vec3 c(0, 0, 1);
   for (Index i = 0; i < kN; ++i) {
     const double t = 2 * std::numbers::pi * i / kN;
-    ASSERT_NEAR((s.system->positions().col(i) - (c + kR * Vec3(std::cos(t), std::sin(t), 0))).norm(),
-                0.0, 1e-15);
+    ASSERT_NEAR(
+        (s.system->positions().col(i) - (c + kR * Vec3(std::cos(t), std::sin(t), 0))).norm(), 0.0,
+        1e-15);
   }
   const auto springs = SpringPairs(s);
   ASSERT_EQ(springs.size(), 1u);
@@ -199,7 +203,8 @@ TEST(RingBuilder, MakesAClosedLoopAndAFanOfAreaTriangles) {
   for (Index i = 0; i + 1 < kN; ++i) expected.insert({i, i + 1});
   expected.insert({0, kN - 1});
   EXPECT_EQ(springs[0], expected);
-  for (const auto& p : springs[0]) ASSERT_NEAR(Length(s, p), 2 * kR * std::sin(std::numbers::pi / kN), 1e-15);
+  for (const auto& p : springs[0])
+    ASSERT_NEAR(Length(s, p), 2 * kR * std::sin(std::numbers::pi / kN), 1e-15);
   ASSERT_EQ(CountObjects(s, "area"), 1);
   EXPECT_NEAR(s.system->potential_energy(), 0.0, 1e-15);
 
@@ -222,8 +227,8 @@ TEST(RingBuilder, MakesAClosedLoopAndAFanOfAreaTriangles) {
 }
 
 TEST(RingBuilder, LiesInThePlaneOfItsNormal) {
-  Scene s = test::load_text(Head(
-      "  - ring: { center: [1, 2, 3], radius: 0.5, n: 7, normal: [0, 2, 0], mass: 0.01 }\n"));
+  Scene s = test::load_text(
+      Head("  - ring: { center: [1, 2, 3], radius: 0.5, n: 7, normal: [0, 2, 0], mass: 0.01 }\n"));
   for (Index i = 0; i < 7; ++i) {
     const Vec3 d = s.system->positions().col(i) - Vec3(1, 2, 3);
     EXPECT_NEAR(d.y(), 0.0, 1e-15);
@@ -232,9 +237,9 @@ TEST(RingBuilder, LiesInThePlaneOfItsNormal) {
 }
 
 TEST(PolygonBuilder, ClosesTheLoopThroughItsPoints) {
-  Scene s = test::load_text(Head(
-      "  - polygon: { points: [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], mass: 0.1,\n"
-      "               springs: { ks: 10 }, area: { k: 3 } }\n"));
+  Scene s = test::load_text(
+      Head("  - polygon: { points: [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], mass: 0.1,\n"
+           "               springs: { ks: 10 }, area: { k: 3 } }\n"));
   ASSERT_EQ(s.system->size(), 4);
   const auto springs = SpringPairs(s);
   ASSERT_EQ(springs.size(), 1u);
@@ -246,45 +251,45 @@ TEST(PolygonBuilder, ClosesTheLoopThroughItsPoints) {
 TEST(Builders, RefuseBadKeysWithLocatedMessages) {
   const std::map<std::string, std::string> cases = {
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 1, mass: 1 }\n",
-       "test.yaml:4:48: particles[0].chain.n: 1 is out of range (expected a whole number >= 2)"},
+       "test.yaml:3:49: particles[0].chain.n: 1 is out of range (expected a whole number >= 2)"},
       {"  - chain: { from: [0, 0, 0], to: [0, 0, 0], n: 3, mass: 1 }\n",
-       "test.yaml:4:34: particles[0].chain.to: is the same point as from (expected the other end "
+       "test.yaml:3:35: particles[0].chain.to: is the same point as from (expected the other end "
        "of a chain of nonzero length)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, spring: { ks: 1 } }\n",
-       "test.yaml:4:59: unknown key 'spring' in particles[0].chain (did you mean 'springs'? "
+       "test.yaml:3:61: unknown key 'spring' in particles[0].chain (did you mean 'springs'? "
        "expected one of: from, to, n, mass, velocity, name, pin, springs, bend)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, pin: [3] }\n",
-       "test.yaml:4:65: particles[0].chain.pin[0]: 3 is outside the chain of 3 particles "
+       "test.yaml:3:67: particles[0].chain.pin[0]: 3 is outside the chain of 3 particles "
        "(expected -3..2)"},
       {"  - lattice: { origin: [0, 0, 0], n: [2, 2.5, 2], spacing: 0.1, mass: 1 }\n",
-       "test.yaml:4:37: particles[0].lattice.n: [2, 2.5, 2] is not three whole numbers (expected "
+       "test.yaml:3:38: particles[0].lattice.n: [2, 2.5, 2] is not three whole numbers (expected "
        "[nx, ny, nz], each a whole number >= 1)"},
       {"  - lattice: { origin: [0, 0, 0], n: [2, 2, 2], spacing: 0.1, mass: 1, springs: { shear: "
        "{ ks: -1 } } }\n",
-       "test.yaml:4:98: particles[0].lattice.springs.shear.ks: -1 is out of range (expected a "
+       "test.yaml:3:96: particles[0].lattice.springs.shear.ks: -1 is out of range (expected a "
        "number >= 0 in N/m)"},
       {"  - cloud: { n: 5, mass: 1 }\n",
-       "test.yaml:4:12: particles[0].cloud: no region is given (expected exactly one region: box: "
+       "test.yaml:3:12: particles[0].cloud: no region is given (expected exactly one region: box: "
        "{ min, max } or sphere: { center, radius })"},
       {"  - cloud: { n: 5, mass: 1, box: { min: [0, 0, 0], max: [1, 1, 1] }, sphere: { center: "
        "[0, 0, 0], radius: 1 } }\n",
-       "test.yaml:4:80: particles[0].cloud.sphere: both 'box' and 'sphere' are given (expected "
+       "test.yaml:3:78: particles[0].cloud.sphere: both 'box' and 'sphere' are given (expected "
        "exactly one region: box: { min, max } or sphere: { center, radius })"},
       {"  - cloud: { n: 5, mass: 1, box: { min: [0, 0, 0], max: [1, -1, 1] } }\n",
-       "test.yaml:4:56: particles[0].cloud.box.max: [1, -1, 1] is below min [0, 0, 0] in some "
+       "test.yaml:3:57: particles[0].cloud.box.max: [1, -1, 1] is below min [0, 0, 0] in some "
        "component (expected max >= min in every component)"},
       {"  - ring: { center: [0, 0, 0], radius: 0, n: 5, mass: 1 }\n",
-       "test.yaml:4:41: particles[0].ring.radius: 0 is out of range (expected a number > 0 in m)"},
+       "test.yaml:3:40: particles[0].ring.radius: 0 is out of range (expected a number > 0 in m)"},
       {"  - ring: { center: [0, 0, 0], radius: 1, n: 5, mass: 1 }\n"
        "  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, name: a }\n"
        "  - ring: { center: [0, 0, 0], radius: 1, n: 5, mass: 1, name: a }\n",
-       "test.yaml:6:65: particles[2].ring.name: group 'a' is already defined (expected a unique "
+       "test.yaml:5:64: particles[2].ring.name: group 'a' is already defined (expected a unique "
        "name)"},
       {"  - polygon: { points: [[0, 0, 0], [1, 0, 0]], mass: 1 }\n",
-       "test.yaml:4:24: particles[0].polygon.points: has 2 points (expected at least 3 for a "
+       "test.yaml:3:24: particles[0].polygon.points: has 2 points (expected at least 3 for a "
        "closed loop)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1 }\n    mass: 2\n",
-       "test.yaml:4:5: particles[0]: a builder entry holds only its builder (expected { chain: { "
+       "test.yaml:3:5: particles[0]: a builder entry holds only its builder (expected { chain: { "
        "... } })"},
   };
   for (const auto& [particles, message] : cases) {

@@ -65,7 +65,9 @@ pdyn::PluginDescriptor describe() {
       pdyn::param::vec3("min", {-0.5, -0.5, -0.5}, "m", "corner with the smallest coordinates"),
       pdyn::param::vec3("max", {0.5, 0.5, 0.5}, "m", "corner with the largest coordinates"),
       pdyn::param::boolean("inside", false, "keep particles inside the box instead of outside"),
-      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr").at_least(0).at_most(1),
+      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr")
+          .at_least(0)
+          .at_most(1),
       pdyn::param::real("friction", 0.0, "", "Coulomb friction coefficient mu").at_least(0),
       pdyn::param::real("epsilon", 1e-4, "m, m/s", "contact tolerance on distance and speeds")
           .greater_than(0),

@@ -35,7 +35,9 @@ pdyn::PluginDescriptor describe() {
   d.params = {
       pdyn::param::vec3("point", {0, 0, 0}, "m", "a point P on the plane"),
       pdyn::param::vec3("normal", {0, 0, 1}, "", "normal N, pointing to the free side").not_zero(),
-      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr").at_least(0).at_most(1),
+      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr")
+          .at_least(0)
+          .at_most(1),
       pdyn::param::real("friction", 0.0, "", "Coulomb friction coefficient mu").at_least(0),
       pdyn::param::real("epsilon", 1e-4, "m, m/s", "contact tolerance on distance and speeds")
           .greater_than(0),

@@ -43,7 +43,9 @@ pdyn::PluginDescriptor describe() {
       pdyn::param::vec3("center", {0, 0, 0}, "m", "centre C"),
       pdyn::param::real("radius", 1.0, "m", "radius R").greater_than(0),
       pdyn::param::boolean("inside", false, "keep particles inside the sphere instead of outside"),
-      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr").at_least(0).at_most(1),
+      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr")
+          .at_least(0)
+          .at_most(1),
       pdyn::param::real("friction", 0.0, "", "Coulomb friction coefficient mu").at_least(0),
       pdyn::param::real("epsilon", 1e-4, "m, m/s", "contact tolerance on distance and speeds")
           .greater_than(0),
