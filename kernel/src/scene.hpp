@@ -62,6 +62,8 @@ struct Scene {
   double end_time = 0.0;     ///< time after the last step, s (steps * dt, or the duration)
   OutputSpec output;
   std::map<std::string, std::vector<Index>> groups;
+  /// The library of each plugin object, by its label: named in fault messages.
+  std::map<std::string, std::filesystem::path> libraries;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`

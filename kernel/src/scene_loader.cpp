@@ -1044,16 +1044,19 @@ Scene Loader::load(const std::string& text) {
     for (const auto& p : *list) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
       if (f) scene.system->add_force(std::move(f), label(p));
+      scene.libraries[label(p)] = p.record->library;
     }
   }
   for (const auto& p : colliders) {
     auto c = create(p, [&] { return registry_.create_collider(*p.record, p.params, ctx); });
     if (c) scene.system->add_collider(std::move(c), label(p));
+    scene.libraries[label(p)] = p.record->library;
   }
   for (const auto& p : solvers) {
     scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
     scene.solver_name = p.record->descriptor->name;
     scene.solver_label = label(p);
+    scene.libraries[label(p)] = p.record->library;
   }
   if (!diags_.empty()) fail();
   return scene;
