@@ -41,8 +41,9 @@ std::string replace_all(std::string s, std::string_view from, std::string_view t
 // CMake reserves these target names; pdyn_add_plugin(NAME ...) would fail.
 bool reserved_by_cmake(const std::string& name) {
   static const std::array<std::string_view, 9> reserved = {
-      "all", "clean", "help", "install", "test", "package", "edit_cache", "rebuild_cache",
-      "list_install_components"};
+      "all",        "clean",         "help",
+      "install",    "test",          "package",
+      "edit_cache", "rebuild_cache", "list_install_components"};
   return std::find(reserved.begin(), reserved.end(), name) != reserved.end();
 }
 
@@ -68,15 +69,17 @@ void write_file(const fs::path& file, std::string_view text) {
 
 int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
   if (!is_valid_plugin_name(a.name)) {
-    err << fmt::format("pdyn: '{}' is not a valid plugin name (expected [a-z0-9_]+, e.g. "
-                       "my_{})\n",
-                       a.name, a.kind);
+    err << fmt::format(
+        "pdyn: '{}' is not a valid plugin name (expected [a-z0-9_]+, e.g. "
+        "my_{})\n",
+        a.name, a.kind);
     return kBadInput;
   }
   if (reserved_by_cmake(a.name)) {
-    err << fmt::format("pdyn: '{}' is a target name that CMake reserves (expected another name, "
-                       "e.g. my_{})\n",
-                       a.name, a.name);
+    err << fmt::format(
+        "pdyn: '{}' is a target name that CMake reserves (expected another name, "
+        "e.g. my_{})\n",
+        a.name, a.name);
     return kBadInput;
   }
   // A second plugin of that name would be refused as a duplicate wherever
@@ -118,18 +121,19 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
   fs::path staging;
   try {
     const fs::path absolute = fs::absolute(target).lexically_normal();
-    fs::path parent = absolute.has_filename() ? absolute.parent_path()
-                                              : absolute.parent_path().parent_path();
-    const fs::path final_path = parent / (absolute.has_filename() ? absolute.filename()
-                                                                  : absolute.parent_path().filename());
+    fs::path parent =
+        absolute.has_filename() ? absolute.parent_path() : absolute.parent_path().parent_path();
+    const fs::path final_path =
+        parent /
+        (absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename());
     fs::create_directories(parent);
     staging = temporary_sibling(final_path);
     fs::create_directory(staging);
     for (const auto& [path, text] : files) {
       const fs::path file = staging / path;
       fs::create_directories(file.parent_path());
-      write_file(file, replace_all(replace_all(std::string(text), "@NAME@", a.name), "@KIND@",
-                                   a.kind));
+      write_file(file,
+                 replace_all(replace_all(std::string(text), "@NAME@", a.name), "@KIND@", a.kind));
     }
     // rename(2) replaces an empty folder, so an empty target is fine too.
     fs::rename(staging, final_path);

@@ -9,7 +9,8 @@
 namespace pdyn::cli {
 
 struct TemplateFile {
-  std::string_view path;  ///< relative to cli/templates/: "common/CMakeLists.txt", "force/@NAME@.cpp"
+  std::string_view
+      path;  ///< relative to cli/templates/: "common/CMakeLists.txt", "force/@NAME@.cpp"
   std::string_view text;
 };
 

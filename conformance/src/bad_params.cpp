@@ -88,16 +88,36 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
       cases.push_back({s.name, std::move(what), std::move(value)});
     };
     switch (s.type) {
-      case ParamType::Real: add("wrong type", "'abc'"); break;
-      case ParamType::Integer: add("wrong type", "0.5"); break;
-      case ParamType::Boolean: add("wrong type", "'maybe'"); break;
-      case ParamType::String: add("wrong type", "[1, 2]"); break;
-      case ParamType::Vector: add("wrong type", "[1, 2]"); break;
-      case ParamType::RealList: add("wrong type", "'abc'"); break;
-      case ParamType::VectorList: add("wrong type", "[1, 2, 3]"); break;
-      case ParamType::IndexList: add("wrong type", "[0.5]"); break;
-      case ParamType::IndexPairs: add("wrong type", "[[0, 1, 2]]"); break;
-      case ParamType::IndexTriples: add("wrong type", "[[0, 1]]"); break;
+      case ParamType::Real:
+        add("wrong type", "'abc'");
+        break;
+      case ParamType::Integer:
+        add("wrong type", "0.5");
+        break;
+      case ParamType::Boolean:
+        add("wrong type", "'maybe'");
+        break;
+      case ParamType::String:
+        add("wrong type", "[1, 2]");
+        break;
+      case ParamType::Vector:
+        add("wrong type", "[1, 2]");
+        break;
+      case ParamType::RealList:
+        add("wrong type", "'abc'");
+        break;
+      case ParamType::VectorList:
+        add("wrong type", "[1, 2, 3]");
+        break;
+      case ParamType::IndexList:
+        add("wrong type", "[0.5]");
+        break;
+      case ParamType::IndexPairs:
+        add("wrong type", "[[0, 1, 2]]");
+        break;
+      case ParamType::IndexTriples:
+        add("wrong type", "[[0, 1]]");
+        break;
     }
     const bool integer = s.type == ParamType::Integer;
     for (bool below : {true, false}) {
@@ -106,11 +126,20 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
       const std::string what = below ? "below the minimum" : "above the maximum";
       switch (s.type) {
         case ParamType::Real:
-        case ParamType::Integer: add(what, *x); break;
-        case ParamType::Vector: add(what, fmt::format("[{0}, {0}, {0}]", *x)); break;
-        case ParamType::RealList: add(what, fmt::format("[{}]", *x)); break;
-        case ParamType::VectorList: add(what, fmt::format("[[{0}, {0}, {0}]]", *x)); break;
-        default: break;
+        case ParamType::Integer:
+          add(what, *x);
+          break;
+        case ParamType::Vector:
+          add(what, fmt::format("[{0}, {0}, {0}]", *x));
+          break;
+        case ParamType::RealList:
+          add(what, fmt::format("[{}]", *x));
+          break;
+        case ParamType::VectorList:
+          add(what, fmt::format("[[{0}, {0}, {0}]]", *x));
+          break;
+        default:
+          break;
       }
     }
     const bool zero_in_range =
@@ -120,7 +149,9 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
       if (s.type == ParamType::VectorList) add("the zero vector", "[[0, 0, 0]]");
     }
     switch (s.type) {
-      case ParamType::IndexList: add("particle index out of range", fmt::format("[{}]", n)); break;
+      case ParamType::IndexList:
+        add("particle index out of range", fmt::format("[{}]", n));
+        break;
       case ParamType::IndexPairs:
         add("particle index out of range", fmt::format("[[0, {}]]", n));
         add("negative particle index", "[[-1, 0]]");
@@ -128,7 +159,8 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
       case ParamType::IndexTriples:
         add("particle index out of range", fmt::format("[[0, 1, {}]]", n));
         break;
-      default: break;
+      default:
+        break;
     }
     if (s.required) cases.push_back({s.name, "required key left out", std::nullopt});
   }
@@ -189,8 +221,9 @@ CheckResult check_bad_params(const PluginDescriptor& d, const Params& sample, co
   const std::string name = "params.bad_rejected";
   PluginRegistry registry;
   if (!registry.add(d, "(plugin under test)")) {
-    return {name, Verdict::Fail, 1, 0,
-            fmt::format("the registry refuses the descriptor: {}", registry.faults().back().message)};
+    return {
+        name, Verdict::Fail, 1, 0,
+        fmt::format("the registry refuses the descriptor: {}", registry.faults().back().message)};
   }
   if (d.kind != PluginKind::Solver && !registry.add(helper_solver(), "(conformance kit)")) {
     return {name, Verdict::Fail, 1, 0,

@@ -355,7 +355,7 @@ struct Loop {
       h = take();
       sys.respond_to_collisions(h);
     } catch (const PluginRuntimeError& e) {
-      return stop(3, fmt::format("plugin {} at step {}", e.what(), k));
+      return stop(3, fmt::format("plugin {} at step {}{}", e.what(), k, library_of(e.label())));
     } catch (const std::exception& e) {
       // The solver failed on its own account, or so it seems: it may have
       // called a force directly (finite-difference Jacobians) that threw,
@@ -371,11 +371,11 @@ struct Loop {
                                    "as the final frame",
                                    k, t_previous, *culprit, solver, k - 1));
       }
-      return stop(3, fmt::format("plugin {}: step threw at step {}: {}", scene.solver_label, k,
-                                 e.what()));
+      return stop(3, fmt::format("plugin {}: step threw at step {}: {}{}", scene.solver_label, k,
+                                 e.what(), library_of(scene.solver_label)));
     } catch (...) {
-      return stop(3, fmt::format("plugin {}: step threw a non-standard exception at step {}",
-                                 scene.solver_label, k));
+      return stop(3, fmt::format("plugin {}: step threw a non-standard exception at step {}{}",
+                                 scene.solver_label, k, library_of(scene.solver_label)));
     }
     if (const Index bad = first_non_finite(sys); bad >= 0) {
       const auto culprit = replay(take, true);
@@ -404,7 +404,7 @@ struct Loop {
     try {
       take();
     } catch (const PluginRuntimeError& e) {
-      culprit = e.what();
+      culprit = e.what() + library_of(e.label());
     } catch (...) {
     }
     replaying = false;
@@ -412,6 +412,12 @@ struct Loop {
     sys.state() = bad_state;
     sys.set_time(bad_time);
     return culprit;
+  }
+
+  // " (library PATH)": which file a faulty plugin object came from.
+  std::string library_of(const std::string& label) const {
+    const auto it = scene.libraries.find(label);
+    return it == scene.libraries.end() ? "" : fmt::format(" (library {})", it->second.string());
   }
 
   std::nullopt_t stop(int code, std::string message) {

@@ -76,6 +76,8 @@ struct Scene {
   std::map<std::string, std::vector<Index>> groups;
   /// Every force and collider object, in the order the system holds them.
   std::vector<PluginUse> uses;
+  /// The library of each plugin object, by its label: named in fault messages.
+  std::map<std::string, std::filesystem::path> libraries;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`

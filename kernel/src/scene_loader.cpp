@@ -1238,6 +1238,7 @@ Scene Loader::load(const std::string& text) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
       if (!f) continue;
       scene.system->add_force(std::move(f), label(p));
+      scene.libraries[label(p)] = p.record->library;
       keep(p, PluginKind::Force);
     }
   }
@@ -1245,12 +1246,14 @@ Scene Loader::load(const std::string& text) {
     auto c = create(p, [&] { return registry_.create_collider(*p.record, p.params, ctx); });
     if (!c) continue;
     scene.system->add_collider(std::move(c), label(p));
+    scene.libraries[label(p)] = p.record->library;
     keep(p, PluginKind::Collider);
   }
   for (const auto& p : solvers) {
     scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
     scene.solver_name = p.record->descriptor->name;
     scene.solver_label = label(p);
+    scene.libraries[label(p)] = p.record->library;
   }
   if (!diags_.empty()) fail();
   return scene;

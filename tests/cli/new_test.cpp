@@ -33,8 +33,9 @@ TEST(New, WritesAProjectForEachKind) {
     EXPECT_EQ(entries(dir), 4u);
     const std::string cmake = read(dir / "CMakeLists.txt");
     EXPECT_NE(cmake.find("find_package(pdyn 0.1 REQUIRED)"), std::string::npos) << cmake;
-    EXPECT_NE(cmake.find("pdyn_add_plugin(" + name + " KIND " + kind + " SOURCES " + name + ".cpp)"),
-              std::string::npos)
+    EXPECT_NE(
+        cmake.find("pdyn_add_plugin(" + name + " KIND " + kind + " SOURCES " + name + ".cpp)"),
+        std::string::npos)
         << cmake;
     EXPECT_NE(cmake.find("${PDYN_EXECUTABLE} check " + name), std::string::npos) << cmake;
     const std::string source = read(dir / (name + ".cpp"));

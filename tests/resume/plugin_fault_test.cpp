@@ -65,7 +65,7 @@ Checkpoint plain_state_at(const std::string& solver, std::int64_t step) {
   return read_checkpoint(dir / "out/run.ckpt");
 }
 
-// Exit 3: one line naming `plugin`, its location and the step; returns the
+// Exit 3: one line naming `plugin`, its location, its library and the step; returns the
 // step, after checking the last good frame and the checkpoint.
 std::int64_t expect_plugin_fault(const Fault& f, const std::string& plugin, int line,
                                  const std::string& hook) {
@@ -76,6 +76,9 @@ std::int64_t expect_plugin_fault(const Fault& f, const std::string& plugin, int 
   EXPECT_TRUE(contains(r.err, "plugin " + plugin + " (scene.yaml:" + std::to_string(line) + ":"))
       << r.err;
   EXPECT_TRUE(contains(r.err, hook + " threw: fixture")) << r.err;
+  // ... and the library it came from.
+  EXPECT_TRUE(contains(r.err, "/faults/pdyn_")) << r.err;
+  EXPECT_TRUE(contains(r.err, "_" + plugin + ".so)")) << r.err;
   EXPECT_TRUE(contains(r.err, "the last good frame and a checkpoint")) << r.err;
   const auto at = r.err.find(" at step ");
   if (at == std::string::npos) {
@@ -149,6 +152,7 @@ TEST(PluginFaults, ThrowingSolverStopsWithExit3) {
     EXPECT_EQ(r.status, 3) << r.err;
     EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
     EXPECT_TRUE(contains(r.err, "plugin throwing_solver (scene.yaml:4:")) << r.err;
+    EXPECT_TRUE(contains(r.err, "/faults/pdyn_solver_throwing_solver.so)")) << r.err;
     EXPECT_TRUE(contains(r.err, non_standard ? "non-standard exception at step 6"
                                              : "step threw at step 6: fixture solver failure"))
         << r.err;
