@@ -36,10 +36,13 @@ class Spring final : public pdyn::Force {
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
     const Index n_springs = static_cast<Index>(pairs_.size());
     if (pdyn::max_threads() == 1 || n_springs < pdyn::kParallelMinElements) {
-      for (Index s = 0; s < n_springs; ++s) {
-        const pdyn::Vec3 fi = force_on_first(p, s);
-        f.col(pairs_[s][0]) += fi;
-        f.col(pairs_[s][1]) -= fi;
+      // The kernel's accumulator is a plain 3 x N matrix: with its stride
+      // known at compile time the scatter is plain pointer arithmetic.
+      if (f.outerStride() == 3) {
+        Eigen::Map<pdyn::Matrix3X> dense(f.data(), 3, f.cols());
+        scatter(p, dense);
+      } else {
+        scatter(p, f);
       }
       return;
     }
@@ -113,11 +116,23 @@ class Spring final : public pdyn::Force {
   }
 
  private:
+  template <class Accumulator>
+  void scatter(const pdyn::ParticleView& p, Accumulator& f) const {
+    const Index n_springs = static_cast<Index>(pairs_.size());
+    for (Index s = 0; s < n_springs; ++s) {
+      const pdyn::Vec3 fi = force_on_first(p, s);
+      f.col(pairs_[s][0]) += fi;
+      f.col(pairs_[s][1]) -= fi;
+    }
+  }
+
   // The force on the first end of spring s. Coincident ends have no
   // direction: the spring adds zero rather than NaN (a zero-length spring
   // at rest exerts no force anyway). Zero is added, not skipped, so that
   // both paths of add_forces do the same additions.
-  pdyn::Vec3 force_on_first(const pdyn::ParticleView& p, Index s) const {
+  // Inlined into both loops: a call per spring costs a fifth of the loop.
+  [[gnu::always_inline]] inline pdyn::Vec3 force_on_first(const pdyn::ParticleView& p,
+                                                          Index s) const {
     const Index i = pairs_[s][0], j = pairs_[s][1];
     const pdyn::Vec3 dx = p.x.col(i) - p.x.col(j);
     const double len = dx.norm();
