@@ -14,7 +14,7 @@
 //   pdyn_bench_cloth --memory pdyn|fused N   peak RSS of an N x N cloth after
 //                                            3 steps (run each in its own process)
 //   pdyn_bench_cloth --load                  scene load times
-//   pdyn_bench_cloth --run VARIANT N STEPS   just step (for callgrind)
+//   pdyn_bench_cloth --run VARIANT N STEPS [THREADS]   just step (for callgrind)
 //
 // scripts/bench.sh runs all three and writes docs/performance.md's numbers.
 #include <benchmark/benchmark.h>
@@ -335,15 +335,15 @@ int load_times() {
 // Steps one variant without timing it, for instruction counts:
 // valgrind --tool=callgrind pdyn_bench_cloth --run VARIANT N STEPS, at two
 // step counts; the difference is the cost of the extra steps alone.
-int run_only(const std::string& variant, int n, int steps) {
+int run_only(const std::string& variant, int n, int steps, int threads) {
   if (variant == "pdyn_run") {
     pdyn::Scene scene = load_pdyn(n, steps);
     pdyn::RunOptions options;
-    options.threads = 1;
+    options.threads = threads;
     return pdyn::run_scene(scene, options).exit_code;
   }
   if (variant == "pdyn_step") {
-    pdyn::set_threads(1);
+    pdyn::set_threads(threads);
     pdyn::Scene scene = load_pdyn(n, steps);
     for (int k = 0; k < steps; ++k) scene.solver->step(*scene.system, kDt);
     return 0;
@@ -365,7 +365,8 @@ int run_only(const std::string& variant, int n, int steps) {
 
 int main(int argc, char** argv) {
   if (argc >= 5 && std::strcmp(argv[1], "--run") == 0) {
-    return run_only(argv[2], std::atoi(argv[3]), std::atoi(argv[4]));
+    return run_only(argv[2], std::atoi(argv[3]), std::atoi(argv[4]),
+                    argc >= 6 ? std::atoi(argv[5]) : 1);
   }
   if (argc >= 4 && std::strcmp(argv[1], "--memory") == 0) {
     return memory(argv[2], std::atoi(argv[3]), argc >= 5 ? std::atoi(argv[4]) : 1);
