@@ -292,10 +292,11 @@ void write_bulk_scenes(const std::filesystem::path& dir) {
   std::ofstream inl(dir / "inline.yaml");
   inl << head << "particles:\n";
   for (std::size_t i = 0; i < rows.x.size(); ++i) {
-    inl << fmt::format("  - {{ position: [{:.17g}, {:.17g}, {:.17g}], velocity: [{:.17g}, "
-                       "{:.17g}, {:.17g}], mass: {:.17g}, fixed: {} }}\n",
-                       rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(),
-                       rows.v[i].z(), rows.mass[i], rows.fixed[i] ? "true" : "false");
+    inl << fmt::format(
+        "  - {{ position: [{:.17g}, {:.17g}, {:.17g}], velocity: [{:.17g}, "
+        "{:.17g}, {:.17g}], mass: {:.17g}, fixed: {} }}\n",
+        rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(), rows.v[i].z(),
+        rows.mass[i], rows.fixed[i] ? "true" : "false");
   }
   inl << "forces:\n  - type: spring\n    ks: 1000\n    kd: 0.02\n    pairs: [";
   for (std::size_t s = 0; s < pairs.size(); ++s) {
@@ -315,15 +316,17 @@ int load_times() {
     return seconds_to_load(PDYN_BENCH_CLOTH,
                            {{"particles[0].grid.nx", "1000"}, {"particles[0].grid.ny", "1000"}});
   });
-  std::printf("{\"load\": \"grid builder, 1000 x 1000 (1 000 000 particles, 3 996 002 "
-              "springs)\", \"seconds\": %.3f}\n",
-              grid);
+  std::printf(
+      "{\"load\": \"grid builder, 1000 x 1000 (1 000 000 particles, 3 996 002 "
+      "springs)\", \"seconds\": %.3f}\n",
+      grid);
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "pdyn_bench_load";
   write_bulk_scenes(dir);
   const double side = best_of(3, [&] { return seconds_to_load(dir / "side.yaml", {}); });
-  std::printf("{\"load\": \"CSV side files, 99 856 particles + 397 530 springs\", "
-              "\"seconds\": %.3f}\n",
-              side);
+  std::printf(
+      "{\"load\": \"CSV side files, 99 856 particles + 397 530 springs\", "
+      "\"seconds\": %.3f}\n",
+      side);
   const double inline_yaml = best_of(1, [&] { return seconds_to_load(dir / "inline.yaml", {}); });
   std::printf("{\"load\": \"the same inline in YAML\", \"seconds\": %.3f}\n", inline_yaml);
   std::filesystem::remove_all(dir);
@@ -358,8 +361,10 @@ int run_only(const std::string& variant, int n, int steps, int threads) {
     for (int k = 0; k < steps; ++k) ode.step(kDt);
     return 0;
   }
-  std::fprintf(stderr, "pdyn_bench_cloth: --run %s: unknown variant (expected pdyn_run, "
-               "pdyn_step, fused or odeint)\n", variant.c_str());
+  std::fprintf(stderr,
+               "pdyn_bench_cloth: --run %s: unknown variant (expected pdyn_run, "
+               "pdyn_step, fused or odeint)\n",
+               variant.c_str());
   return 2;
 }
 

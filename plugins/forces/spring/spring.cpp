@@ -21,10 +21,11 @@ class Spring final : public pdyn::Force {
  public:
   // `n_particles` is the scene's N: the springs are grouped by particle
   // block here, once, so that stepping never allocates.
-  Spring(std::vector<IndexPair> pairs, std::vector<double> rest, double ks, double kd,
+  // `pairs` and `rest` are copied once, straight into block order.
+  Spring(const std::vector<IndexPair>& pairs, const std::vector<double>& rest, double ks, double kd,
          Index n_particles)
-      : pairs_(std::move(pairs)), rest_(std::move(rest)), ks_(ks), kd_(kd) {
-    group_by_block(n_particles);
+      : ks_(ks), kd_(kd) {
+    group_by_block(pairs, rest, n_particles);
   }
 
   // Parallel without races, atomics or a thread-count-dependent rounding.
@@ -106,8 +107,8 @@ class Spring final : public pdyn::Force {
   template <class Accumulator>
   void accumulate(const pdyn::ParticleView& p, Accumulator& f) const {
     const Index n_blocks = static_cast<Index>(block_start_.size()) - 1;
-    const bool parallel = pdyn::max_threads() > 1 &&
-                          static_cast<Index>(pairs_.size()) >= pdyn::kParallelMinElements;
+    const bool parallel =
+        pdyn::max_threads() > 1 && static_cast<Index>(pairs_.size()) >= pdyn::kParallelMinElements;
     auto interior = [&](Index blk) {
       for (Index s = block_start_[blk]; s < block_start_[blk + 1]; ++s) {
         const pdyn::Vec3 fi = force_on_first(p, s);
@@ -151,27 +152,26 @@ class Spring final : public pdyn::Force {
   // About 64 blocks, at least 4096 particles each: enough to balance any
   // thread count up to a few dozen, few enough that boundary springs stay
   // a small fraction.
-  void group_by_block(Index n) {
+  void group_by_block(const std::vector<IndexPair>& given, const std::vector<double>& given_rest,
+                      Index n) {
     const Index block = std::max<Index>(4096, (n + 63) / 64);
     const Index n_blocks = std::max<Index>(1, (n + block - 1) / block);
-    const Index n_springs = static_cast<Index>(pairs_.size());
+    const Index n_springs = static_cast<Index>(given.size());
     auto bucket = [&](const IndexPair& pr) {
       const Index b = pr[0] / block;
       return b == pr[1] / block ? b : n_blocks;  // n_blocks: boundary
     };
     std::vector<Index> start(static_cast<std::size_t>(n_blocks + 2), 0);
-    for (const auto& pr : pairs_) ++start[bucket(pr) + 1];
+    for (const auto& pr : given) ++start[bucket(pr) + 1];
     for (Index b = 0; b <= n_blocks; ++b) start[b + 1] += start[b];
-    std::vector<IndexPair> pairs(pairs_.size());
-    std::vector<double> rest(rest_.size());
+    pairs_.resize(given.size());
+    rest_.resize(given.size());
     std::vector<Index> next(start.begin(), start.end() - 1);
     for (Index s = 0; s < n_springs; ++s) {
-      const Index to = next[bucket(pairs_[s])]++;
-      pairs[to] = pairs_[s];
-      rest[to] = rest_[s];
+      const Index to = next[bucket(given[s])]++;
+      pairs_[to] = given[s];
+      rest_[to] = given_rest[s];
     }
-    pairs_ = std::move(pairs);
-    rest_ = std::move(rest);
     block_start_.assign(start.begin(), start.end() - 1);  // n_blocks + 1 entries
     const Index first = block_start_.back(), n_boundary = n_springs - first;
     // CSR over the particles the boundary springs touch, in id order.
@@ -217,8 +217,9 @@ class Spring final : public pdyn::Force {
   std::vector<Index> block_start_;    // block b's interior springs: [start[b], start[b + 1])
   std::vector<Index> touched_;        // particles with boundary springs, increasing
   std::vector<Index> touched_start_;  // their entries in incident_
-  std::vector<Index> incident_;       // 2 s (first end) or 2 s + 1 (second end), s from the first boundary spring
-  mutable pdyn::Matrix3X buffer_;     // boundary springs' forces on their first ends, N
+  std::vector<Index>
+      incident_;  // 2 s (first end) or 2 s + 1 (second end), s from the first boundary spring
+  mutable pdyn::Matrix3X buffer_;  // boundary springs' forces on their first ends, N
 };
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
@@ -247,8 +248,7 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
       rest[s] = (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();
     }
   }
-  return std::make_unique<Spring>(pairs, std::move(rest), p.real("ks"), p.real("kd"),
-                                  ctx.particles.size());
+  return std::make_unique<Spring>(pairs, rest, p.real("ks"), p.real("kd"), ctx.particles.size());
 }
 
 pdyn::PluginDescriptor describe() {
