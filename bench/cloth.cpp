@@ -14,7 +14,7 @@
 //   pdyn_bench_cloth --memory pdyn|fused N   peak RSS of an N x N cloth after
 //                                            3 steps (run each in its own process)
 //   pdyn_bench_cloth --load                  scene load times
-//   pdyn_bench_cloth --run VARIANT N STEPS   just step (for callgrind)
+//   pdyn_bench_cloth --run VARIANT N STEPS [THREADS]   just step (for callgrind)
 //
 // scripts/bench.sh runs all three and writes docs/performance.md's numbers.
 #include <benchmark/benchmark.h>
@@ -292,10 +292,11 @@ void write_bulk_scenes(const std::filesystem::path& dir) {
   std::ofstream inl(dir / "inline.yaml");
   inl << head << "particles:\n";
   for (std::size_t i = 0; i < rows.x.size(); ++i) {
-    inl << fmt::format("  - {{ position: [{:.17g}, {:.17g}, {:.17g}], velocity: [{:.17g}, "
-                       "{:.17g}, {:.17g}], mass: {:.17g}, fixed: {} }}\n",
-                       rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(),
-                       rows.v[i].z(), rows.mass[i], rows.fixed[i] ? "true" : "false");
+    inl << fmt::format(
+        "  - {{ position: [{:.17g}, {:.17g}, {:.17g}], velocity: [{:.17g}, "
+        "{:.17g}, {:.17g}], mass: {:.17g}, fixed: {} }}\n",
+        rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(), rows.v[i].z(),
+        rows.mass[i], rows.fixed[i] ? "true" : "false");
   }
   inl << "forces:\n  - type: spring\n    ks: 1000\n    kd: 0.02\n    pairs: [";
   for (std::size_t s = 0; s < pairs.size(); ++s) {
@@ -315,15 +316,17 @@ int load_times() {
     return seconds_to_load(PDYN_BENCH_CLOTH,
                            {{"particles[0].grid.nx", "1000"}, {"particles[0].grid.ny", "1000"}});
   });
-  std::printf("{\"load\": \"grid builder, 1000 x 1000 (1 000 000 particles, 3 996 002 "
-              "springs)\", \"seconds\": %.3f}\n",
-              grid);
+  std::printf(
+      "{\"load\": \"grid builder, 1000 x 1000 (1 000 000 particles, 3 996 002 "
+      "springs)\", \"seconds\": %.3f}\n",
+      grid);
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "pdyn_bench_load";
   write_bulk_scenes(dir);
   const double side = best_of(3, [&] { return seconds_to_load(dir / "side.yaml", {}); });
-  std::printf("{\"load\": \"CSV side files, 99 856 particles + 397 530 springs\", "
-              "\"seconds\": %.3f}\n",
-              side);
+  std::printf(
+      "{\"load\": \"CSV side files, 99 856 particles + 397 530 springs\", "
+      "\"seconds\": %.3f}\n",
+      side);
   const double inline_yaml = best_of(1, [&] { return seconds_to_load(dir / "inline.yaml", {}); });
   std::printf("{\"load\": \"the same inline in YAML\", \"seconds\": %.3f}\n", inline_yaml);
   std::filesystem::remove_all(dir);
@@ -335,15 +338,15 @@ int load_times() {
 // Steps one variant without timing it, for instruction counts:
 // valgrind --tool=callgrind pdyn_bench_cloth --run VARIANT N STEPS, at two
 // step counts; the difference is the cost of the extra steps alone.
-int run_only(const std::string& variant, int n, int steps) {
+int run_only(const std::string& variant, int n, int steps, int threads) {
   if (variant == "pdyn_run") {
     pdyn::Scene scene = load_pdyn(n, steps);
     pdyn::RunOptions options;
-    options.threads = 1;
+    options.threads = threads;
     return pdyn::run_scene(scene, options).exit_code;
   }
   if (variant == "pdyn_step") {
-    pdyn::set_threads(1);
+    pdyn::set_threads(threads);
     pdyn::Scene scene = load_pdyn(n, steps);
     for (int k = 0; k < steps; ++k) scene.solver->step(*scene.system, kDt);
     return 0;
@@ -358,14 +361,17 @@ int run_only(const std::string& variant, int n, int steps) {
     for (int k = 0; k < steps; ++k) ode.step(kDt);
     return 0;
   }
-  std::fprintf(stderr, "pdyn_bench_cloth: --run %s: unknown variant (expected pdyn_run, "
-               "pdyn_step, fused or odeint)\n", variant.c_str());
+  std::fprintf(stderr,
+               "pdyn_bench_cloth: --run %s: unknown variant (expected pdyn_run, "
+               "pdyn_step, fused or odeint)\n",
+               variant.c_str());
   return 2;
 }
 
 int main(int argc, char** argv) {
   if (argc >= 5 && std::strcmp(argv[1], "--run") == 0) {
-    return run_only(argv[2], std::atoi(argv[3]), std::atoi(argv[4]));
+    return run_only(argv[2], std::atoi(argv[3]), std::atoi(argv[4]),
+                    argc >= 6 ? std::atoi(argv[5]) : 1);
   }
   if (argc >= 4 && std::strcmp(argv[1], "--memory") == 0) {
     return memory(argv[2], std::atoi(argv[3]), argc >= 5 ? std::atoi(argv[4]) : 1);

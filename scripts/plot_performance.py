@@ -71,11 +71,11 @@ def main():
         script = f"""
 set terminal pngcairo size 900,560 noenhanced font ",11"
 set output "{png}"
-set title "Hanging cloth, rk4: time per particle-step (lower is better)"
-set logscale x
+set title "Hanging cloth, rk4: time per particle-step (lower is better; log scales)"
+set logscale xy
 set xlabel "particles"
 set ylabel "ns per particle-step"
-set yrange [0:*]
+
 set key outside right
 set grid
 plot for [i=0:{len(VARIANTS) - 1}] "{dat}" index i using 1:2 with linespoints lw 2 title columnheader(1)

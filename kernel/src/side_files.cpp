@@ -26,7 +26,10 @@ class Problems {
       out_.push_back({fmt::format("{}:{}:{}", shown_, line, column), std::move(message)});
     }
   }
-  void add_file(std::string message) { out_.push_back({shown_, std::move(message)}); ++count_; }
+  void add_file(std::string message) {
+    out_.push_back({shown_, std::move(message)});
+    ++count_;
+  }
   bool any() const { return count_ > 0; }
   void finish() {
     if (count_ > kMaxProblemsPerFile) {
@@ -59,7 +62,8 @@ struct Field {
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
   return s;
 }
 
@@ -137,8 +141,7 @@ std::string column_count_message(std::size_t got, std::size_t want, const std::s
 }  // namespace
 
 std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
-                                           const std::string& shown,
-                                           std::vector<Diagnostic>& out) {
+                                           const std::string& shown, std::vector<Diagnostic>& out) {
   Problems problems(shown, out);
   const auto text = slurp(file);
   if (!text) {
@@ -168,9 +171,9 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
                      fmt::format("unknown column {} (expected x, y, z, vx, vy, vz, mass, fixed)",
                                  quoted(fields[k].text)));
       } else if (at[c] >= 0) {
-        problems.add(line, fields[k].column,
-                     fmt::format("column '{}' appears twice (expected each column once)",
-                                 kNames[c]));
+        problems.add(
+            line, fields[k].column,
+            fmt::format("column '{}' appears twice (expected each column once)", kNames[c]));
       } else {
         at[c] = static_cast<int>(k);
       }
@@ -185,8 +188,7 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
     }
     const int velocities = (at[VX] >= 0) + (at[VY] >= 0) + (at[VZ] >= 0);
     if (velocities != 0 && velocities != 3) {
-      problems.add(line, 1,
-                   "the header has only some of vx, vy, vz (expected all three or none)");
+      problems.add(line, 1, "the header has only some of vx, vy, vz (expected all three or none)");
     }
     return !problems.any();
   };
@@ -216,9 +218,9 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
       if (f.text == "1" || f.text == "true") {
         fixed = 1;
       } else if (!(f.text == "0" || f.text == "false")) {
-        problems.add(line, f.column,
-                     fmt::format("fixed: {} is not a flag (expected 0, 1, true or false)",
-                                 quoted(f.text)));
+        problems.add(
+            line, f.column,
+            fmt::format("fixed: {} is not a flag (expected 0, 1, true or false)", quoted(f.text)));
         ok = false;
       }
     }
@@ -260,8 +262,9 @@ std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesyst
     bool ok = fields.size() == K;
     for (std::size_t k = 0; ok && k < K; ++k) ok = fields[k].text == kNames[k];
     if (!ok) {
-      problems.add(line, 1, fmt::format("the header is not {} (expected the columns {})",
-                                        header_text, header_text));
+      problems.add(
+          line, 1,
+          fmt::format("the header is not {} (expected the columns {})", header_text, header_text));
     }
     return ok;
   };
@@ -310,9 +313,10 @@ void write_particles(const std::filesystem::path& file, const ParticleRows& rows
   fmt::memory_buffer buf;
   fmt::format_to(std::back_inserter(buf), "x,y,z,vx,vy,vz,mass,fixed\n");
   for (std::size_t i = 0; i < rows.x.size(); ++i) {
-    fmt::format_to(std::back_inserter(buf), "{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{}\n",
-                   rows.x[i].x(), rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(),
-                   rows.v[i].z(), rows.mass[i], int{rows.fixed[i]});
+    fmt::format_to(std::back_inserter(buf),
+                   "{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{}\n", rows.x[i].x(),
+                   rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(), rows.v[i].z(),
+                   rows.mass[i], int{rows.fixed[i]});
   }
   std::ofstream(file, std::ios::binary).write(buf.data(), static_cast<std::streamsize>(buf.size()));
 }

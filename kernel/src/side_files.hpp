@@ -33,10 +33,10 @@ inline constexpr std::size_t kMaxProblemsPerFile = 20;
 
 /// Particles read from a CSV file, one entry per record.
 struct ParticleRows {
-  std::vector<Vec3> x;                  ///< m
-  std::vector<Vec3> v;                  ///< m/s (zero when the file has no vx,vy,vz)
-  std::vector<double> mass;             ///< kg, > 0
-  std::vector<std::uint8_t> fixed;      ///< 1: nailed (0 when the file has no fixed column)
+  std::vector<Vec3> x;              ///< m
+  std::vector<Vec3> v;              ///< m/s (zero when the file has no vx,vy,vz)
+  std::vector<double> mass;         ///< kg, > 0
+  std::vector<std::uint8_t> fixed;  ///< 1: nailed (0 when the file has no fixed column)
 };
 
 /// Reads a particle file (columns x,y,z,mass required; vx,vy,vz together or

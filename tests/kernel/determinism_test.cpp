@@ -1,8 +1,9 @@
 // Determinism across thread counts: a cloth stepped with 1, 2, 3 and 4
 // threads ends in bit-identical states, for every shipped explicit solver
 // that splits its updates over threads (pdyn/parallel.hpp, the spring
-// plugin's buffered gather). The cloth is large enough (64 x 64 particles,
-// 23 500 springs) that every parallel path is taken, not its serial fallback.
+// plugin's blocks and boundary gather). The cloth is large enough (96 x 96
+// particles: three spring blocks of 4096 particles, 54 000 springs) that
+// every parallel path is taken, not its serial fallback.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -19,11 +20,11 @@ std::string cloth(const std::string& solver, int steps) {
          " } }\n"
          "particles:\n"
          "  - grid:\n"
-         "      origin: [-0.315, 0, 1]\n"
+         "      origin: [-0.475, 0, 1]\n"
          "      u: [0.01, 0, 0]\n"
          "      v: [0, 0, 0.01]\n"
-         "      nx: 64\n"
-         "      ny: 64\n"
+         "      nx: 96\n"
+         "      ny: 96\n"
          "      mass: 0.0001\n"
          "      velocity: [0, 1, 0]\n"
          "      pin: [[0, -1], [-1, -1]]\n"

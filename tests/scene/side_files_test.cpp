@@ -1,11 +1,12 @@
 // CSV side files (kernel/src/side_files.cpp): particles and spring pairs
 // read from files a scene names, with exact located messages for bad rows.
+#include "side_files.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <functional>
 
-#include "side_files.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn::test {
@@ -79,15 +80,19 @@ TEST_P(BadRow, IsReportedAtItsLineAndColumn) {
 INSTANTIATE_TEST_SUITE_P(
     Particles, BadRow,
     ::testing::Values(
-        std::pair{"0,zero,0,1", "3:3: y: 'zero' is not a number (expected a real number, e.g. 0.25)"},
-        std::pair{"0,0,0", "3:6: has 3 fields, the header has 4 (expected 4 comma-separated "
-                           "values: x,y,z,mass)"},
-        std::pair{"0,0,0,1,5", "3:10: has 5 fields, the header has 4 (expected 4 comma-separated "
-                               "values: x,y,z,mass)"},
+        std::pair{"0,zero,0,1",
+                  "3:3: y: 'zero' is not a number (expected a real number, e.g. 0.25)"},
+        std::pair{"0,0,0",
+                  "3:6: has 3 fields, the header has 4 (expected 4 comma-separated "
+                  "values: x,y,z,mass)"},
+        std::pair{"0,0,0,1,5",
+                  "3:10: has 5 fields, the header has 4 (expected 4 comma-separated "
+                  "values: x,y,z,mass)"},
         std::pair{"0, nan,0,1", "3:4: y: nan is not finite (expected a finite number)"},
         std::pair{"0,0,0,-0.5", "3:7: mass: -0.5 is not positive (expected a mass > 0 kg)"},
-        std::pair{"0,0,,1", "3:5: z: an empty field is not a number (expected a real number, "
-                            "e.g. 0.25)"}));
+        std::pair{"0,0,,1",
+                  "3:5: z: an empty field is not a number (expected a real number, "
+                  "e.g. 0.25)"}));
 
 TEST(SideFiles, BadHeaderAndBadPairsAreLocated) {
   const fs::path dir = temp_dir("side_bad_header");
@@ -98,7 +103,8 @@ TEST(SideFiles, BadHeaderAndBadPairsAreLocated) {
   write_file(dir / "b.yaml",
              "simulation: { dt: 0.001, steps: 1 }\nparticles:\n  - file: q.csv\n"
              "forces:\n  - { type: spring, pairs: { file: s.csv } }\n");
-  write_file(dir / "c.yaml", "simulation: { dt: 0.001, steps: 1 }\nparticles:\n  - file: none.csv\n");
+  write_file(dir / "c.yaml",
+             "simulation: { dt: 0.001, steps: 1 }\nparticles:\n  - file: none.csv\n");
   try {
     load_scene(dir / "a.yaml", shipped_plugins());
     FAIL() << "a bad header was accepted";

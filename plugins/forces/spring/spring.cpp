@@ -19,47 +19,38 @@ using pdyn::IndexPair;
 
 class Spring final : public pdyn::Force {
  public:
-  Spring(std::vector<IndexPair> pairs, std::vector<double> rest, double ks, double kd)
-      : pairs_(std::move(pairs)), rest_(std::move(rest)), ks_(ks), kd_(kd) {}
+  // `n_particles` is the scene's N: the springs are grouped by particle
+  // block here, once, so that stepping never allocates.
+  // `pairs` and `rest` are copied once, straight into block order.
+  Spring(const std::vector<IndexPair>& pairs, const std::vector<double>& rest, double ks, double kd,
+         Index n_particles)
+      : ks_(ks), kd_(kd) {
+    group_by_block(pairs, rest, n_particles);
+  }
 
-  // One thread: each spring adds into both ends directly, the fastest form
-  // (one pass over the springs; the ends' columns are still in cache from
-  // the neighbouring springs of a grid). Several threads: two ends of
-  // different springs may be the same particle, so scattering in parallel
-  // would race, and atomics would make the order of the additions (hence
-  // the rounding) depend on timing. Instead the springs' forces go into a
-  // per-spring buffer in parallel, and then each particle, in parallel,
-  // adds the forces of its springs in increasing spring order, read from a
-  // precomputed CSR incidence list. That is exactly the sequence of
-  // additions the serial scatter applies to that particle's accumulator,
-  // so the result is bit-identical for every thread count, 1 included.
+  // Parallel without races, atomics or a thread-count-dependent rounding.
+  // The particles are cut into fixed blocks of consecutive ids, whose size
+  // depends on N only, never on the thread count. A spring with both ends
+  // in one block is "interior" to it; the others (a few percent on a grid,
+  // whose blocks are bands of rows) are "boundary" springs. Phase 1: each
+  // block's interior springs add into their ends directly, in spring order,
+  // the blocks spread over the threads; no two threads touch one particle.
+  // Phase 2: the boundary springs' forces go into a buffer in parallel, then
+  // every particle they touch adds its entries in spring order (a CSR
+  // incidence list). So each particle's accumulator receives the same terms
+  // in the same order whatever the thread count, 1 included: the result is
+  // bit-identical. Phase 1 is as fast as a plain serial scatter (the ends'
+  // columns are still in cache from neighbouring springs); the buffer's
+  // extra memory traffic is paid by the boundary springs only.
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
-    const Index n_springs = static_cast<Index>(pairs_.size());
-    if (pdyn::max_threads() == 1 || n_springs < pdyn::kParallelMinElements) {
-      for (Index s = 0; s < n_springs; ++s) {
-        const pdyn::Vec3 fi = force_on_first(p, s);
-        f.col(pairs_[s][0]) += fi;
-        f.col(pairs_[s][1]) -= fi;
-      }
-      return;
+    // The kernel's accumulator is a plain 3 x N matrix: with its stride
+    // known at compile time the scatter is plain pointer arithmetic.
+    if (f.outerStride() == 3) {
+      Eigen::Map<pdyn::Matrix3X> dense(f.data(), 3, f.cols());
+      accumulate(p, dense);
+    } else {
+      accumulate(p, f);
     }
-    prepare_gather(p.size());  // allocates on the first call only
-    pdyn::parallel_ranges(n_springs, [&](Index b, Index e) {
-      for (Index s = b; s < e; ++s) buffer_.col(s) = force_on_first(p, s);
-    });
-    pdyn::parallel_ranges(p.size(), [&](Index b, Index e) {
-      for (Index i = b; i < e; ++i) {
-        for (Index k = offsets_[i]; k < offsets_[i + 1]; ++k) {
-          // incident_ holds 2 s for the spring's first end, 2 s + 1 for its second.
-          const Index s = incident_[k] >> 1;
-          if (incident_[k] & 1) {
-            f.col(i) -= buffer_.col(s);
-          } else {
-            f.col(i) += buffer_.col(s);
-          }
-        }
-      }
-    });
   }
 
   // Jacobians for implicit solvers. With n = dx/L and P = I - n n^T,
@@ -113,11 +104,104 @@ class Spring final : public pdyn::Force {
   }
 
  private:
+  template <class Accumulator>
+  void accumulate(const pdyn::ParticleView& p, Accumulator& f) const {
+    const Index n_blocks = static_cast<Index>(block_start_.size()) - 1;
+    const bool parallel =
+        pdyn::max_threads() > 1 && static_cast<Index>(pairs_.size()) >= pdyn::kParallelMinElements;
+    auto interior = [&](Index blk) {
+      for (Index s = block_start_[blk]; s < block_start_[blk + 1]; ++s) {
+        const pdyn::Vec3 fi = force_on_first(p, s);
+        f.col(pairs_[s][0]) += fi;
+        f.col(pairs_[s][1]) -= fi;
+      }
+    };
+    // Not `omp parallel for if (parallel)`: libgomp allocates a team for
+    // every region, even a serial one, and stepping must not allocate.
+    if (parallel) {
+#pragma omp parallel for schedule(static)
+      for (Index blk = 0; blk < n_blocks; ++blk) interior(blk);
+    } else {
+      for (Index blk = 0; blk < n_blocks; ++blk) interior(blk);
+    }
+    const Index first = block_start_.back(), n_boundary = static_cast<Index>(pairs_.size()) - first;
+    if (n_boundary == 0) return;
+    pdyn::parallel_ranges(n_boundary, [&](Index b, Index e) {
+      for (Index s = b; s < e; ++s) buffer_.col(s) = force_on_first(p, first + s);
+    });
+    pdyn::parallel_ranges(static_cast<Index>(touched_.size()), [&](Index b, Index e) {
+      for (Index t = b; t < e; ++t) {
+        auto fi = f.col(touched_[t]);
+        for (Index k = touched_start_[t]; k < touched_start_[t + 1]; ++k) {
+          // 2 s for the spring's first end, 2 s + 1 for its second: f_j = -f_i,
+          // added as a subtraction, the same operation phase 1 uses.
+          const Index s = incident_[k] >> 1;
+          if (incident_[k] & 1) {
+            fi -= buffer_.col(s);
+          } else {
+            fi += buffer_.col(s);
+          }
+        }
+      }
+    });
+  }
+
+  // Orders the springs as add_forces uses them: the interior springs of
+  // block 0, of block 1, ..., then the boundary springs, each group in the
+  // order given (a stable counting sort). Builds the boundary CSR list.
+  // About 64 blocks, at least 4096 particles each: enough to balance any
+  // thread count up to a few dozen, few enough that boundary springs stay
+  // a small fraction.
+  void group_by_block(const std::vector<IndexPair>& given, const std::vector<double>& given_rest,
+                      Index n) {
+    const Index block = std::max<Index>(4096, (n + 63) / 64);
+    const Index n_blocks = std::max<Index>(1, (n + block - 1) / block);
+    const Index n_springs = static_cast<Index>(given.size());
+    auto bucket = [&](const IndexPair& pr) {
+      const Index b = pr[0] / block;
+      return b == pr[1] / block ? b : n_blocks;  // n_blocks: boundary
+    };
+    std::vector<Index> start(static_cast<std::size_t>(n_blocks + 2), 0);
+    for (const auto& pr : given) ++start[bucket(pr) + 1];
+    for (Index b = 0; b <= n_blocks; ++b) start[b + 1] += start[b];
+    pairs_.resize(given.size());
+    rest_.resize(given.size());
+    std::vector<Index> next(start.begin(), start.end() - 1);
+    for (Index s = 0; s < n_springs; ++s) {
+      const Index to = next[bucket(given[s])]++;
+      pairs_[to] = given[s];
+      rest_[to] = given_rest[s];
+    }
+    block_start_.assign(start.begin(), start.end() - 1);  // n_blocks + 1 entries
+    const Index first = block_start_.back(), n_boundary = n_springs - first;
+    // CSR over the particles the boundary springs touch, in id order.
+    std::vector<std::pair<Index, Index>> ends;  // (particle, 2 s + end)
+    ends.reserve(static_cast<std::size_t>(2 * n_boundary));
+    for (Index s = 0; s < n_boundary; ++s) {
+      ends.emplace_back(pairs_[first + s][0], 2 * s);
+      ends.emplace_back(pairs_[first + s][1], 2 * s + 1);
+    }
+    std::sort(ends.begin(), ends.end());  // by particle, then spring order
+    touched_.clear();
+    touched_start_.clear();
+    incident_.clear();
+    for (std::size_t k = 0; k < ends.size(); ++k) {
+      if (k == 0 || ends[k].first != ends[k - 1].first) {
+        touched_.push_back(ends[k].first);
+        touched_start_.push_back(static_cast<Index>(k));
+      }
+      incident_.push_back(ends[k].second);
+    }
+    touched_start_.push_back(static_cast<Index>(ends.size()));
+    buffer_.resize(3, n_boundary);
+  }
+
   // The force on the first end of spring s. Coincident ends have no
   // direction: the spring adds zero rather than NaN (a zero-length spring
-  // at rest exerts no force anyway). Zero is added, not skipped, so that
-  // both paths of add_forces do the same additions.
-  pdyn::Vec3 force_on_first(const pdyn::ParticleView& p, Index s) const {
+  // at rest exerts no force anyway).
+  // Inlined into both loops: a call per spring costs a fifth of the loop.
+  [[gnu::always_inline]] inline pdyn::Vec3 force_on_first(const pdyn::ParticleView& p,
+                                                          Index s) const {
     const Index i = pairs_[s][0], j = pairs_[s][1];
     const pdyn::Vec3 dx = p.x.col(i) - p.x.col(j);
     const double len = dx.norm();
@@ -127,36 +211,15 @@ class Spring final : public pdyn::Force {
     return -(magnitude / len) * dx;
   }
 
-  // Builds the CSR incidence list of the parallel path: particle i's
-  // springs are incident_[offsets_[i] .. offsets_[i + 1]), in increasing
-  // spring order (a counting sort over the springs, which visits them in
-  // order). Costs 8 bytes per particle and 16 + 24 bytes per spring, so it
-  // is only built when more than one thread runs.
-  void prepare_gather(Index n) {
-    if (static_cast<Index>(offsets_.size()) == n + 1) return;
-    const Index n_springs = static_cast<Index>(pairs_.size());
-    offsets_.assign(static_cast<std::size_t>(n + 1), 0);
-    for (const auto& pr : pairs_) {
-      ++offsets_[pr[0] + 1];
-      ++offsets_[pr[1] + 1];
-    }
-    for (Index i = 0; i < n; ++i) offsets_[i + 1] += offsets_[i];
-    incident_.resize(static_cast<std::size_t>(2 * n_springs));
-    std::vector<Index> next(offsets_.begin(), offsets_.end() - 1);
-    for (Index s = 0; s < n_springs; ++s) {
-      incident_[next[pairs_[s][0]]++] = 2 * s;
-      incident_[next[pairs_[s][1]]++] = 2 * s + 1;
-    }
-    buffer_.resize(3, n_springs);
-  }
-
-  std::vector<IndexPair> pairs_;
-  std::vector<double> rest_;  // rest length of each pair, m
+  std::vector<IndexPair> pairs_;  // grouped by block (group_by_block)
+  std::vector<double> rest_;      // rest length of each pair, m
   double ks_, kd_;
-  // Parallel path only (see add_forces).
-  std::vector<Index> offsets_;   // N + 1
-  std::vector<Index> incident_;  // 2 per spring: 2 s (first end) or 2 s + 1 (second end)
-  pdyn::Matrix3X buffer_;        // force on each spring's first end, N
+  std::vector<Index> block_start_;    // block b's interior springs: [start[b], start[b + 1])
+  std::vector<Index> touched_;        // particles with boundary springs, increasing
+  std::vector<Index> touched_start_;  // their entries in incident_
+  std::vector<Index>
+      incident_;  // 2 s (first end) or 2 s + 1 (second end), s from the first boundary spring
+  mutable pdyn::Matrix3X buffer_;  // boundary springs' forces on their first ends, N
 };
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
@@ -185,7 +248,7 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
       rest[s] = (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();
     }
   }
-  return std::make_unique<Spring>(pairs, std::move(rest), p.real("ks"), p.real("kd"));
+  return std::make_unique<Spring>(pairs, rest, p.real("ks"), p.real("kd"), ctx.particles.size());
 }
 
 pdyn::PluginDescriptor describe() {
