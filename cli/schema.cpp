@@ -204,25 +204,35 @@ Json make_schema(const PluginRegistry& registry) {
   Json particle = object(particle_specs(), false);
   particle["description"] = "one particle";
   Json items = Json::array({particle});
-  const PluginRecord* spring = registry.find(PluginKind::Force, "spring");
+  // A builder's nested mapping: a force plugin's parameters less the list
+  // the builder generates (or families of them), or fixed keys.
+  auto nested = [&](const BuilderNested& n) {
+    Json j;
+    if (n.plugin.empty()) {
+      j = object(n.specs, false);
+    } else if (const PluginRecord* rec = registry.find(PluginKind::Force, n.plugin)) {
+      std::vector<ParamSpec> specs;
+      for (const auto& s : rec->descriptor->params) {
+        if (s.name != n.generated) specs.push_back(s);
+      }
+      j = object(specs, true);
+    } else {
+      j = Json{{"type", "object"}};
+    }
+    j["type"] = Json::array({"object", "null"});
+    if (!n.families.empty()) {
+      Json families = Json::object();
+      for (const auto& f : n.families) families[f] = j;
+      j = {{"type", Json::array({"object", "null"})},
+           {"properties", families},
+           {"additionalProperties", false}};
+    }
+    j["description"] = n.doc;
+    return j;
+  };
   for (const auto& b : builder_specs()) {
     Json extra = Json::object();
-    if (!b.spring_families.empty()) {
-      std::vector<ParamSpec> spring_specs;
-      if (spring) {
-        for (const auto& s : spring->descriptor->params) {
-          if (s.name != "pairs") spring_specs.push_back(s);
-        }
-      }
-      Json family = spring ? object(spring_specs, true) : Json{{"type", "object"}};
-      family["type"] = Json::array({"object", "null"});
-      Json families = Json::object();
-      for (const auto& f : b.spring_families) families[f] = family;
-      extra["springs"] = {{"type", Json::array({"object", "null"})},
-                          {"description", "springs of the `spring` plugin between neighbours"},
-                          {"properties", families},
-                          {"additionalProperties", false}};
-    }
+    for (const auto& n : b.nested) extra[n.key] = nested(n);
     Json builder = object(b.params, false, extra);
     builder["description"] = b.doc;
     items.push_back({{"type", "object"},

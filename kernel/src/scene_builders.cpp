@@ -99,9 +99,8 @@ Params with_triples(std::vector<IndexTriple> triples) {
 // neighbours (i, i+1); `bend` adds angle springs on (i-1, i, i+1), which
 // resist the chain folding at particle i (a rope's bending stiffness).
 
-void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path) {
-  if (!host.check_map(c, path, "chain: { from, to, n, mass, ... }")) return;
-  const std::vector<ParamSpec> specs = {
+std::vector<ParamSpec> chain_specs() {
+  return {
       param::required_vec3("from", "m", "position of the first particle"),
       param::required_vec3("to", "m", "position of the last particle"),
       count("n", 2, "number of particles"),
@@ -110,8 +109,12 @@ void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path)
       name_spec(),
       param::optional("pin", ParamType::IndexList, "",
                       "chain positions of nailed particles; negative counts from the end"),
-  };
-  auto p = host.read_params(c, path, specs, {"springs", "bend"});
+    };
+}
+
+void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path) {
+  if (!host.check_map(c, path, "chain: { from, to, n, mass, ... }")) return;
+  auto p = host.read_params(c, path, chain_specs(), {"springs", "bend"});
   if (!p) return;
   const std::int64_t n = p->integer("n");
   const Vec3 from = p->vec3("from"), to = p->vec3("to");
@@ -155,9 +158,8 @@ void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path)
 // of every cube cell). Structural springs alone let a cell shear flat;
 // face diagonals make every face rigid and with them the cube.
 
-void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
-  if (!host.check_map(l, path, "lattice: { origin, n: [nx, ny, nz], spacing, mass, ... }")) return;
-  const std::vector<ParamSpec> specs = {
+std::vector<ParamSpec> lattice_specs() {
+  return {
       param::required_vec3("origin", "m", "position of particle (0, 0, 0)"),
       param::required("n", ParamType::Vector, "", "[nx, ny, nz] particles along x, y, z")
           .at_least(1),
@@ -168,8 +170,12 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
       param::optional("pin", ParamType::IndexTriples, "",
                       "lattice coordinates [i, j, k] of nailed particles; negative counts from "
                       "the end"),
-  };
-  auto p = host.read_params(l, path, specs, {"springs"});
+    };
+}
+
+void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
+  if (!host.check_map(l, path, "lattice: { origin, n: [nx, ny, nz], spacing, mass, ... }")) return;
+  auto p = host.read_params(l, path, lattice_specs(), {"springs"});
   if (!p) return;
   const Vec3 nv = p->vec3("n");
   if (nv != nv.array().round().matrix()) {
@@ -287,17 +293,27 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
 
 double uniform01(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
 
+std::vector<ParamSpec> cloud_specs() {
+  ParamSpec seed = param::integer("seed", 0, "seed of the random generator (std::mt19937_64)");
+  seed.at_least(0);
+  return {count("n", 1, "number of particles"), mass_spec(), velocity_spec(), seed, name_spec()};
+}
+std::vector<ParamSpec> cloud_box_specs() {
+  return {param::required_vec3("min", "m", "corner with the smallest coordinates"),
+          param::required_vec3("max", "m", "corner with the largest coordinates")};
+}
+std::vector<ParamSpec> cloud_sphere_specs() {
+  return {param::required_vec3("center", "m", "centre of the ball"),
+          param::required_real("radius", "m", "radius of the ball").greater_than(0)};
+}
+
 void read_cloud(BuilderHost& host, const YAML::Node& c, const std::string& path) {
   if (!host.check_map(c, path,
                       "cloud: { n, box: { min, max } or sphere: { center, radius }, "
                       "mass, seed }")) {
     return;
   }
-  ParamSpec seed = param::integer("seed", 0, "seed of the random generator (std::mt19937_64)");
-  seed.at_least(0);
-  const std::vector<ParamSpec> specs = {count("n", 1, "number of particles"), mass_spec(),
-                                        velocity_spec(), seed, name_spec()};
-  auto p = host.read_params(c, path, specs, {"box", "sphere"});
+  auto p = host.read_params(c, path, cloud_specs(), {"box", "sphere"});
   const Family box = family(host, c, "box", path, "box: { min: [x, y, z], max: [x, y, z] }");
   const Family ball = family(host, c, "sphere", path, "sphere: { center: [x, y, z], radius }");
   if (!p || box == Family::Bad || ball == Family::Bad) return;
@@ -313,14 +329,7 @@ void read_cloud(BuilderHost& host, const YAML::Node& c, const std::string& path)
   Vec3 lo, hi, center = Vec3::Zero();
   double radius = 0.0;
   if (box == Family::Given) {
-    auto r = host.read_params(c["box"], path + ".box",
-                              {param::required_vec3("min", "m",
-                                                    "corner with the smallest "
-                                                    "coordinates"),
-                               param::required_vec3("max", "m",
-                                                    "corner with the largest "
-                                                    "coordinates")},
-                              {});
+    auto r = host.read_params(c["box"], path + ".box", cloud_box_specs(), {});
     if (!r) return;
     lo = r->vec3("min");
     hi = r->vec3("max");
@@ -332,11 +341,7 @@ void read_cloud(BuilderHost& host, const YAML::Node& c, const std::string& path)
       return;
     }
   } else {
-    auto r = host.read_params(
-        c["sphere"], path + ".sphere",
-        {param::required_vec3("center", "m", "centre of the ball"),
-         param::required_real("radius", "m", "radius of the ball").greater_than(0)},
-        {});
+    auto r = host.read_params(c["sphere"], path + ".sphere", cloud_sphere_specs(), {});
     if (!r) return;
     center = r->vec3("center");
     radius = r->real("radius");
@@ -398,6 +403,18 @@ std::vector<ParamSpec> loop_specs(std::vector<ParamSpec> specs) {
   return specs;
 }
 
+std::vector<ParamSpec> ring_specs() {
+  return loop_specs(
+      {param::required_vec3("center", "m", "centre of the ring"),
+       param::required_real("radius", "m", "radius of the ring").greater_than(0),
+       count("n", 3, "number of particles"),
+       param::vec3("normal", Vec3::UnitZ(), "", "normal of the ring's plane").not_zero()});
+}
+std::vector<ParamSpec> polygon_specs() {
+  return loop_specs({param::required("points", ParamType::VectorList, "m",
+                                     "corners of the loop, in order (at least 3)")});
+}
+
 // A regular n-gon of circumradius R around `center` in the plane normal to
 // `normal`: particle i at center + R (cos t_i a + sin t_i b), t_i = 2 pi i / n,
 // counter-clockwise about the normal, with a the unit projection of x onto
@@ -406,11 +423,7 @@ void read_ring(BuilderHost& host, const YAML::Node& r, const std::string& path) 
   if (!host.check_map(r, path, "ring: { center, radius, n, mass, ... }")) return;
   auto p = host.read_params(
       r, path,
-      loop_specs(
-          {param::required_vec3("center", "m", "centre of the ring"),
-           param::required_real("radius", "m", "radius of the ring").greater_than(0),
-           count("n", 3, "number of particles"),
-           param::vec3("normal", Vec3::UnitZ(), "", "normal of the ring's plane").not_zero()}),
+      ring_specs(),
       {"springs", "area"});
   if (!p) return;
   const std::int64_t n = p->integer("n");
@@ -434,8 +447,7 @@ void read_polygon(BuilderHost& host, const YAML::Node& g, const std::string& pat
   if (!host.check_map(g, path, "polygon: { points: [[x, y, z], ...], mass, ... }")) return;
   auto p =
       host.read_params(g, path,
-                       loop_specs({param::required("points", ParamType::VectorList, "m",
-                                                   "corners of the loop, in order (at least 3)")}),
+                       polygon_specs(),
                        {"springs", "area"});
   if (!p) return;
   const auto& pts = p->vec3s("points");
@@ -468,6 +480,29 @@ void read_polygon(BuilderHost& host, const YAML::Node& g, const std::string& pat
 const std::vector<std::string>& builder_names() {
   static const std::vector<std::string> names = {"chain", "lattice", "cloud", "ring", "polygon"};
   return names;
+}
+
+std::vector<BuilderSpec> more_builder_specs() {
+  const BuilderNested springs{"springs", "springs of the `spring` plugin between neighbours",
+                              "spring", "pairs", {}, {}};
+  const BuilderNested loop_area{"area", "area springs of the `area` plugin on a fan of triangles",
+                                "area", "triples", {}, {}};
+  return {
+      {"chain", "a rope of n particles from `from` to `to`", chain_specs(),
+       {springs,
+        {"bend", "angle springs of the `angle` plugin on consecutive triples", "angle",
+         "triples", {}, {}}}},
+      {"lattice", "a 3-D block of nx x ny x nz particles (a jelly cube)", lattice_specs(),
+       {{"springs", "spring families of the `spring` plugin", "spring", "pairs",
+         {"structural", "shear", "body"}, {}}}},
+      {"cloud", "n particles uniform in a box or a ball, reproducible from `seed`", cloud_specs(),
+       {{"box", "the region: an axis-aligned box", "", "", {}, cloud_box_specs()},
+        {"sphere", "the region: a ball", "", "", {}, cloud_sphere_specs()}}},
+      {"ring", "a closed loop of n particles on a circle (a 2-D soft blob)", ring_specs(),
+       {springs, loop_area}},
+      {"polygon", "a closed loop of particles through given points", polygon_specs(),
+       {springs, loop_area}},
+  };
 }
 
 void read_builder(BuilderHost& host, const std::string& name, const YAML::Node& node,

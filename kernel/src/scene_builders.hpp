@@ -16,6 +16,7 @@
 
 #include "pdyn/params.hpp"
 #include "pdyn/types.hpp"
+#include "scene_specs.hpp"
 
 namespace pdyn {
 
@@ -56,6 +57,10 @@ class BuilderHost {
 
 /// The builder keys that read_builder() accepts as a particles entry.
 const std::vector<std::string>& builder_names();
+
+/// The specs of those builders, the same tables their readers check
+/// against, for `pdyn schema` (through builder_specs()).
+std::vector<BuilderSpec> more_builder_specs();
 
 /// Reads the builder `name` (one of builder_names()) from `node`, a
 /// particles entry's value, at `path` (e.g. "particles[2].chain").

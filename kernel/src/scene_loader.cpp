@@ -110,8 +110,14 @@ std::vector<ParamSpec> checkpoint_specs() {
 }
 
 std::vector<BuilderSpec> builder_specs() {
-  return {{"grid", "a rectangular sheet of nx x ny particles, optionally joined by springs",
-           grid_specs(), {"structural", "shear", "bend"}}};
+  std::vector<BuilderSpec> all = {
+      {"grid",
+       "a rectangular sheet of nx x ny particles, optionally joined by springs",
+       grid_specs(),
+       {{"springs", "Provot's spring families of the `spring` plugin", "spring", "pairs",
+         {"structural", "shear", "bend"}, {}}}}};
+  for (auto& b : more_builder_specs()) all.push_back(std::move(b));
+  return all;
 }
 
 namespace {

@@ -20,14 +20,24 @@ std::vector<ParamSpec> output_specs();
 /// `output.checkpoint:`.
 std::vector<ParamSpec> checkpoint_specs();
 
+/// A key of a builder that holds a mapping: the parameters of a force
+/// plugin the builder creates (less the particle list it generates), a
+/// mapping of families of those, or a fixed set of keys (a region).
+struct BuilderNested {
+  std::string key;                    ///< "springs", "bend", "box"
+  std::string doc;                    ///< one line
+  std::string plugin;                 ///< force plugin ("spring"); empty: `specs`
+  std::string generated;              ///< the plugin's key the builder fills ("pairs")
+  std::vector<std::string> families;  ///< non-empty: { family: { plugin params }, ... }
+  std::vector<ParamSpec> specs;       ///< the keys, when `plugin` is empty
+};
+
 /// A particle builder: a `particles:` entry `{ KEY: { ... } }`.
 struct BuilderSpec {
-  std::string key;                ///< "grid"
-  std::string doc;                ///< one line
-  std::vector<ParamSpec> params;  ///< the builder's own keys
-  /// Optional `springs:` key: spring families ("structural", ...), each a
-  /// mapping of the `spring` plugin's parameters except the generated `pairs`.
-  std::vector<std::string> spring_families;
+  std::string key;                    ///< "grid"
+  std::string doc;                    ///< one line
+  std::vector<ParamSpec> params;      ///< the builder's own keys
+  std::vector<BuilderNested> nested;  ///< its keys that hold mappings
 };
 
 /// Every builder the loader accepts. A new builder is listed here, with the
