@@ -118,6 +118,13 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
       case ParamType::IndexTriples:
         add("wrong type", "[[0, 1]]");
         break;
+      case ParamType::StringList:
+        add("wrong type", "{ a: 1 }");
+        break;
+      case ParamType::NamedReals:
+        add("wrong type", "[1, 2]");
+        add("not an identifier", "{ 2x: 1 }");
+        break;
     }
     const bool integer = s.type == ParamType::Integer;
     for (bool below : {true, false}) {
@@ -137,6 +144,9 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
           break;
         case ParamType::VectorList:
           add(what, fmt::format("[[{0}, {0}, {0}]]", *x));
+          break;
+        case ParamType::NamedReals:
+          add(what, fmt::format("{{ a: {} }}", *x));
           break;
         default:
           break;
