@@ -132,9 +132,11 @@ std::vector<Vec3> obstacle_points(const Drawables& d) {
       pts.push_back(s.center - s.radius * Vec3::Unit(k));
     }
   }
-  for (const auto& b : d.boxes) {
-    pts.push_back(b.min);
-    pts.push_back(b.max);
+  for (const auto& b : d.boxes) {  // all eight corners: any of them may be outermost on screen
+    for (int k = 0; k < 8; ++k) {
+      pts.emplace_back(k & 1 ? b.max.x() : b.min.x(), k & 2 ? b.max.y() : b.min.y(),
+                       k & 4 ? b.max.z() : b.min.z());
+    }
   }
   return pts;
 }
