@@ -193,4 +193,49 @@ std::string format_value(const ParamValue& value) {
   return std::visit(Visitor{}, value);
 }
 
+void require_distinct_particles(const Params& params, std::string_view key) {
+  auto refuse = [&](std::size_t s, const std::string& message) {
+    throw ParamError(std::string(key), message, static_cast<long>(s));
+  };
+  const auto it = params.values().find(key);
+  const auto* pairs =
+      it == params.values().end() ? nullptr : std::get_if<std::vector<IndexPair>>(&it->second);
+  if (pairs) {
+    for (std::size_t s = 0; s < pairs->size(); ++s) {
+      if ((*pairs)[s][0] == (*pairs)[s][1]) {
+        refuse(s, fmt::format("joins particle {} to itself (expected two different particles)",
+                              (*pairs)[s][0]));
+      }
+    }
+    return;
+  }
+  const auto& triples = params.triples(key);  // throws for a missing or mistyped key
+  for (std::size_t s = 0; s < triples.size(); ++s) {
+    const auto [i, j, k] = triples[s];
+    if (i == j || j == k || i == k) {
+      refuse(s, fmt::format("[{}, {}, {}] repeats a particle (expected three different "
+                            "particles)",
+                            i, j, k));
+    }
+  }
+}
+
+std::vector<double> rest_values(const Params& params, std::string_view key, std::size_t n,
+                                std::string_view elements,
+                                const std::function<double(std::size_t)>& initial) {
+  std::vector<double> rest(n);
+  if (!params.has(key)) {
+    for (std::size_t s = 0; s < n; ++s) rest[s] = initial(s);
+    return rest;
+  }
+  const auto& given = params.reals(key);
+  if (given.size() != 1 && given.size() != n) {
+    throw ParamError(std::string(key),
+                     fmt::format("has {} values for {} {} (expected 1 value for all, or {})",
+                                 given.size(), n, elements, n));
+  }
+  for (std::size_t s = 0; s < n; ++s) rest[s] = given.size() == 1 ? given[0] : given[s];
+  return rest;
+}
+
 }  // namespace pdyn

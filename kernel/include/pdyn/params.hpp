@@ -6,6 +6,7 @@
 // already-checked values. Plugin code never parses YAML.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -105,6 +106,22 @@ class Params {
   const T& as(std::string_view name) const;
   std::map<std::string, ParamValue, std::less<>> values_;
 };
+
+// ---- checks and defaults that factories of multi-particle forces share ----
+
+/// Throws ParamError at the first element of the pair or triple list `key`
+/// that names one particle twice (a spring from a particle to itself, a
+/// triangle with a repeated corner): no geometry to act along.
+void require_distinct_particles(const Params& params, std::string_view key);
+
+/// Rest values (lengths in m, angles in rad, areas in m^2) of `n` elements
+/// of a force: the RealList `key` with one value for all or one per element,
+/// or, when the scene leaves it out, initial(s) for each element s (the
+/// configuration the scene starts in is at rest). `elements` names them in
+/// the message ("pairs", "triples") when the count fits neither.
+std::vector<double> rest_values(const Params& params, std::string_view key, std::size_t n,
+                                std::string_view elements,
+                                const std::function<double(std::size_t)>& initial);
 
 /// "a number", "[x, y, z]", ... — how a scene spells a value of this type.
 const char* describe(ParamType type);

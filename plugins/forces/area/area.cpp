@@ -87,35 +87,14 @@ class Area final : public pdyn::Force {
 };
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
+  pdyn::require_distinct_particles(p, "triples");
   const auto& triples = p.triples("triples");
-  for (std::size_t s = 0; s < triples.size(); ++s) {
-    const auto [i, j, k] = triples[s];
-    if (i == j || j == k || i == k) {
-      throw pdyn::ParamError(
-          "triples",
-          fmt::format("[{}, {}, {}] repeats a particle (expected three different particles)", i, j,
-                      k),
-          static_cast<long>(s));
-    }
-  }
-  std::vector<double> rest(triples.size());
-  if (p.has("rest")) {
-    const auto& given = p.reals("rest");
-    if (given.size() != 1 && given.size() != triples.size()) {
-      throw pdyn::ParamError(
-          "rest", fmt::format("has {} values for {} triples (expected 1 value for all, or {})",
-                              given.size(), triples.size(), triples.size()));
-    }
-    for (std::size_t s = 0; s < triples.size(); ++s) {
-      rest[s] = given.size() == 1 ? given[0] : given[s];
-    }
-  } else {
-    for (std::size_t s = 0; s < triples.size(); ++s) {
-      const auto [i, j, k] = triples[s];
-      rest[s] =
-          triangle(ctx.particles.x.col(i), ctx.particles.x.col(j), ctx.particles.x.col(k)).area;
-    }
-  }
+  std::vector<double> rest =
+      pdyn::rest_values(p, "rest", triples.size(), "triples", [&](std::size_t s) {
+        const auto [i, j, k] = triples[s];
+        return triangle(ctx.particles.x.col(i), ctx.particles.x.col(j), ctx.particles.x.col(k))
+            .area;
+      });
   return std::make_unique<Area>(triples, std::move(rest), p.real("k"), p.real("kd"));
 }
 

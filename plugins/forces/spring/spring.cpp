@@ -223,31 +223,12 @@ class Spring final : public pdyn::Force {
 };
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
+  pdyn::require_distinct_particles(p, "pairs");
   const auto& pairs = p.pairs("pairs");
-  for (std::size_t s = 0; s < pairs.size(); ++s) {
-    if (pairs[s][0] == pairs[s][1]) {
-      throw pdyn::ParamError(
-          "pairs",
-          fmt::format("joins particle {} to itself (expected two different particles)",
-                      pairs[s][0]),
-          static_cast<long>(s));
-    }
-  }
-  std::vector<double> rest(pairs.size());
-  if (p.has("rest")) {
-    const auto& given = p.reals("rest");
-    if (given.size() != 1 && given.size() != pairs.size()) {
-      throw pdyn::ParamError(
-          "rest", fmt::format("has {} values for {} pairs (expected 1 value for all, or {})",
-                              given.size(), pairs.size(), pairs.size()));
-    }
-    for (std::size_t s = 0; s < pairs.size(); ++s)
-      rest[s] = given.size() == 1 ? given[0] : given[s];
-  } else {
-    for (std::size_t s = 0; s < pairs.size(); ++s) {
-      rest[s] = (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();
-    }
-  }
+  std::vector<double> rest =
+      pdyn::rest_values(p, "rest", pairs.size(), "pairs", [&](std::size_t s) {
+        return (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();
+      });
   return std::make_unique<Spring>(pairs, rest, p.real("ks"), p.real("kd"), ctx.particles.size());
 }
 
