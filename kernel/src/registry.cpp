@@ -14,7 +14,6 @@
 #include <boost/dll/runtime_symbol_info.hpp>
 #include <boost/dll/shared_library.hpp>
 #include <cstdlib>
-#include <dlfcn.h>
 #include <set>
 
 namespace pdyn {
@@ -142,26 +141,6 @@ void PluginRegistry::discover(const std::vector<fs::path>& dirs) {
   }
 }
 
-namespace {
-
-// A plugin library stays mapped until the process exits, even after the
-// registry and every object made from it are gone. Its static data, and
-// that of the libraries it brings in (muParser and the OpenMP runtime Debian
-// builds it with), may hold the only pointers to memory allocated while it
-// was loaded: dlclose would unmap them, leaving that memory unreachable
-// (LeakSanitizer reports it), and run their static destructors midway
-// through the program instead of at exit.
-void keep_resident(const fs::path& file) {
-#ifdef RTLD_NODELETE
-  // RTLD_NOLOAD: the library is already loaded; this only marks it.
-  (void)::dlopen(file.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
-#else
-  (void)file;
-#endif
-}
-
-}  // namespace
-
 bool PluginRegistry::load_library(const fs::path& file) {
   const std::string hint = name_from_file(file);
   auto lib = std::make_shared<boost::dll::shared_library>();
@@ -199,7 +178,6 @@ bool PluginRegistry::load_library(const fs::path& file) {
     fault(file, hint, "descriptor is null");
     return false;
   }
-  keep_resident(file);
   return admit(*d, file, hint, std::static_pointer_cast<void>(lib));
 }
 

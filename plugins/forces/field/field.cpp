@@ -12,6 +12,7 @@
 // every evaluation; the per-particle loop is fast enough for the gallery's
 // thousand-particle scenes.
 #include <fmt/format.h>
+#include <dlfcn.h>
 #include <muParser.h>
 
 #include <algorithm>
@@ -218,7 +219,22 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
                                  std::move(selection));
 }
 
+// muParser, as Debian builds it, brings in the OpenMP runtime, whose static
+// state keeps memory allocated while it is loaded. Unloading it together
+// with this plugin (when the last object and registry let go) would unmap
+// the only pointers to that memory, which LeakSanitizer then reports as
+// leaked at exit. So this library, once loaded, stays resident: it marks
+// itself RTLD_NODELETE (RTLD_NOLOAD: it is already loaded, nothing else is).
+void keep_resident() {
+  static const char self = 0;
+  Dl_info info;
+  if (dladdr(&self, &info) != 0 && info.dli_fname != nullptr) {
+    (void)dlopen(info.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+  }
+}
+
 pdyn::PluginDescriptor describe() {
+  keep_resident();
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
   d.name = "field";
