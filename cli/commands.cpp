@@ -373,6 +373,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   add_plugin_path_option(describe_cmd, common);
   std::vector<SdkCommand> sdk = add_sdk_commands(app);
   sdk.push_back(add_render_command(app));
+  sdk.push_back(add_serve_command(app));
 
   std::vector<std::string> reversed(args.rbegin(), args.rend());
   try {

@@ -9,6 +9,7 @@
 
 #include "pdyn/types.hpp"
 #include "scene.hpp"
+#include "scene_drawables.hpp"
 #include "sdk_commands.hpp"
 
 namespace pdyn::cli {
@@ -47,23 +48,10 @@ struct Camera {
 /// point, or none, gets a 1 m field of view.
 Camera fit_camera(View view, const std::vector<Vec3>& points, int width, int height);
 
-/// What is drawn besides the particles, read from the scene's plugin
-/// parameters: links from every force's particle pairs (springs) and
-/// triples (their edges), and the obstacles of the shipped colliders.
-struct Drawables {
-  std::vector<IndexPair> links;
-  struct Plane { Vec3 point, normal; };
-  struct Sphere { Vec3 center; double radius; };
-  struct Box { Vec3 min, max; };
-  std::vector<Plane> planes;
-  std::vector<Sphere> spheres;
-  std::vector<Box> boxes;
-};
-Drawables drawables(const Scene& scene);
-
-/// Points (m) the camera must keep in view for these obstacles: sphere and
-/// box extents (planes are unbounded and are drawn to fit the particles).
-std::vector<Vec3> obstacle_points(const Drawables& d);
+/// Links and obstacles: see scene_drawables.hpp.
+using pdyn::Drawables;
+using pdyn::drawables;
+using pdyn::obstacle_points;
 
 }  // namespace render
 }  // namespace pdyn::cli

@@ -29,6 +29,9 @@ SdkCommand add_new_command(CLI::App& app);
 /// `pdyn schema [--plugin-path DIR] [--output FILE]`.
 SdkCommand add_schema_command(CLI::App& app);
 
+/// `pdyn serve SCENE [--port N] [--host ADDR] [--viewer DIR]` (serve.cpp).
+SdkCommand add_serve_command(CLI::App& app);
+
 /// Every SDK command, in the order of `pdyn --help`.
 std::vector<SdkCommand> add_sdk_commands(CLI::App& app);
 

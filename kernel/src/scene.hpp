@@ -65,6 +65,7 @@ struct Scene {
   std::shared_ptr<Solver> solver;
   std::string solver_name;
   std::string solver_label;  ///< "rk4 (scene.yaml:3:11)", for messages
+  Params solver_params;      ///< the solver's checked parameters: to make a fresh one
   /// The scene after overrides, as canonical YAML without simulation.steps
   /// and simulation.duration: what a checkpoint must match to be resumed.
   std::string canonical_text;

@@ -1268,6 +1268,7 @@ Scene Loader::load(const std::string& text) {
     scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
     scene.solver_name = p.record->descriptor->name;
     scene.solver_label = label(p);
+    scene.solver_params = p.params;
     scene.libraries[label(p)] = p.record->library;
   }
   if (!diags_.empty()) fail();

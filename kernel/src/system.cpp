@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "pdyn/error.hpp"
 #include "pdyn/parallel.hpp"
 #include "registry.hpp"
@@ -61,6 +63,14 @@ void System::update_inverse_mass() {
 
 void System::add_force(std::shared_ptr<Force> force, std::string label) {
   forces_.push_back({std::move(force), std::move(label)});
+}
+
+bool System::remove_force(const Force* force) {
+  const auto it = std::find_if(forces_.begin(), forces_.end(),
+                               [&](const ForceEntry& e) { return e.force.get() == force; });
+  if (it == forces_.end()) return false;
+  forces_.erase(it);
+  return true;
 }
 
 void System::add_collider(std::shared_ptr<Collider> collider, std::string label) {

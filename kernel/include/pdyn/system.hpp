@@ -41,6 +41,9 @@ class System {
   void set_fixed(Index i, bool fixed);
   /// Adds a force object; `label` names it in messages (e.g. "spring (scene.yaml:12)").
   void add_force(std::shared_ptr<Force> force, std::string label);
+  /// Removes a force object added with add_force (an interactive host's
+  /// mouse spring, when the button is released); false if it is not held.
+  bool remove_force(const Force* force);
   /// Adds a collider; `label` names it in messages.
   void add_collider(std::shared_ptr<Collider> collider, std::string label);
 
