@@ -28,6 +28,12 @@ packages=(
   libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
   libbenchmark-dev                 # bench/ (Google Benchmark)
 )
+# pdyn serve's page takes three.js from the npm registry (viewer/package.json
+# and its lock file); Node.js and npm come from Debian unless the machine
+# already has them.
+command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
+# The browser test drives Debian's Chromium headless (no browser download).
+[[ "$what" == test ]] && packages+=(chromium)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -40,14 +46,20 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-cmake --preset default
+# three.js (and, for the tests, playwright-core) into viewer/node_modules,
+# exactly as the lock file pins them.
+npm ci --prefix viewer --no-audit --no-fund --loglevel=error
+
+browser=()
+[[ "$what" == test ]] && browser=(-DPDYN_BROWSER_TEST=ON)  # fail, not skip, if it cannot run
+cmake --preset default "${browser[@]}"
 cmake --build --preset default
 
 if [[ "$what" == demo ]]; then
   ./build/bin/pdyn run configs/demo.yaml
 else
   bash scripts/fuzz.sh "${PDYN_FUZZ_SECONDS:-120}"
-  cmake --preset asan
+  cmake --preset asan -DPDYN_BROWSER_TEST=OFF  # the browser test runs once, on the build for use
   cmake --build --preset asan
   ctest --preset asan
   ctest --preset default
