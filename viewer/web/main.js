@@ -127,7 +127,7 @@ $('dt').onchange = () => {
   if (dt > 0) send({ op: 'dt', value: dt });
   else showError(`dt ${$('dt').value} (expected a number of seconds > 0)`);
 };
-$('springs').onchange = () => { view.showSprings = $('springs').checked; if (view.lines) view.lines.visible = view.showSprings; };
+$('springs').onchange = () => view.showLinks($('springs').checked);
 $('by-speed').onchange = () => { view.bySpeed = $('by-speed').checked; view.recolour(); };
 $('camera').onchange = () => view.setMode($('camera').value);
 window.addEventListener('keydown', (e) => {

@@ -60,6 +60,9 @@ export class View {
     this.scene.add(this.drag);
     this.points = null;
     this.lines = null;
+    // Drawn only when something changed (a frame, the camera, a toggle):
+    // ten thousand points and sixty thousand lines are not free without a GPU.
+    this.dirty = true;
     new ResizeObserver(() => this.resize()).observe(container);
     this.resize();
   }
@@ -70,6 +73,7 @@ export class View {
     this.perspective.aspect = w / h;
     this.perspective.updateProjectionMatrix();
     this.fitOrthographic();
+    this.dirty = true;
   }
 
   fitOrthographic() {
@@ -179,7 +183,9 @@ export class View {
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
     this.controls.target.copy(target);
     this.controls.enableRotate = mode === '3d';
+    this.controls.addEventListener('change', () => { this.dirty = true; });
     this.controls.update();
+    this.dirty = true;
   }
 
   /** Copies a frame's positions and speeds into the buffers. */
@@ -188,6 +194,7 @@ export class View {
     const position = this.points.geometry.attributes.position;
     position.array.set(frame.positions);
     position.needsUpdate = true;
+    this.dirty = true;
     this.speeds = frame.speeds;
     if (this.bySpeed) this.recolour();
   }
@@ -207,6 +214,7 @@ export class View {
       colour.setXYZ(i, c.r, c.g, c.b);
     }
     colour.needsUpdate = true;
+    this.dirty = true;
   }
 
   position(id) {
@@ -247,12 +255,24 @@ export class View {
   target() { return this.controls.target.clone(); }
 
   showDrag(from, to) {
+    if (this.drag.visible !== !!from) this.dirty = true;
     this.drag.visible = !!from;
-    if (from) this.drag.geometry.setFromPoints([from, to]);
+    if (from && to) {
+      this.drag.geometry.setFromPoints([from, to]);
+      this.dirty = true;
+    }
+  }
+
+  showLinks(on) {
+    this.showSprings = on;
+    if (this.lines) this.lines.visible = on;
+    this.dirty = true;
   }
 
   render() {
     this.controls.update();
+    if (!this.dirty) return;
+    this.dirty = false;
     this.renderer.render(this.scene, this.camera);
   }
 }
