@@ -100,27 +100,6 @@ Scene load(const RunArgs& a, const Common& c, const PluginRegistry& registry) {
   return load_scene(a.scene, registry, overrides);
 }
 
-int report(const std::exception_ptr& error, std::ostream& err) {
-  try {
-    std::rethrow_exception(error);
-  } catch (const SceneError& e) {
-    for (const auto& d : e.diagnostics()) err << d.text() << "\n";
-    return kBadInput;
-  } catch (const PluginError& e) {
-    err << e.what() << "\n";
-    return kPluginFault;
-  } catch (const CheckpointError& e) {
-    err << "pdyn: " << e.what() << "\n";
-    return kBadInput;
-  } catch (const std::exception& e) {
-    err << "pdyn: " << e.what() << "\n";
-    return kFailure;
-  } catch (...) {
-    // Rethrowing it from here would end the process with std::terminate.
-    err << "pdyn: internal error: a non-standard exception\n";
-    return kFailure;
-  }
-}
 
 int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err) {
   const PluginRegistry registry = discover(c);
@@ -136,7 +115,7 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
     }
     return kOk;
   } catch (...) {
-    return report(std::current_exception(), err);
+    return report_error(std::current_exception(), err);
   }
 }
 
@@ -197,7 +176,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     }
     return kOk;
   } catch (...) {
-    return report(std::current_exception(), err);
+    return report_error(std::current_exception(), err);
   }
 }
 
@@ -329,6 +308,40 @@ int cmd_describe(const Common& c, const std::string& name, std::ostream& out, st
 
 }  // namespace
 
+int report_error(const std::exception_ptr& error, std::ostream& err) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const SceneError& e) {
+    for (const auto& d : e.diagnostics()) err << d.text() << "\n";
+    return kBadInput;
+  } catch (const PluginError& e) {
+    err << e.what() << "\n";
+    return kPluginFault;
+  } catch (const CheckpointError& e) {
+    err << "pdyn: " << e.what() << "\n";
+    return kBadInput;
+  } catch (const std::exception& e) {
+    err << "pdyn: " << e.what() << "\n";
+    return kFailure;
+  } catch (...) {
+    // Rethrowing it from here would end the process with std::terminate.
+    err << "pdyn: internal error: a non-standard exception\n";
+    return kFailure;
+  }
+}
+
+void add_scene_options(CLI::App* sub, std::vector<std::string>& sets,
+                       std::vector<std::string>& plugin_path) {
+  // One value per occurrence, so that `--set K=V scene.yaml` leaves the scene
+  // to the positional argument.
+  sub->add_option("--set", sets, "override a scene value: KEY.PATH=VALUE (repeatable)")
+      ->allow_extra_args(false);
+  sub->add_option("--plugin-path", plugin_path,
+                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
+                  "(repeatable)")
+      ->allow_extra_args(false);
+}
+
 int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                 bool terminal) {
   CLI::App app{"pdyn: plugin-based particle dynamics (Witkin's particle systems)", "pdyn"};
@@ -397,7 +410,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
     for (const auto& command : sdk)
       if (command.sub->parsed()) return command.run(out, err);
   } catch (...) {
-    return report(std::current_exception(), err);
+    return report_error(std::current_exception(), err);
   }
   return kBadInput;
 }

@@ -1,9 +1,15 @@
 // The `pdyn` command line: run, validate, plugins.
 #pragma once
 
+#include <exception>
+
 #include <iosfwd>
 #include <string>
 #include <vector>
+
+namespace CLI {
+class App;
+}
 
 namespace pdyn::cli {
 
@@ -20,6 +26,16 @@ enum Exit : int {
 /// Runs `pdyn ARGS...` (without the program name), writing to `out` and
 /// `err`; returns the exit status. `terminal` says whether `err` is a
 /// terminal, which enables the progress bar.
+/// Reports an exception from loading or running a scene on `err` and returns
+/// the exit status for it: a SceneError's diagnostics (2), a PluginError (3),
+/// a CheckpointError (2), anything else (1).
+int report_error(const std::exception_ptr& error, std::ostream& err);
+
+/// Adds `--set KEY.PATH=VALUE` and `--plugin-path DIR` (both repeatable) to
+/// a command that loads a scene.
+void add_scene_options(CLI::App* sub, std::vector<std::string>& sets,
+                       std::vector<std::string>& plugin_path);
+
 int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                 bool terminal = false);
 

@@ -349,14 +349,7 @@ SdkCommand add_render_command(CLI::App& app) {
   sub->add_option("--size", a->size, "picture size in pixels, WIDTHxHEIGHT (default 1200x800)");
   sub->add_option("--view", a->view,
                   "3d (oblique, z up), xy (down the z axis), xz (along +y) or yz (along -x)");
-  // One value per occurrence, so that `--set K=V scene.yaml` leaves the scene
-  // to the positional argument.
-  sub->add_option("--set", a->sets, "override a scene value: KEY.PATH=VALUE (repeatable)")
-      ->allow_extra_args(false);
-  sub->add_option("--plugin-path", a->plugin_path,
-                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
-                  "(repeatable)")
-      ->allow_extra_args(false);
+  add_scene_options(sub, a->sets, a->plugin_path);
   sub->add_flag("--quiet,-q", a->quiet, "print only errors");
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_render(*a, out, err); }};
 }

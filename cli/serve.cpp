@@ -85,15 +85,8 @@ int cmd_serve(const ServeArgs& a, std::ostream& out, std::ostream& err) {
                                                     : available_threads();
     viewer::serve(session, options, out, a.scene);
     return kOk;
-  } catch (const SceneError& e) {
-    for (const auto& d : e.diagnostics()) err << d.text() << "\n";
-    return kBadInput;
-  } catch (const PluginError& e) {
-    err << e.what() << "\n";
-    return kPluginFault;
-  } catch (const std::exception& e) {
-    err << "pdyn serve: " << e.what() << "\n";
-    return kFailure;
+  } catch (...) {
+    return report_error(std::current_exception(), err);
   }
 }
 
@@ -112,12 +105,7 @@ SdkCommand add_serve_command(CLI::App& app) {
                   "share/pdyn/viewer)");
   sub->add_option("--threads", a->threads,
                   "threads for forces and solvers (default: simulation.threads, else all cores)");
-  sub->add_option("--set", a->sets, "override a scene value: KEY.PATH=VALUE (repeatable)")
-      ->allow_extra_args(false);
-  sub->add_option("--plugin-path", a->plugin_path,
-                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
-                  "(repeatable)")
-      ->allow_extra_args(false);
+  add_scene_options(sub, a->sets, a->plugin_path);
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_serve(*a, out, err); }};
 }
 
