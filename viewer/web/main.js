@@ -105,7 +105,7 @@ function updateStatus() {
   if (!s) return;
   $('status').textContent =
     `t ${s.time.toFixed(4)} s   step ${s.step}\n` +
-    `real-time factor ${s.rtf.toFixed(3)}\n` +
+    `real-time factor ${s.rtf.toPrecision(3)}\n` +
     `${hooks.fps} frames/s   ${s.count} particles\n` +
     `${s.solver}, dt ${s.dt} s, ${s.playing ? 'playing' : 'paused'}` +
     (view.bySpeed ? `\nspeed colours: 0 .. ${view.topSpeed?.toPrecision(3)} m/s` : '');
