@@ -40,8 +40,8 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
     }
     record = &registry.plugins().back();
   } else {
-    registry.discover(
-        PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+    registry.discover(PluginRegistry::search_path(
+        std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
     try {
       registry.require_healthy(a.name);
     } catch (const PluginError& e) {
@@ -62,6 +62,13 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
   const auto results = conformance::run_checks(d, {a.seed});
   out << fmt::format("pdyn check: {} {} {} ({}), seed {}\n\n", kind_name(d.kind), d.name, d.version,
                      record->library.string(), a.seed);
+  if (record->optimised == false) {
+    out << fmt::format(
+        "warning: {} was compiled without optimisation: its code may run 10 to 100 "
+        "times slower (expected a build with CMAKE_BUILD_TYPE=Release or "
+        "RelWithDebInfo; pdyn_add_plugin optimises when no build type is set)\n\n",
+        record->library.string());
+  }
   out << conformance::table(results);
   std::size_t failed = 0;
   std::vector<std::string> failed_names;
@@ -89,12 +96,10 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
 
 SdkCommand add_check_command(CLI::App& app) {
   auto a = std::make_shared<CheckArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "check", "run the conformance kit on a plugin (by name or library path)");
+  CLI::App* sub =
+      app.add_subcommand("check", "run the conformance kit on a plugin (by name or library path)");
   sub->add_option("name", a->name, "plugin name, or path of a plugin library")->required();
-  sub->add_option("--plugin-path", a->plugin_path,
-                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
-                  "(repeatable)");
+  add_plugin_path_option(sub, a->plugin_path);
   sub->add_option("--junit", a->junit, "also write the report as JUnit XML to this file");
   sub->add_option("--seed", a->seed, "seed of the generated particle configurations");
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_check(*a, out, err); }};

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <ostream>
@@ -30,9 +31,7 @@ struct Common {
 };
 
 void add_plugin_path_option(CLI::App* app, Common& c) {
-  app->add_option("--plugin-path", c.plugin_path,
-                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
-                  "(repeatable)");
+  cli::add_plugin_path_option(app, c.plugin_path);
 }
 
 PluginRegistry discover(const Common& c) {
@@ -44,8 +43,8 @@ PluginRegistry discover(const Common& c) {
 
 void warn_faults(const PluginRegistry& registry, std::ostream& err) {
   for (const auto& f : registry.faults()) {
-    err << fmt::format("pdyn: warning: {}: plugin '{}' skipped: {}\n", f.library.string(),
-                       f.plugin, f.message);
+    err << fmt::format("pdyn: warning: {}: plugin '{}' skipped: {}\n", f.library.string(), f.plugin,
+                       f.message);
   }
 }
 
@@ -55,9 +54,9 @@ struct RunArgs {
   std::string scene;
   std::optional<std::int64_t> steps;
   std::optional<double> duration;
-  std::string resume;    // checkpoint to continue from
-  bool force = false;    // resume even if the scene changed
-  int threads = 0;       // --threads; 0: the scene's simulation.threads, else all cores
+  std::string resume;             // checkpoint to continue from
+  bool force = false;             // resume even if the scene changed
+  int threads = 0;                // --threads; 0: the scene's simulation.threads, else all cores
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
 
@@ -100,18 +99,17 @@ Scene load(const RunArgs& a, const Common& c, const PluginRegistry& registry) {
   return load_scene(a.scene, registry, overrides);
 }
 
-
 int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err) {
   const PluginRegistry registry = discover(c);
   if (!c.quiet) warn_faults(registry, err);
   try {
     Scene scene = load(a, c, registry);
     if (!c.quiet) {
-      out << fmt::format("{}: ok: {} particles, {} force objects, {} colliders, solver {}, "
-                         "{} steps of {} s\n",
-                         a.scene, scene.system->size(), scene.system->force_objects().size(),
-                         scene.system->collider_objects().size(), scene.solver_name, scene.steps,
-                         scene.dt);
+      out << fmt::format(
+          "{}: ok: {} particles, {} force objects, {} colliders, solver {}, "
+          "{} steps of {} s\n",
+          a.scene, scene.system->size(), scene.system->force_objects().size(),
+          scene.system->collider_objects().size(), scene.solver_name, scene.steps, scene.dt);
     }
     return kOk;
   } catch (...) {
@@ -167,7 +165,8 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
                                            r.counts.rejected)
                              : "");
       if (!scene.output.path.empty()) {
-        out << fmt::format("pdyn: frames written to {}\n", fs::absolute(scene.output.path).string());
+        out << fmt::format("pdyn: frames written to {}\n",
+                           fs::absolute(scene.output.path).string());
       }
       if (!scene.output.energy.empty()) {
         out << fmt::format("pdyn: energy written to {}\n",
@@ -192,8 +191,10 @@ std::string range_text(const ParamSpec& s) {
 
 nlohmann::json to_json(const PluginRecord& r) {
   const PluginDescriptor& d = *r.descriptor;
-  nlohmann::json j{{"kind", kind_name(d.kind)}, {"name", d.name},
-                   {"version", d.version},      {"description", d.description},
+  nlohmann::json j{{"kind", kind_name(d.kind)},
+                   {"name", d.name},
+                   {"version", d.version},
+                   {"description", d.description},
                    {"library", r.library.string()}};
   if (d.kind == PluginKind::Solver) {
     j["order"] = d.solver_traits.order;
@@ -205,8 +206,11 @@ nlohmann::json to_json(const PluginRecord& r) {
   }
   auto params = nlohmann::json::array();
   for (const auto& p : d.params) {
-    nlohmann::json pj{{"name", p.name}, {"type", type_name(p.type)}, {"unit", p.unit},
-                      {"doc", p.doc},   {"required", p.required}};
+    nlohmann::json pj{{"name", p.name},
+                      {"type", type_name(p.type)},
+                      {"unit", p.unit},
+                      {"doc", p.doc},
+                      {"required", p.required}};
     if (p.fallback) pj["default"] = format_value(*p.fallback);
     if (p.min) pj[p.min_exclusive ? "exclusive_minimum" : "minimum"] = *p.min;
     if (p.max) pj["maximum"] = *p.max;
@@ -295,13 +299,24 @@ int cmd_describe(const Common& c, const std::string& name, std::ostream& out, st
     out << "  no parameters\n";
     return kOk;
   }
-  out << fmt::format("\n  {:<12} {:<14} {:<18} {:<10} {:<12} {}\n", "KEY", "TYPE", "DEFAULT",
-                     "UNIT", "RANGE", "MEANING");
+  // Columns as wide as their widest entry: a long unit (m^3/(kg s^2)) or
+  // default must not push the rest of its row out of line.
+  std::vector<std::array<std::string, 6>> rows{
+      {"KEY", "TYPE", "DEFAULT", "UNIT", "RANGE", "MEANING"}};
   for (const auto& p : d.params) {
-    const std::string def = p.fallback ? format_value(*p.fallback)
-                                       : (p.required ? "(required)" : "(optional)");
-    out << fmt::format("  {:<12} {:<14} {:<18} {:<10} {:<12} {}\n", p.name, type_name(p.type), def,
-                       p.unit.empty() ? "-" : p.unit, range_text(p), p.doc);
+    rows.push_back(
+        {p.name, type_name(p.type),
+         p.fallback ? format_value(*p.fallback) : (p.required ? "(required)" : "(optional)"),
+         p.unit.empty() ? "-" : p.unit, range_text(p), p.doc});
+  }
+  std::array<std::size_t, 5> width{};
+  for (const auto& row : rows) {
+    for (std::size_t c = 0; c < width.size(); ++c) width[c] = std::max(width[c], row[c].size());
+  }
+  out << "\n";
+  for (const auto& row : rows) {
+    out << fmt::format("  {:<{}} {:<{}} {:<{}} {:<{}} {:<{}} {}\n", row[0], width[0], row[1],
+                       width[1], row[2], width[2], row[3], width[3], row[4], width[4], row[5]);
   }
   return kOk;
 }
@@ -330,31 +345,51 @@ int report_error(const std::exception_ptr& error, std::ostream& err) {
   }
 }
 
+void add_plugin_path_option(CLI::App* sub, std::vector<std::string>& plugin_path,
+                            const char* help) {
+  const CLI::Validator folder(
+      [](std::string& dir) -> std::string {
+        std::error_code ec;
+        if (fs::is_directory(dir, ec)) return {};
+        return fmt::format(
+            "'{}' is {} (expected a folder holding plugin libraries "
+            "pdyn_KIND_NAME.so)",
+            dir, fs::exists(dir, ec) ? "not a folder" : "no such folder");
+      },
+      "FOLDER");
+  sub->add_option("--plugin-path", plugin_path,
+                  help ? help
+                       : "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped "
+                         "ones (repeatable)")
+      ->allow_extra_args(false)
+      ->check(folder);
+}
+
 void add_scene_options(CLI::App* sub, std::vector<std::string>& sets,
                        std::vector<std::string>& plugin_path) {
   // One value per occurrence, so that `--set K=V scene.yaml` leaves the scene
   // to the positional argument.
-  sub->add_option("--set", sets, "override a scene value: KEY.PATH=VALUE (repeatable)")
+  sub->add_option("--set", sets,
+                  "override a scene value: KEY.PATH=VALUE, e.g. simulation.dt=0.0005 or "
+                  "forces[0].g=[0,0,-1.62] (repeatable)")
       ->allow_extra_args(false);
-  sub->add_option("--plugin-path", plugin_path,
-                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
-                  "(repeatable)")
-      ->allow_extra_args(false);
+  add_plugin_path_option(sub, plugin_path);
 }
 
 int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                 bool terminal) {
   CLI::App app{"pdyn: plugin-based particle dynamics (Witkin's particle systems)", "pdyn"};
   app.require_subcommand(1);
+  // The program's version and the plugin ABI it loads: what a plugin built
+  // elsewhere must match (pdyn/version.hpp).
+  app.set_version_flag("--version",
+                       fmt::format("pdyn {} (plugin ABI {})", PDYN_VERSION_STRING, kAbiVersion));
   Common common;
   RunArgs run_args;
 
   auto scene_options = [&](CLI::App* sub) {
     sub->add_option("scene", run_args.scene, "scene file (YAML)")->required();
-    sub->add_option("--set", common.sets,
-                    "override a scene value: KEY.PATH=VALUE, e.g. simulation.dt=0.0005 or "
-                    "forces[0].g=[0,0,-1.62] (repeatable)");
-    add_plugin_path_option(sub, common);
+    add_scene_options(sub, common.sets, common.plugin_path);
     sub->add_flag("--quiet,-q", common.quiet, "print only errors");
   };
   CLI::App* run = app.add_subcommand("run", "run a scene");
@@ -396,6 +431,9 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
     return kOk;
   } catch (const CLI::CallForAllHelp&) {
     out << app.help("", CLI::AppFormatMode::All);
+    return kOk;
+  } catch (const CLI::CallForVersion& e) {
+    out << e.what() << "\n";
     return kOk;
   } catch (const CLI::ParseError& e) {
     err << "pdyn: " << e.what() << " (see pdyn --help)\n";

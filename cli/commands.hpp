@@ -2,7 +2,6 @@
 #pragma once
 
 #include <exception>
-
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -30,6 +29,13 @@ enum Exit : int {
 /// the exit status for it: a SceneError's diagnostics (2), a PluginError (3),
 /// a CheckpointError (2), anything else (1).
 int report_error(const std::exception_ptr& error, std::ostream& err);
+
+/// Adds `--plugin-path DIR` to `sub`: repeatable, one folder per occurrence
+/// (so that `--plugin-path DIR scene.yaml` leaves the scene to the positional
+/// argument), and refused unless DIR is an existing folder, since a
+/// misspelled one would otherwise only show up later as an unknown plugin.
+void add_plugin_path_option(CLI::App* sub, std::vector<std::string>& plugin_path,
+                            const char* help = nullptr);
 
 /// Adds `--set KEY.PATH=VALUE` and `--plugin-path DIR` (both repeatable) to
 /// a command that loads a scene.

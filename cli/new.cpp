@@ -118,6 +118,15 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
     }
   }
 
+  // Where the plugin author's guide is: installed beside this program
+  // (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources.
+  std::string guide = "docs/plugins.md in the pdyn sources";
+  {
+    const fs::path program = fs::read_symlink("/proc/self/exe", ec);
+    const fs::path installed = program.parent_path() / PDYN_BIN_TO_DOCS / "plugins.md";
+    if (!ec && fs::is_regular_file(installed, ec)) guide = installed.lexically_normal().string();
+  }
+
   fs::path staging;
   try {
     const fs::path absolute = fs::absolute(target).lexically_normal();
@@ -132,8 +141,9 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
     for (const auto& [path, text] : files) {
       const fs::path file = staging / path;
       fs::create_directories(file.parent_path());
-      write_file(file,
-                 replace_all(replace_all(std::string(text), "@NAME@", a.name), "@KIND@", a.kind));
+      write_file(file, replace_all(replace_all(replace_all(std::string(text), "@NAME@", a.name),
+                                               "@KIND@", a.kind),
+                                   "@DOCS@", guide));
     }
     // rename(2) replaces an empty folder, so an empty target is fine too.
     fs::rename(staging, final_path);
@@ -167,8 +177,8 @@ SdkCommand add_new_command(CLI::App& app) {
       ->check(CLI::IsMember({"force", "solver", "collider"}));
   sub->add_option("name", a->name, "the plugin's name, [a-z0-9_]+")->required();
   sub->add_option("dir", a->dir, "folder to create (default: ./NAME); must be new or empty");
-  sub->add_option("--plugin-path", a->plugin_path,
-                  "also refuse names of the plugins in this folder (repeatable)");
+  add_plugin_path_option(sub, a->plugin_path,
+                         "also refuse names of the plugins in this folder (repeatable)");
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_new(*a, out, err); }};
 }
 

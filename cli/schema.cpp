@@ -118,7 +118,9 @@ Json param_schema(const ParamSpec& s, bool indices_checked) {
     case ParamType::IndexTriples:
       j = {{"type", "array"}, {"items", tuples(3, indices_checked)}};
       break;
-    case ParamType::StringList: j = {{"type", "array"}, {"items", {{"type", "string"}}}}; break;
+    case ParamType::StringList:
+      j = {{"type", "array"}, {"items", {{"type", "string"}}}};
+      break;
     case ParamType::NamedReals:
       // Names are identifiers (the loader's rule), each mapped to a number.
       j = {{"type", "object"},
@@ -296,9 +298,7 @@ SdkCommand add_schema_command(CLI::App& app) {
   auto a = std::make_shared<SchemaArgs>();
   CLI::App* sub = app.add_subcommand(
       "schema", "print the JSON Schema (draft 2020-12) of scenes with the plugins found");
-  sub->add_option("--plugin-path", a->plugin_path,
-                  "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "
-                  "(repeatable)");
+  add_plugin_path_option(sub, a->plugin_path);
   sub->add_option("--output,-o", a->output, "write to this file instead of standard output");
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_schema(*a, out, err); }};
 }

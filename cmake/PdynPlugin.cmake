@@ -50,6 +50,13 @@ function(pdyn_add_plugin name)
   if(PDYN_WARNINGS)
     target_compile_options(${name} PRIVATE ${PDYN_WARNINGS})
   endif()
+  # A project that sets no build type compiles with no -O at all, and a force
+  # loop then runs about 150 times slower. Optimise unless the author chose.
+  if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
+    target_compile_options(${name} PRIVATE -O2 -g)
+    message(STATUS "pdyn_add_plugin(${name}): no CMAKE_BUILD_TYPE given, building optimised "
+                   "(-O2 -g); -DCMAKE_BUILD_TYPE=Debug for a debug build")
+  endif()
   if(PDYN_PLUGIN_INSTALL_DIR)
     install(TARGETS ${name} LIBRARY DESTINATION "${PDYN_PLUGIN_INSTALL_DIR}")
   endif()

@@ -9,7 +9,9 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-120}"
-cmake --preset fuzz >/dev/null
+launcher=()
+command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+cmake --preset fuzz "${launcher[@]}" >/dev/null
 cmake --build --preset fuzz --target scene_fuzzer pdyn_plugins
 work=build-fuzz/corpus
 rm -rf "$work" build-fuzz/findings && mkdir -p "$work" build-fuzz/findings

@@ -2,9 +2,11 @@
 # pdyn quick start, for a fresh Debian 12 machine (run as root, or with sudo).
 #
 #   bash scripts/quickstart.sh demo   # install what is missing, build, run the demo
-#   bash scripts/quickstart.sh test   # install what is missing, build, run every test:
-#                                     # a 2-minute fuzz run of the scene loader, the suite
-#                                     # under ASan + UBSan, then the suite as built for use
+#   bash scripts/quickstart.sh test   # install what is missing, build, run the whole test
+#                                     # suite as built for use (browser test included)
+#
+# CI (.ci/run) runs `test` and then scripts/ci-extra.sh: the suite under
+# ASan + UBSan and a fuzz run of the scene loader, which take longer.
 #
 # Everything comes from Debian's packages; nothing is downloaded at build time.
 set -euo pipefail
@@ -50,17 +52,18 @@ fi
 # exactly as the lock file pins them.
 npm ci --prefix viewer --no-audit --no-fund --loglevel=error
 
-browser=()
-[[ "$what" == test ]] && browser=(-DPDYN_BROWSER_TEST=ON)  # fail, not skip, if it cannot run
-cmake --preset default "${browser[@]}"
-cmake --build --preset default
+# ccache, where the machine has it, makes a second build of the same sources
+# (another preset, another clone) mostly a copy.
+launcher=()
+command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 
 if [[ "$what" == demo ]]; then
+  # Only what the demo needs: the program and the shipped plugins.
+  cmake --preset default "${launcher[@]}"
+  cmake --build --preset default --target pdyn pdyn_plugins
   ./build/bin/pdyn run configs/demo.yaml
 else
-  bash scripts/fuzz.sh "${PDYN_FUZZ_SECONDS:-120}"
-  cmake --preset asan -DPDYN_BROWSER_TEST=OFF  # the browser test runs once, on the build for use
-  cmake --build --preset asan
-  ctest --preset asan
+  cmake --preset default -DPDYN_BROWSER_TEST=ON "${launcher[@]}"  # fail, not skip, if it cannot run
+  cmake --build --preset default
   ctest --preset default
 fi

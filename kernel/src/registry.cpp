@@ -26,6 +26,13 @@ bool is_valid_plugin_name(std::string_view name) {
   });
 }
 
+bool is_valid_param_name(std::string_view name) {
+  auto letter = [](char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; };
+  return !name.empty() && letter(name[0]) && name != "type" &&
+         std::all_of(name.begin(), name.end(),
+                     [&](char c) { return letter(c) || (c >= '0' && c <= '9'); });
+}
+
 namespace {
 
 // "pdyn_force_gravity.so" -> "gravity": what a faulty library probably provides.
@@ -61,7 +68,10 @@ std::string load_failure(const std::string& what, const fs::path& file) {
 // Checks what the host relies on before listing a plugin.
 std::string descriptor_problem(const PluginDescriptor& d) {
   if (!is_valid_plugin_name(d.name)) {
-    return fmt::format("plugin name '{}' is not of the form [a-z0-9_]+", d.name);
+    return fmt::format(
+        "plugin name '{}' is not allowed (expected lower-case letters, digits "
+        "and '_', e.g. n_body)",
+        d.name);
   }
   const bool has_factory = (d.kind == PluginKind::Force && d.create_force) ||
                            (d.kind == PluginKind::Solver && d.create_solver) ||
@@ -69,8 +79,12 @@ std::string descriptor_problem(const PluginDescriptor& d) {
   if (!has_factory) return fmt::format("descriptor has no {} factory", kind_name(d.kind));
   std::set<std::string> seen;
   for (const auto& p : d.params) {
-    if (!is_valid_plugin_name(p.name) || p.name == "type") {
-      return fmt::format("parameter name '{}' is not allowed", p.name);
+    if (!is_valid_param_name(p.name)) {
+      return fmt::format(
+          "parameter name '{}' is not allowed (expected a letter or '_', then "
+          "letters, digits or '_', e.g. G or k_spring; not 'type', which names "
+          "the plugin)",
+          p.name);
     }
     if (!seen.insert(p.name).second) return fmt::format("parameter '{}' declared twice", p.name);
     // ParamType's enumerators are in the order of ParamValue's alternatives,
@@ -86,9 +100,12 @@ std::string descriptor_problem(const PluginDescriptor& d) {
 
 const char* kind_name(PluginKind kind) {
   switch (kind) {
-    case PluginKind::Force: return "force";
-    case PluginKind::Solver: return "solver";
-    case PluginKind::Collider: return "collider";
+    case PluginKind::Force:
+      return "force";
+    case PluginKind::Solver:
+      return "solver";
+    case PluginKind::Collider:
+      return "collider";
   }
   return "?";
 }
@@ -178,7 +195,12 @@ bool PluginRegistry::load_library(const fs::path& file) {
     fault(file, hint, "descriptor is null");
     return false;
   }
-  return admit(*d, file, hint, std::static_pointer_cast<void>(lib));
+  if (!admit(*d, file, hint, std::static_pointer_cast<void>(lib))) return false;
+  if (lib->has(kBuildFlagsSymbol)) {
+    plugins_.back().optimised =
+        (lib->get<std::uint32_t() noexcept>(kBuildFlagsSymbol)() & kBuildOptimised) != 0;
+  }
+  return true;
 }
 
 bool PluginRegistry::add(const PluginDescriptor& descriptor, const fs::path& origin) {
@@ -217,8 +239,8 @@ const PluginRecord* PluginRegistry::find_any(std::string_view name) const {
 void PluginRegistry::require_healthy(std::string_view name) const {
   for (const auto& f : faults_) {
     if (f.plugin == name) {
-      throw PluginError(fmt::format("{}: plugin '{}': {}", f.library.string(), f.plugin,
-                                    f.message));
+      throw PluginError(
+          fmt::format("{}: plugin '{}': {}", f.library.string(), f.plugin, f.message));
     }
   }
 }
@@ -239,8 +261,8 @@ namespace {
 template <class T>
 std::shared_ptr<T> keep_loaded(std::unique_ptr<T> obj, const PluginRecord& r) {
   if (!obj) {
-    throw PluginError(fmt::format("{}: plugin '{}': factory returned no object",
-                                  r.library.string(), r.descriptor->name));
+    throw PluginError(fmt::format("{}: plugin '{}': factory returned no object", r.library.string(),
+                                  r.descriptor->name));
   }
   std::shared_ptr<void> handle = r.handle;
   return std::shared_ptr<T>(obj.release(), [handle](T* p) { delete p; });

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,6 +37,9 @@ struct PluginRecord {
   const PluginDescriptor* descriptor = nullptr;
   std::filesystem::path library;
   std::shared_ptr<void> handle;  // the loaded library; every created object holds a copy
+  /// Whether the library was compiled with optimisation; unknown for
+  /// libraries built before PDYN_PLUGIN recorded it, and for built-ins.
+  std::optional<bool> optimised;
 };
 
 /// A library on the search path that could not be used.
@@ -100,5 +104,7 @@ class PluginRegistry {
 
 /// True for names of the form [a-z0-9_]+.
 bool is_valid_plugin_name(std::string_view name);
+/// True for parameter names: [A-Za-z_][A-Za-z0-9_]*, except "type" (see ParamSpec::name).
+bool is_valid_param_name(std::string_view name);
 
 }  // namespace pdyn

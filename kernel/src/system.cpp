@@ -122,6 +122,7 @@ void check_finite(const Matrix3X& f, const std::string& label) {
 // Witkin's loop, steps 1 and 2 (clear accumulators, invoke force objects),
 // followed by the colliders' contact forces, which must see the total force.
 void System::evaluate_forces() {
+  ++evaluations_;
   parallel_ranges(size(), [&](Index b, Index e) { force_.middleCols(b, e - b).setZero(); });
   const ParticleView p = view();
   for (auto& entry : forces_) {
@@ -148,8 +149,7 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   const auto v = velocities();
   parallel_ranges(n, [&](Index b, Index e) {
     vel.middleCols(b, e - b) = v.middleCols(b, e - b);
-    a.middleCols(b, e - b) =
-        force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
+    a.middleCols(b, e - b) = force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
   });
   // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
   // blew up, so the blow-up is reported at the particle that moved.

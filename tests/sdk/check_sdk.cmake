@@ -8,7 +8,7 @@ include(${CMAKE_CURRENT_LIST_DIR}/sdk_common.cmake)
 file(REMOVE_RECURSE "${WORK}")
 
 set(example "${SOURCE_DIR}/examples/third_party_force")
-build_project("${example}" "${WORK}")
+build_project("${example}" "${WORK}" RelWithDebInfo)
 if(NOT EXISTS "${WORK}/pdyn_force_vortex.so")
   message(FATAL_ERROR "the example did not build ${WORK}/pdyn_force_vortex.so")
 endif()

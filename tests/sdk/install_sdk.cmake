@@ -7,7 +7,8 @@ file(REMOVE_RECURSE "${PREFIX}")
 run("cmake --install" ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${PREFIX}")
 foreach(f lib/cmake/pdyn/pdynConfig.cmake lib/cmake/pdyn/pdynConfigVersion.cmake
           lib/cmake/pdyn/pdynTargets.cmake lib/cmake/pdyn/PdynPlugin.cmake
-          include/pdyn/plugin.hpp include/pdyn/conformance.hpp bin/pdyn)
+          include/pdyn/plugin.hpp include/pdyn/conformance.hpp bin/pdyn
+          share/doc/pdyn/plugins.md share/doc/pdyn/scenes.md)
   if(NOT EXISTS "${PREFIX}/${f}")
     message(FATAL_ERROR "not installed: ${PREFIX}/${f}")
   endif()

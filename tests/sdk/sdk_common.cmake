@@ -21,9 +21,15 @@ endfunction()
 
 # Configures and builds the plugin project in `source` into `build` against
 # the install prefix PREFIX only (never the build tree).
+# ARGV2, if given, is the build type; none given means none set, as a
+# newcomer configures (`cmake -S . -B build`).
 function(build_project source build)
+  set(build_type "")
+  if(ARGC GREATER 2)
+    set(build_type "-DCMAKE_BUILD_TYPE=${ARGV2}")
+  endif()
   run("configuring ${source}" ${CMAKE_COMMAND} -S "${source}" -B "${build}" -G "${GENERATOR}"
-      -DCMAKE_CXX_COMPILER=${CXX} -DCMAKE_BUILD_TYPE=RelWithDebInfo
+      -DCMAKE_CXX_COMPILER=${CXX} ${build_type}
       -DCMAKE_PREFIX_PATH=${PREFIX} -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF)
   file(STRINGS "${build}/CMakeCache.txt" pdyn_dir REGEX "^pdyn_DIR:")
   string(FIND "${pdyn_dir}" "${PREFIX}/" at)

@@ -42,26 +42,46 @@ using ParamValue = std::variant<double, std::int64_t, bool, std::string, Vec3, s
 
 /// How one parameter is spelled, typed, bounded and documented.
 struct ParamSpec {
-  std::string name;                   ///< YAML key, [a-z0-9_]+
+  /// YAML key: a letter or '_', then letters, digits or '_' ([A-Za-z_][A-Za-z0-9_]*,
+  /// e.g. `G`, `k_spring`), never `type`, which names the plugin. The registry
+  /// refuses a library that declares another name, and says why.
+  std::string name;
   ParamType type = ParamType::Real;
-  std::optional<ParamValue> fallback; ///< default value; none: required or optional
-  bool required = false;              ///< must appear in the scene
-  std::string unit;                   ///< SI unit ("N/m"), empty if dimensionless
-  std::string doc;                    ///< one line for `pdyn plugins describe`
-  std::optional<double> min, max;     ///< bounds on a number or on each element
-  bool min_exclusive = false;         ///< min is a strict bound (> instead of >=)
-  bool nonzero = false;               ///< for Vec3: the zero vector is refused
+  std::optional<ParamValue> fallback;  ///< default value; none: required or optional
+  bool required = false;               ///< must appear in the scene
+  std::string unit;                    ///< SI unit ("N/m"), empty if dimensionless
+  std::string doc;                     ///< one line for `pdyn plugins describe`
+  std::optional<double> min, max;      ///< bounds on a number or on each element
+  bool min_exclusive = false;          ///< min is a strict bound (> instead of >=)
+  bool nonzero = false;                ///< for Vec3: the zero vector is refused
   /// A typical value, used instead of the default by the conformance kit
   /// (`pdyn check`) to build the plugin, e.g. for a required expression
   /// that has no sensible default. Bounds are not checked against it.
   std::optional<ParamValue> sample;
 
   /// Fluent bounds: `param::real("ks", 1.0, "N/m", "...").at_least(0)`.
-  ParamSpec& at_least(double lo) { min = lo; min_exclusive = false; return *this; }
-  ParamSpec& greater_than(double lo) { min = lo; min_exclusive = true; return *this; }
-  ParamSpec& at_most(double hi) { max = hi; return *this; }
-  ParamSpec& not_zero() { nonzero = true; return *this; }
-  ParamSpec& with_sample(ParamValue v) { sample = std::move(v); return *this; }
+  ParamSpec& at_least(double lo) {
+    min = lo;
+    min_exclusive = false;
+    return *this;
+  }
+  ParamSpec& greater_than(double lo) {
+    min = lo;
+    min_exclusive = true;
+    return *this;
+  }
+  ParamSpec& at_most(double hi) {
+    max = hi;
+    return *this;
+  }
+  ParamSpec& not_zero() {
+    nonzero = true;
+    return *this;
+  }
+  ParamSpec& with_sample(ParamValue v) {
+    sample = std::move(v);
+    return *this;
+  }
 };
 
 /// Short constructors for ParamSpec. A spec with a default is optional; one

@@ -65,10 +65,8 @@ struct SolverTraits {
   bool symplectic = false;  ///< preserves phase-space volume
 };
 
-using ForceFactory =
-    std::function<std::unique_ptr<Force>(const Params&, const SceneContext&)>;
-using SolverFactory =
-    std::function<std::unique_ptr<Solver>(const Params&, const SceneContext&)>;
+using ForceFactory = std::function<std::unique_ptr<Force>(const Params&, const SceneContext&)>;
+using SolverFactory = std::function<std::unique_ptr<Solver>(const Params&, const SceneContext&)>;
 using ColliderFactory =
     std::function<std::unique_ptr<Collider>(const Params&, const SceneContext&)>;
 
@@ -90,13 +88,31 @@ struct PluginDescriptor {
 
 #define PDYN_PLUGIN_EXPORT __attribute__((visibility("default")))
 
+// How the plugin's own translation unit was compiled (pdyn::kBuildOptimised),
+// recorded by PDYN_PLUGIN so that `pdyn check` can warn about a plugin built
+// without optimisation, which runs one to two orders of magnitude slower. An
+// optional symbol: libraries built before it are loaded as before.
+#ifdef __OPTIMIZE__
+#define PDYN_PLUGIN_BUILD_FLAGS_ 1u
+#else
+#define PDYN_PLUGIN_BUILD_FLAGS_ 0u
+#endif
+
+/// The descriptor of the plugin compiled into this binary, defined by
+/// PDYN_PLUGIN. A plugin's own tests, which compile the plugin's source into
+/// the test program, pass it to pdyn::conformance::run_checks.
+extern "C" PDYN_PLUGIN_EXPORT const ::pdyn::PluginDescriptor* pdyn_plugin_descriptor();
+
 /// Exports the plugin described by `describe_fn` (a function returning a
 /// pdyn::PluginDescriptor). Use once per plugin library, at namespace scope.
-#define PDYN_PLUGIN(describe_fn)                                                          \
-  extern "C" PDYN_PLUGIN_EXPORT std::uint32_t pdyn_plugin_abi_version() noexcept {       \
-    return PDYN_ABI_VERSION;                                                              \
-  }                                                                                       \
+#define PDYN_PLUGIN(describe_fn)                                                           \
+  extern "C" PDYN_PLUGIN_EXPORT std::uint32_t pdyn_plugin_abi_version() noexcept {         \
+    return PDYN_ABI_VERSION;                                                               \
+  }                                                                                        \
   extern "C" PDYN_PLUGIN_EXPORT const ::pdyn::PluginDescriptor* pdyn_plugin_descriptor() { \
-    static const ::pdyn::PluginDescriptor descriptor = describe_fn();                     \
-    return &descriptor;                                                                   \
+    static const ::pdyn::PluginDescriptor descriptor = describe_fn();                      \
+    return &descriptor;                                                                    \
+  }                                                                                        \
+  extern "C" PDYN_PLUGIN_EXPORT std::uint32_t pdyn_plugin_build_flags() noexcept {         \
+    return PDYN_PLUGIN_BUILD_FLAGS_;                                                       \
   }

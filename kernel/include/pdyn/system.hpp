@@ -87,6 +87,9 @@ class System {
   const Matrix3X& compute_accelerations();
   /// Forces (N) of the last derivative or acceleration evaluation.
   const Matrix3X& forces() const noexcept { return force_; }
+  /// Force evaluations (derivative or compute_accelerations calls) since the
+  /// system was assembled: the cost measure a run summary reports.
+  std::uint64_t force_evaluations() const noexcept { return evaluations_; }
 
   // ---- particle properties and observables ----
 
@@ -122,17 +125,18 @@ class System {
   void evaluate_forces();
   void update_inverse_mass();
 
-  Eigen::VectorXd state_;        // [x | v], 6N
-  Eigen::VectorXd mass_;         // N
-  Eigen::VectorXd inv_mass_;     // N, zero for fixed particles: gathers f/m with no branch
+  Eigen::VectorXd state_;     // [x | v], 6N
+  Eigen::VectorXd mass_;      // N
+  Eigen::VectorXd inv_mass_;  // N, zero for fixed particles: gathers f/m with no branch
   std::vector<std::uint8_t> fixed_;
   std::vector<Index> fixed_ids_;  // indices of fixed particles
-  Matrix3X force_;               // force accumulators, 3 x N
-  Matrix3X accel_;               // f/m for compute_accelerations()
+  Matrix3X force_;                // force accumulators, 3 x N
+  Matrix3X accel_;                // f/m for compute_accelerations()
   double time_ = 0.0;
   bool finite_checks_ = false;
   std::vector<ForceEntry> forces_;
   std::vector<ColliderEntry> colliders_;
+  std::uint64_t evaluations_ = 0;  // last, so that the layout before it is unchanged
 };
 
 }  // namespace pdyn

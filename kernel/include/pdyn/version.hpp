@@ -14,4 +14,8 @@ inline constexpr std::uint32_t kAbiVersion = PDYN_ABI_VERSION;
 /// The two symbols every plugin library exports (see PDYN_PLUGIN).
 inline constexpr const char* kAbiSymbol = "pdyn_plugin_abi_version";
 inline constexpr const char* kDescriptorSymbol = "pdyn_plugin_descriptor";
+/// Optional third symbol (since pdyn 0.1, same ABI): how the plugin was compiled.
+inline constexpr const char* kBuildFlagsSymbol = "pdyn_plugin_build_flags";
+/// Bit of the build flags: the plugin was compiled with optimisation (-O1 or more).
+inline constexpr std::uint32_t kBuildOptimised = 1u;
 }  // namespace pdyn

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# What CI runs after the README's test command (scripts/quickstart.sh test):
+# the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer,
+# then a bounded libFuzzer run of the scene loader. Slower than the default
+# suite, so users get a fast answer from the quick start and CI stays complete.
+#
+#   bash scripts/ci-extra.sh     (PDYN_FUZZ_SECONDS, default 120)
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+launcher=()
+command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+cmake --preset asan -DPDYN_BROWSER_TEST=OFF "${launcher[@]}"  # the browser test runs on the build for use
+cmake --build --preset asan
+ctest --preset asan
+bash scripts/fuzz.sh "${PDYN_FUZZ_SECONDS:-120}"
