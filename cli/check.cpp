@@ -62,8 +62,9 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
     }
   }
   const PluginDescriptor& d = *record->descriptor;
-  // Nothing in this process has run plugin code or an OpenMP team yet: a
-  // safe place to fork the checks' child processes from.
+  // Isolated: a crash or a hang fails its check instead of ending pdyn.
+  // The `pdyn` process has run no plugin code and no OpenMP team before
+  // this point, which makes it a safe place to fork from.
   const auto results =
       conformance::run_checks(d, {.seed = a.seed, .isolate = !a.in_process, .timeout = a.timeout});
   out << fmt::format("pdyn check: {} {} {} ({}), seed {}\n\n", kind_name(d.kind), d.name, d.version,

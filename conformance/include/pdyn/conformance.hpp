@@ -46,8 +46,9 @@ struct Options {
   /// crashes (any fatal signal), aborts, exits or hangs fails the check it
   /// was in ("crashed with SIGSEGV", "timed out after 10 s") and the other
   /// checks still run. The report is the same as in-process otherwise.
-  /// `pdyn check` does this. Fork from a process that has not run OpenMP
-  /// parallel regions with explicit team sizes; the child runs on one thread.
+  /// `pdyn check` does this. The child runs OpenMP with one thread (GNU
+  /// libgomp cannot start a team in a child forked from a process that had
+  /// one; results do not depend on the thread count).
   bool isolate = false;
   /// With `isolate`: seconds a check may run without finishing (> 0).
   double timeout = kDefaultTimeout;
