@@ -43,8 +43,8 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
     }
     record = &registry.plugins().back();
   } else {
-    registry.discover(
-        PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+    registry.discover(PluginRegistry::search_path(
+        std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
     try {
       registry.require_healthy(a.name);
     } catch (const PluginError& e) {
@@ -96,8 +96,8 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
 
 SdkCommand add_check_command(CLI::App& app) {
   auto a = std::make_shared<CheckArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "check", "run the conformance kit on a plugin (by name or library path)");
+  CLI::App* sub =
+      app.add_subcommand("check", "run the conformance kit on a plugin (by name or library path)");
   sub->add_option("name", a->name, "plugin name, or path of a plugin library")->required();
   sub->add_option("--plugin-path", a->plugin_path,
                   "folder to search for plugins before $PDYN_PLUGIN_PATH and the shipped ones "

@@ -151,8 +151,7 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   const auto v = velocities();
   parallel_ranges(n, [&](Index b, Index e) {
     vel.middleCols(b, e - b) = v.middleCols(b, e - b);
-    a.middleCols(b, e - b) =
-        force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
+    a.middleCols(b, e - b) = force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
   });
   // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
   // blew up, so the blow-up is reported at the particle that moved.
