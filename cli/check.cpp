@@ -1,6 +1,7 @@
 // `pdyn check`: runs the conformance kit on one plugin and prints its table.
-//   exit 0: every check passed; 1: a check failed; 2: no such plugin (or a
-//   bad command line); 3: the plugin's library cannot be used.
+//   exit 0: every check passed; 1: a check failed (a check that crashed or
+//   hung included: the checks run in a child process); 2: no such plugin
+//   (or a bad command line); 3: the plugin's library cannot be used.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -26,6 +27,8 @@ struct CheckArgs {
   std::vector<std::string> plugin_path;
   std::string junit;
   std::uint64_t seed = 1;
+  double timeout = conformance::kDefaultTimeout;
+  bool in_process = false;
 };
 
 int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
@@ -59,7 +62,11 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
     }
   }
   const PluginDescriptor& d = *record->descriptor;
-  const auto results = conformance::run_checks(d, {a.seed});
+  // Isolated: a crash or a hang fails its check instead of ending pdyn.
+  // The `pdyn` process has run no plugin code and no OpenMP team before
+  // this point, which makes it a safe place to fork from.
+  const auto results =
+      conformance::run_checks(d, {.seed = a.seed, .isolate = !a.in_process, .timeout = a.timeout});
   out << fmt::format("pdyn check: {} {} {} ({}), seed {}\n\n", kind_name(d.kind), d.name, d.version,
                      record->library.string(), a.seed);
   if (record->optimised == false) {
@@ -102,6 +109,13 @@ SdkCommand add_check_command(CLI::App& app) {
   add_plugin_path_option(sub, a->plugin_path);
   sub->add_option("--junit", a->junit, "also write the report as JUnit XML to this file");
   sub->add_option("--seed", a->seed, "seed of the generated particle configurations");
+  sub->add_option("--timeout", a->timeout,
+                  fmt::format("seconds a check may run before it fails as hung (default {:g})",
+                              conformance::kDefaultTimeout))
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--in-process", a->in_process,
+                "run the checks in this process rather than in a child process (for a "
+                "debugger): a plugin that crashes or hangs then takes pdyn check with it");
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_check(*a, out, err); }};
 }
 

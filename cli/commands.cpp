@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 
+#include "crash_report.hpp"
 #include "registry.hpp"
 #include "render.hpp"
 #include "runner.hpp"
@@ -138,6 +139,8 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
       }
       options.resume = &*checkpoint;
     }
+    // A plugin that crashes is named in one line (crash_report.hpp).
+    const crash::ReportCrashes report_crashes;
     const auto start = std::chrono::steady_clock::now();
     const RunResult r = run_scene(scene, options);
     const double wall =

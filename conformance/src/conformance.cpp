@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "checks.hpp"
+#include "isolation.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn::conformance {
@@ -119,8 +120,17 @@ CheckResult skip(std::string name, std::string why) {
 }
 
 // Runs `check`, turning an exception from the plugin into a failed check.
+// Isolated (Options::isolate), it tells the parent process which check runs,
+// and skips a check that crashed an earlier child, taking its result.
 void guarded(std::vector<CheckResult>& out, const std::string& name,
              const std::function<CheckResult()>& check) {
+  detail::Worker* worker = detail::current_worker();
+  if (worker) {
+    if (const CheckResult* recorded = worker->begin(out, name)) {
+      out.push_back(*recorded);
+      return;
+    }
+  }
   try {
     out.push_back(check());
   } catch (const std::exception& e) {
@@ -128,6 +138,7 @@ void guarded(std::vector<CheckResult>& out, const std::string& name,
   } catch (...) {
     out.push_back(result(name, false, 0, 0, "threw a non-standard exception"));
   }
+  if (worker) worker->flush(out);
 }
 
 SceneContext context_of(const State& s) { return SceneContext{s.view(), nullptr}; }
@@ -914,8 +925,9 @@ Params sample_params(const PluginDescriptor& d, Index n) {
   return p;
 }
 
-std::vector<CheckResult> run_checks(const PluginDescriptor& d, const Options& o) {
-  std::vector<CheckResult> out;
+namespace {
+
+void check_sequence(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
   out.push_back(check_descriptor(d));
   try {
     switch (d.kind) {
@@ -938,6 +950,17 @@ std::vector<CheckResult> run_checks(const PluginDescriptor& d, const Options& o)
   } catch (const std::exception& e) {
     out.push_back(result("run", false, 0, 0, fmt::format("threw: {}", e.what())));
   }
+}
+
+}  // namespace
+
+std::vector<CheckResult> run_checks(const PluginDescriptor& d, const Options& o) {
+  if (o.isolate) {
+    return detail::run_isolated([&](std::vector<CheckResult>& out) { check_sequence(d, o, out); },
+                                o.timeout);
+  }
+  std::vector<CheckResult> out;
+  check_sequence(d, o, out);
   return out;
 }
 

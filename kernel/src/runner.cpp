@@ -3,7 +3,6 @@
 #include "runner.hpp"
 
 #include <fmt/format.h>
-#include <pdyn/parallel.hpp>
 #include <unistd.h>
 
 #include <atomic>
@@ -12,7 +11,10 @@
 #include <csignal>
 #include <cstring>
 #include <ostream>
+#include <pdyn/parallel.hpp>
 #include <tuple>
+
+#include "crash_report.hpp"
 
 namespace pdyn {
 
@@ -22,6 +24,14 @@ namespace fs = std::filesystem;
 // AtomicFile
 
 namespace {
+
+// The name a file is written under until it is complete. The fatal-signal
+// report (crash_report.hpp) removes these names, so they come from here only.
+fs::path temporary_name(const fs::path& path) {
+  fs::path temp = path;
+  temp += fmt::format(".tmp-{}", ::getpid());
+  return temp;
+}
 
 // Copies the first mark.bytes bytes of `source` into `dest`, returning false
 // (and copying nothing usable) if the file is shorter or its CRC differs. On
@@ -51,8 +61,7 @@ bool copy_prefix(const fs::path& source, const OutputMark& mark, std::FILE* dest
 AtomicFile::AtomicFile(fs::path path, const OutputMark* resume) : path_(std::move(path)) {
   std::error_code ec;
   if (path_.has_parent_path()) fs::create_directories(path_.parent_path(), ec);
-  temp_ = path_;
-  temp_ += fmt::format(".tmp-{}", ::getpid());
+  temp_ = temporary_name(path_);
   file_ = std::fopen(temp_.c_str(), "wb");
   if (!file_) {
     throw Error(fmt::format("{}: cannot create output file ({})", path_.string(),
@@ -285,23 +294,37 @@ class Output {
     c.state = sys_.state();
     c.mass = sys_.masses();
     c.fixed = sys_.fixed();
-    c.plugin_states.emplace_back(scene_.solver_label, scene_.solver->save_state());
+    {
+      const crash::CallScope call(scene_.solver_label, "save_state");
+      c.plugin_states.emplace_back(scene_.solver_label, scene_.solver->save_state());
+    }
     for (const auto& f : sys_.force_objects()) {
+      const crash::CallScope call(f.label, "save_state");
       c.plugin_states.emplace_back(f.label, f.force->save_state());
     }
     for (const auto& col : sys_.collider_objects()) {
+      const crash::CallScope call(col.label, "save_state");
       c.plugin_states.emplace_back(col.label, col.collider->save_state());
     }
     if (frames_) c.frames = frames_->mark();
     if (energy_) c.energy = energy_->mark();
     if (held_) std::tie(c.frames, c.energy) = *held_;
     write_checkpoint(checkpoint_, c);
+    // From now on the temporary files are what a resume continues.
+    if (crash_report_) crash_report_->keep_temp_files(checkpoint_);
     return checkpoint_;
   }
   void commit() {
     if (frames_) frames_->commit();
     if (energy_) energy_->commit();
   }
+  std::vector<fs::path> temp_files() const {
+    std::vector<fs::path> files;
+    if (frames_) files.push_back(temporary_name(scene_.output.path));
+    if (energy_) files.push_back(temporary_name(scene_.output.energy));
+    return files;
+  }
+  void set_crash_report(crash::FatalSignalReport* report) { crash_report_ = report; }
 
  private:
   const Scene& scene_;
@@ -309,6 +332,7 @@ class Output {
   fs::path checkpoint_;
   std::optional<AtomicFile> frames_, energy_;
   std::optional<std::pair<OutputMark, OutputMark>> held_;  // marks before an extra frame
+  crash::FatalSignalReport* crash_report_ = nullptr;
 };
 
 // ---------------------------------------------------------------------------
@@ -350,6 +374,7 @@ struct Loop {
     System& sys = *scene.system;
     previous = sys.state();
     t_previous = sys.time();
+    crash::set_step(k);
     double h = 0.0;
     try {
       h = take();
@@ -445,6 +470,7 @@ void run_fixed(Loop& loop, std::int64_t k0) {
         k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
     auto take = [&] {
       const double h = t_end - sys.time();
+      const crash::CallScope call(scene.solver_label, "step");
       scene.solver->step(sys, h);
       sys.set_time(t_end);
       return h;
@@ -495,12 +521,20 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
   // output, before the collision response changes the state at its end.
   auto take = [&] {
     const double t_begin = sys.time();
-    const double h = solver.advance(sys, has_dense ? t_end : frame_time(next_frame), scene.dt);
+    double h = 0.0;
+    {
+      const crash::CallScope call(scene.solver_label, "advance");
+      h = solver.advance(sys, has_dense ? t_end : frame_time(next_frame), scene.dt);
+    }
     const double t_new = t_begin + h;
     if (loop.replaying) return h;
-    if (!has_dense) has_dense = solver.interpolate(t_new, dense);
+    auto interpolate = [&](double t) {
+      const crash::CallScope call(scene.solver_label, "interpolate");
+      return solver.interpolate(t, dense);
+    };
+    if (!has_dense) has_dense = interpolate(t_new);
     for (double tf; (tf = frame_time(next_frame)) < t_new;) {
-      if (!solver.interpolate(tf, dense)) break;
+      if (!interpolate(tf)) break;
       current = sys.state();
       sys.state() = dense;
       sys.set_time(tf);
@@ -547,6 +581,11 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   RunResult result;
   SignalGuard signals(options.handle_signals);
   Output out(scene, options.resume);
+  std::optional<crash::FatalSignalReport> crash_report;
+  if (crash::reporting_enabled()) {
+    crash_report.emplace(scene, out.temp_files());
+    out.set_crash_report(&*crash_report);
+  }
   Progress progress(options.progress ? options.log : nullptr, scene.steps, scene.end_time);
   const std::int64_t k0 = options.resume ? options.resume->step : 0;
   progress.start_at(k0);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "crash_report.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/parallel.hpp"
 #include "registry.hpp"
@@ -94,9 +95,11 @@ namespace {
 
 // Runs one plugin call; an exception from it becomes a PluginRuntimeError
 // naming the plugin object, so the user learns which scene entry failed.
-// The try block costs nothing unless something is thrown.
+// The try block costs nothing unless something is thrown; the call scope
+// (two stores) lets `pdyn run` name the plugin if it crashes instead.
 template <class Call>
 void guarded(const std::string& label, const char* hook, Call&& call) {
+  const crash::CallScope scope(label, hook);
   try {
     call();
   } catch (const PluginRuntimeError&) {
@@ -175,6 +178,7 @@ double System::potential_energy() const {
   const ParticleView p = view();
   double u = 0.0;
   for (const auto& entry : forces_) {
+    const crash::CallScope scope(entry.label, "potential_energy");
     if (auto e = entry.force->potential_energy(p)) u += *e;
   }
   return u;

@@ -36,8 +36,22 @@ struct CheckResult {
   std::string detail;
 };
 
+/// Seconds a check may run, isolated, before it fails as hung: 100 times
+/// what the whole kit takes for the slowest shipped plugin (0.1 s).
+inline constexpr double kDefaultTimeout = 10.0;
+
 struct Options {
   std::uint64_t seed = 1;  ///< seeds the random particle configurations
+  /// Run the checks in a child process (fork), so that a plugin that
+  /// crashes (any fatal signal), aborts, exits or hangs fails the check it
+  /// was in ("crashed with SIGSEGV", "timed out after 10 s") and the other
+  /// checks still run. The report is the same as in-process otherwise.
+  /// `pdyn check` does this. The child runs OpenMP with one thread (GNU
+  /// libgomp cannot start a team in a child forked from a process that had
+  /// one; results do not depend on the thread count).
+  bool isolate = false;
+  /// With `isolate`: seconds a check may run without finishing (> 0).
+  double timeout = kDefaultTimeout;
 };
 
 /// Runs every check for the descriptor's kind. Never throws: a plugin that

@@ -1,0 +1,100 @@
+// Naming the plugin that crashed: the "current plugin call" record that the
+// step loop keeps around every call into a plugin, and the fatal-signal
+// handler of `pdyn run` that reads it.
+//
+// A plugin that dereferences a null pointer kills the process with SIGSEGV;
+// no exception is thrown, so the step loop's own fault handling never sees
+// it. The record costs a few stores per plugin call (no allocation, no
+// lock); the handler, installed only while a run steps, turns the crash
+// into one line:
+//   pdyn: force 'nbody' (scene.yaml:12:5, library /p/pdyn_force_nbody.so)
+//         crashed with SIGSEGV in add_forces at step 12
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace pdyn {
+
+struct Scene;
+
+namespace crash {
+
+/// "SIGSEGV", "SIGABRT", ... for the usual signals; nullptr for others.
+/// Async-signal-safe (returns a string literal).
+const char* signal_name(int sig) noexcept;
+
+/// One plugin call in progress: the label the System holds for the object
+/// (its address identifies the object) and the hook being called.
+struct PluginCall {
+  const std::string* label;
+  const char* hook;  ///< a string literal: "add_forces", "step", ...
+};
+
+/// The calling thread's innermost plugin call, or null.
+extern thread_local const PluginCall* t_current_call;
+
+/// Marks a plugin call for its lifetime. Nested scopes (the forces a
+/// solver's step calls) restore the outer one on exit. Per thread, so two
+/// systems stepped in two threads keep apart; the fatal-signal handler
+/// falls back to the thread that installed it when the crash happens in a
+/// plugin's own worker thread (OpenMP).
+class CallScope {
+ public:
+  CallScope(const std::string& label, const char* hook) noexcept
+      : call_{&label, hook}, previous_(t_current_call) {
+    t_current_call = &call_;
+  }
+  ~CallScope() { t_current_call = previous_; }
+  CallScope(const CallScope&) = delete;
+  CallScope& operator=(const CallScope&) = delete;
+
+ private:
+  PluginCall call_;
+  const PluginCall* previous_;
+};
+
+/// The step the runner is taking, for the crash message (one store).
+void set_step(std::int64_t step) noexcept;
+
+/// While alive, turns the fatal-signal report on for the runs of this
+/// process (run_scene installs a FatalSignalReport while it steps): `pdyn
+/// run` does, for its one run; tests, renderers and servers that run scenes
+/// in-process keep their own signal handling. Process-wide, as signal
+/// dispositions are.
+class ReportCrashes {
+ public:
+  ReportCrashes() noexcept;
+  ~ReportCrashes();
+  ReportCrashes(const ReportCrashes&) = delete;
+  ReportCrashes& operator=(const ReportCrashes&) = delete;
+};
+bool reporting_enabled() noexcept;
+
+/// While alive, SIGSEGV, SIGBUS, SIGFPE, SIGILL and SIGABRT make the
+/// process print one line on stderr naming the plugin call in progress (its
+/// kind, name, scene location, library, hook and the step), remove the
+/// run's temporary output files, and die of the same signal (exit status
+/// 128 + signal). Everything the handler prints is formatted here, before
+/// the run; the handler itself only copies bytes, calls write(2) and
+/// unlink(2). One at a time per process.
+class FatalSignalReport {
+ public:
+  FatalSignalReport(const Scene& scene, const std::vector<std::filesystem::path>& temp_files);
+  ~FatalSignalReport();
+  FatalSignalReport(const FatalSignalReport&) = delete;
+  FatalSignalReport& operator=(const FatalSignalReport&) = delete;
+
+  /// A checkpoint has been written: from now on the temporary output files
+  /// are what `pdyn run --resume CHECKPOINT` continues, so a crash keeps
+  /// them and names them instead of removing them.
+  void keep_temp_files(const std::filesystem::path& checkpoint);
+
+ private:
+  bool installed_ = false;
+};
+
+}  // namespace crash
+}  // namespace pdyn
