@@ -90,6 +90,10 @@ struct PluginDescriptor {
 
 #define PDYN_PLUGIN_EXPORT __attribute__((visibility("default")))
 
+/// The descriptor of the plugin this library exports (defined by PDYN_PLUGIN):
+/// a plugin's own tests pass it to pdyn::conformance::run_checks.
+extern "C" PDYN_PLUGIN_EXPORT const ::pdyn::PluginDescriptor* pdyn_plugin_descriptor();
+
 /// Exports the plugin described by `describe_fn` (a function returning a
 /// pdyn::PluginDescriptor). Use once per plugin library, at namespace scope.
 #define PDYN_PLUGIN(describe_fn)                                                          \
