@@ -44,9 +44,11 @@ import json
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 import yaml
 
@@ -207,6 +209,12 @@ class Checker:
             return
         data = docs[0]
         d = self.block_dir(block)
+        missing = [f for f in side_file_names(data) if not os.path.exists(os.path.join(d, f))]
+        if missing:
+            self.fail(block, f"yaml: names {', '.join(missing)}, which the doc does not show "
+                             f"before it (show it in a block marked <!-- snippet file: "
+                             f"{missing[0]} -->, or mark this one not checked)")
+            return
         scene_path = os.path.join(d, "scene.yaml")
         whole = isinstance(data, dict) and "simulation" in data and "particles" in data
         if whole:
@@ -294,6 +302,8 @@ class Checker:
             json.loads(block.text)
         except json.JSONDecodeError as e:
             self.fail(block, f"json: does not parse: {e.msg}", block.line + e.lineno)
+            return
+        self.note(block, "parses")
 
     # ---- cmake -----------------------------------------------------------------------------
 
@@ -337,7 +347,7 @@ class Checker:
             if not re.search(r"set(_and_check)?\(\s*" + var + r"\b", config + plugin_cmake):
                 self.fail(block, f"cmake: ${{{var}}} is not set by find_package(pdyn)")
         if "find_package(pdyn" not in text or not self.args.sdk_prefix:
-            return
+            return self.note(block, "calls only commands that exist")
         # For real: configure and build it against the installed SDK, with the
         # source files the doc shows.
         d = self.block_dir(block)
@@ -349,6 +359,7 @@ class Checker:
         with open(os.path.join(d, "CMakeLists.txt"), "w") as f:
             f.write(block.text)
         build = os.path.join(d, "build")
+        started = time.monotonic()
         for what, cmd in [
                 ("configure", [self.args.cmake, "-S", d, "-B", build, "-G", self.args.generator,
                                f"-DCMAKE_CXX_COMPILER={self.args.cxx}",
@@ -362,6 +373,8 @@ class Checker:
                 self.fail(block, f"cmake: {what} against {self.args.sdk_prefix} failed: "
                                  f"{(errors or [first_line(out)])[0].strip()}")
                 return
+        self.note(block, f"configured and built against {self.args.sdk_prefix} with "
+                         f"{', '.join(sources)} in {time.monotonic() - started:.0f} s")
 
     # ---- sh --------------------------------------------------------------------------------
 
@@ -468,7 +481,9 @@ class Checker:
         for o, v in opts:
             if o == "--plugin-path" and not os.path.isdir(os.path.join(self.src, v or "")):
                 return                               # a user's plugin: syntax only
-        cwd = self.block_dir(block)
+        # Its own folder: two `pdyn new` of one block must not collide.
+        cwd = os.path.join(self.block_dir(block), f"line{line}")
+        os.makedirs(cwd, exist_ok=True)
         argv = list(path)
         if path in {("validate",), ("run",)}:
             # A run is validated, with its overrides: --set paths drift too.
@@ -542,6 +557,16 @@ def first_line(text):
 def error_line(message, path):
     m = re.match(re.escape(path) + r":(\d+):", message)
     return int(m.group(1)) if m else 0
+
+
+def side_file_names(data):
+    """The `file:` values of a scene or fragment (particles, pairs from CSV files)."""
+    if isinstance(data, dict):
+        names = [data["file"]] if isinstance(data.get("file"), str) else []
+        return names + [n for v in data.values() for n in side_file_names(v)]
+    if isinstance(data, list):
+        return [n for v in data for n in side_file_names(v)]
+    return []
 
 
 def simple_commands(tokens):
@@ -632,7 +657,10 @@ def main():
     p.add_argument("docs", nargs="*")
     args = p.parse_args()
     checker = Checker(args)
-    ok = checker.run(args.docs or shipped_docs(os.path.abspath(args.source_dir)))
+    try:
+        ok = checker.run(args.docs or shipped_docs(os.path.abspath(args.source_dir)))
+    finally:
+        shutil.rmtree(checker.tmp, ignore_errors=True)
     if args.expect_failed_lines is not None:
         expected = {int(n) for n in args.expect_failed_lines.split(",")}
         got = {line for _, line in checker.failed_blocks}
