@@ -65,10 +65,8 @@ struct SolverTraits {
   bool symplectic = false;  ///< preserves phase-space volume
 };
 
-using ForceFactory =
-    std::function<std::unique_ptr<Force>(const Params&, const SceneContext&)>;
-using SolverFactory =
-    std::function<std::unique_ptr<Solver>(const Params&, const SceneContext&)>;
+using ForceFactory = std::function<std::unique_ptr<Force>(const Params&, const SceneContext&)>;
+using SolverFactory = std::function<std::unique_ptr<Solver>(const Params&, const SceneContext&)>;
 using ColliderFactory =
     std::function<std::unique_ptr<Collider>(const Params&, const SceneContext&)>;
 
@@ -96,11 +94,11 @@ extern "C" PDYN_PLUGIN_EXPORT const ::pdyn::PluginDescriptor* pdyn_plugin_descri
 
 /// Exports the plugin described by `describe_fn` (a function returning a
 /// pdyn::PluginDescriptor). Use once per plugin library, at namespace scope.
-#define PDYN_PLUGIN(describe_fn)                                                          \
-  extern "C" PDYN_PLUGIN_EXPORT std::uint32_t pdyn_plugin_abi_version() noexcept {       \
-    return PDYN_ABI_VERSION;                                                              \
-  }                                                                                       \
+#define PDYN_PLUGIN(describe_fn)                                                           \
+  extern "C" PDYN_PLUGIN_EXPORT std::uint32_t pdyn_plugin_abi_version() noexcept {         \
+    return PDYN_ABI_VERSION;                                                               \
+  }                                                                                        \
   extern "C" PDYN_PLUGIN_EXPORT const ::pdyn::PluginDescriptor* pdyn_plugin_descriptor() { \
-    static const ::pdyn::PluginDescriptor descriptor = describe_fn();                     \
-    return &descriptor;                                                                   \
+    static const ::pdyn::PluginDescriptor descriptor = describe_fn();                      \
+    return &descriptor;                                                                    \
   }
