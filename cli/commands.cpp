@@ -314,7 +314,8 @@ int cmd_describe(const Common& c, const std::string& name, std::ostream& out, st
   }
   std::array<std::size_t, 5> width{};
   for (const auto& row : rows) {
-    for (std::size_t c = 0; c < width.size(); ++c) width[c] = std::max(width[c], row[c].size());
+    for (std::size_t col = 0; col < width.size(); ++col)
+      width[col] = std::max(width[col], row[col].size());
   }
   out << "\n";
   for (const auto& row : rows) {

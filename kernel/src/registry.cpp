@@ -218,7 +218,7 @@ bool PluginRegistry::admit(const PluginDescriptor& d, const fs::path& file, cons
           fmt::format("plugin '{}' is already provided by {}", d.name, other->library.string()));
     return false;
   }
-  plugins_.push_back({&d, file, std::move(handle)});
+  plugins_.push_back({&d, file, std::move(handle), std::nullopt});
   return true;
 }
 
