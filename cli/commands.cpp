@@ -342,6 +342,20 @@ void add_scene_options(CLI::App* sub, std::vector<std::string>& sets,
       ->allow_extra_args(false);
 }
 
+// A lower bound, printed as "at least 0". CLI11's NonNegativeNumber checks
+// the range [0, DBL_MAX] and prints the upper bound in full: 309 digits.
+// Text that is not a number is left to the option's own conversion.
+CLI::Validator at_least(double min) {
+  return CLI::Validator(
+      [min](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || x >= min) return {};
+        return fmt::format("{} is out of range (expected at least {})", text, min);
+      },
+      fmt::format(">= {}", min));
+}
+
 int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                 bool terminal) {
   CLI::App app{"pdyn: plugin-based particle dynamics (Witkin's particle systems)", "pdyn"};
@@ -360,9 +374,9 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   CLI::App* run = app.add_subcommand("run", "run a scene");
   scene_options(run);
   auto* steps = run->add_option("--steps", run_args.steps, "number of steps (replaces the scene's)")
-                    ->check(CLI::NonNegativeNumber);
+                    ->check(at_least(0));
   run->add_option("--duration", run_args.duration, "simulated time in s (replaces the scene's)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(at_least(0))
       ->excludes(steps);
   run->add_option("--threads", run_args.threads,
                   "threads for forces and solvers (default: simulation.threads, else all "
