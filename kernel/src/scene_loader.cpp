@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -320,8 +321,31 @@ std::string Loader::where(const YAML::Node& at, const std::string& path) const {
   return file_;
 }
 
+// bash expands an unquoted `~` after `=` in a word such as `output=~`, so
+// `--set output=~` arrives as `output=/home/NAME`. A value that is the home
+// folder, or a path inside it, refused by a key is most likely that.
+bool looks_like_home(const std::string& value) {
+  const char* env = std::getenv("HOME");
+  const std::string home = env ? env : "";
+  if (home.empty() || home == "/") return false;
+  return value == home || value.rfind(home + "/", 0) == 0;
+}
+
 void Loader::error(const YAML::Node& at, const std::string& path, std::string message) {
-  diags_.push_back({where(at, path), std::move(message)});
+  std::string loc = where(at, path);
+  for (const auto& ov : overrides_) {
+    if (loc != fmt::format("--set {}={}", ov.path, ov.value) || !looks_like_home(ov.value)) {
+      continue;
+    }
+    constexpr const char* hint = "did you mean null? the shell expands ~ to your home folder";
+    if (const auto open = message.rfind(" ("); open != std::string::npos && message.back() == ')') {
+      message.insert(open + 2, std::string(hint) + "; ");
+    } else {
+      message += fmt::format(" ({})", hint);
+    }
+    break;
+  }
+  diags_.push_back({std::move(loc), std::move(message)});
 }
 
 void Loader::fail() { throw SceneError(diags_); }
