@@ -107,11 +107,12 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
   try {
     Scene scene = load(a, c, registry);
     if (!c.quiet) {
-      out << fmt::format("{}: ok: {} particles, {} force objects, {} colliders, solver {}, "
-                         "{} steps of {} s\n",
-                         a.scene, scene.system->size(), scene.system->force_objects().size(),
-                         scene.system->collider_objects().size(), scene.solver_name, scene.steps,
-                         scene.dt);
+      out << fmt::format(
+          "{}: ok: {}, {}, {}, solver {}, {} of {} s\n", a.scene,
+          count_of(scene.system->size(), "particle"),
+          count_of(static_cast<long long>(scene.system->force_objects().size()), "force object"),
+          count_of(static_cast<long long>(scene.system->collider_objects().size()), "collider"),
+          scene.solver_name, count_of(scene.steps, "step"), scene.dt);
     }
     return kOk;
   } catch (...) {
@@ -160,11 +161,18 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
         return kNonFinite;
     }
     if (!c.quiet) {
-      out << fmt::format("pdyn: {} steps of {} particles with {} to t = {} s in {:.3g} s{}\n",
-                         r.steps_done, scene.system->size(), scene.solver_name, r.time, wall,
+      // A resumed run took only the steps after its checkpoint's.
+      const std::int64_t first = checkpoint ? checkpoint->step : 0;
+      const std::string steps =
+          checkpoint ? fmt::format("{} (resumed at step {}; {} in all)",
+                                   count_of(r.steps_done - first, "step"), first, r.steps_done)
+                     : count_of(r.steps_done, "step");
+      out << fmt::format("pdyn: {} of {} with {} to t = {} s in {:.3g} s{}\n", steps,
+                         count_of(scene.system->size(), "particle"), scene.solver_name, r.time,
+                         wall,
                          scene.solver->adaptive()
-                             ? fmt::format(" ({} steps accepted, {} rejected)", r.counts.accepted,
-                                           r.counts.rejected)
+                             ? fmt::format(" ({} accepted, {} rejected)",
+                                           count_of(r.counts.accepted, "step"), r.counts.rejected)
                              : "");
       if (!scene.output.path.empty()) {
         out << fmt::format("pdyn: frames written to {}\n", fs::absolute(scene.output.path).string());
@@ -172,6 +180,9 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
       if (!scene.output.energy.empty()) {
         out << fmt::format("pdyn: energy written to {}\n",
                            fs::absolute(scene.output.energy).string());
+      }
+      if (!r.checkpoint.empty()) {
+        out << fmt::format("pdyn: checkpoint written to {}\n", fs::absolute(r.checkpoint).string());
       }
     }
     return kOk;

@@ -454,9 +454,8 @@ std::optional<Index> Loader::read_index(const YAML::Node& n, const std::string& 
   }
   if (n_particles >= 0 && (i < 0 || i >= n_particles)) {
     error(n, path,
-          fmt::format("{}: particle index {} is out of range (expected 0..{}: the scene has {} "
-                      "particles)",
-                      path, i, n_particles - 1, n_particles));
+          fmt::format("{}: particle index {} is out of range (expected 0..{}: the scene has {})",
+                      path, i, n_particles - 1, count_of(n_particles, "particle")));
     return std::nullopt;
   }
   return static_cast<Index>(i);
@@ -562,6 +561,10 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     case ParamType::Boolean: {
       bool b = false;
       if (n.IsScalar() && YAML::convert<bool>::decode(n, b)) return ParamValue(b);
+      // 0 and 1 too, as a CSV side file's `fixed` column takes them.
+      if (n.IsScalar() && (n.Scalar() == "0" || n.Scalar() == "1")) {
+        return ParamValue(n.Scalar() == "1");
+      }
       error(n, path,
             fmt::format("{}: '{}' is not true or false (expected {})", path, shown(n),
                         expectation(spec)));
@@ -576,6 +579,12 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
       return std::nullopt;
     case ParamType::RealList:
       element.type = ParamType::Real;
+      // A single number is the one-element list: `rest: 0.1` is `rest: [0.1]`,
+      // "one for all" as the plugins that take such lists describe it.
+      if (n.IsScalar()) {
+        if (auto x = read_number(n, path, element)) return ParamValue(std::vector<double>{*x});
+        return std::nullopt;
+      }
       return list_of([&](const YAML::Node& e, const std::string& p) {
         return read_number(e, p, element);
       });

@@ -248,8 +248,8 @@ class Field final : public pdyn::Force {
       }
     };
     if (force.size() != 3) {
-      throw ParamError("force", fmt::format("has {} expressions (expected 3: [fx, fy, fz], in N)",
-                                            force.size()));
+      throw ParamError("force", fmt::format("has {} expression{} (expected 3: [fx, fy, fz], in N)",
+                                            force.size(), force.size() == 1 ? "" : "s"));
     }
     for (int c = 0; c < 3; ++c) compile(component_[c], force[c], "force", c);
     if (potential) {
