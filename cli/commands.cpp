@@ -57,6 +57,7 @@ struct RunArgs {
   std::optional<double> duration;
   std::string resume;    // checkpoint to continue from
   bool force = false;    // resume even if the scene changed
+  bool strict = false;   // an energy that grows without a driving force: exit 4
   int threads = 0;       // --threads; 0: the scene's simulation.threads, else all cores
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
@@ -131,6 +132,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     options.log = &err;
     options.handle_signals = true;
     options.threads = a.threads;
+    options.strict = a.strict;
     std::optional<Checkpoint> checkpoint;
     if (!a.resume.empty()) {
       checkpoint = read_checkpoint(a.resume);
@@ -143,6 +145,8 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     }
     const auto start = std::chrono::steady_clock::now();
     const RunResult r = run_scene(scene, options);
+    // Printed even with --quiet: the run's result is probably wrong.
+    if (!r.energy_warning.empty()) err << "pdyn: warning: " << r.energy_warning << "\n";
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     switch (r.exit_code) {
@@ -184,6 +188,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
       if (!r.checkpoint.empty()) {
         out << fmt::format("pdyn: checkpoint written to {}\n", fs::absolute(r.checkpoint).string());
       }
+      if (!r.energy_warning.empty()) out << "pdyn: warning: " << r.energy_warning << "\n";
     }
     return kOk;
   } catch (...) {
@@ -397,6 +402,9 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
                   "continue from a checkpoint written by an earlier run of this scene");
   run->add_flag("--force", run_args.force,
                 "with --resume: continue even if the scene changed (says what differs)");
+  run->add_flag("--strict", run_args.strict,
+                "stop with exit status 4 when the total energy grows more than a millionfold "
+                "with no force driving it (default: a warning)");
 
   CLI::App* validate = app.add_subcommand("validate", "check a scene without simulating");
   scene_options(validate);

@@ -1332,6 +1332,7 @@ Scene Loader::load(const std::string& text) {
       if (!f) continue;
       scene.system->add_force(std::move(f), label(p));
       scene.libraries[label(p)] = p.record->library;
+      scene.force_traits[label(p)] = p.record->descriptor->force_traits;
       keep(p, PluginKind::Force);
     }
   }
