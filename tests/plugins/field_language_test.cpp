@@ -113,8 +113,13 @@ TEST(FieldExpressionLanguage, EveryFunctionOfTheParserIsDocumented) {
   ASSERT_GE(known.size(), 20u) << message;
   std::set<std::string> documented;
   for (const auto& r : documented_rows()) {
+    // A call: a name, then '('.
     const auto paren = r.expr.find('(');
     if (r.value == "refused" || paren == std::string::npos || paren == 0) continue;
+    const std::string name = r.expr.substr(0, paren);
+    if (name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos) {
+      continue;
+    }
     documented.insert(r.expr.substr(0, paren));
   }
   EXPECT_EQ(documented, known);

@@ -58,7 +58,8 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 }
 
 // "did you mean 'sin' or 'sinh'? ": the known names nearest to `word`, if
-// close enough to be a typo (one edit per three letters, at least two).
+// close enough to be a typo (one edit per three letters, at least two, and
+// fewer than the word's letters).
 std::string suggestion(const std::string& word, const std::vector<std::string>& known) {
   const std::size_t limit = std::max<std::size_t>(2, word.size() / 3);
   std::size_t best = limit + 1;
@@ -71,7 +72,8 @@ std::string suggestion(const std::string& word, const std::vector<std::string>& 
     }
     if (d == best) nearest.push_back(k);
   }
-  if (nearest.empty()) return "";
+  // A name as short as its distance (q for x) is no typo of it.
+  if (nearest.empty() || best >= word.size()) return "";
   std::string s = "did you mean ";
   for (std::size_t i = 0; i < nearest.size(); ++i) {
     s += fmt::format("{}'{}'", i == 0 ? "" : i + 1 == nearest.size() ? " or " : ", ", nearest[i]);
@@ -132,7 +134,9 @@ std::string explain(const mu::ParserError& e, const std::string& expr, const std
           expected = "one of " + names;
         }
       } else {
-        what = fmt::format("unexpected '{}'", tok);
+        // muParser's token is the rest of the expression ("% 2 "): name
+        // its first character, where the position points.
+        what = fmt::format("unexpected '{}'", tok.empty() ? tok : tok.substr(0, 1));
       }
       break;
     case mu::ecUNEXPECTED_EOF:
