@@ -44,8 +44,8 @@ PluginRegistry discover(const Common& c) {
 
 void warn_faults(const PluginRegistry& registry, std::ostream& err) {
   for (const auto& f : registry.faults()) {
-    err << fmt::format("pdyn: warning: {}: plugin '{}' skipped: {}\n", f.library.string(),
-                       f.plugin, f.message);
+    err << fmt::format("pdyn: warning: {}: plugin '{}' skipped: {}\n", f.library.string(), f.plugin,
+                       f.message);
   }
 }
 
@@ -55,10 +55,10 @@ struct RunArgs {
   std::string scene;
   std::optional<std::int64_t> steps;
   std::optional<double> duration;
-  std::string resume;    // checkpoint to continue from
-  bool force = false;    // resume even if the scene changed
-  bool strict = false;   // an energy that grows without a driving force: exit 4
-  int threads = 0;       // --threads; 0: the scene's simulation.threads, else all cores
+  std::string resume;             // checkpoint to continue from
+  bool force = false;             // resume even if the scene changed
+  bool strict = false;            // an energy that grows without a driving force: exit 4
+  int threads = 0;                // --threads; 0: the scene's simulation.threads, else all cores
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
 
@@ -100,7 +100,6 @@ Scene load(const RunArgs& a, const Common& c, const PluginRegistry& registry) {
   }
   return load_scene(a.scene, registry, overrides);
 }
-
 
 int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err) {
   const PluginRegistry registry = discover(c);
@@ -179,7 +178,8 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
                                            count_of(r.counts.accepted, "step"), r.counts.rejected)
                              : "");
       if (!scene.output.path.empty()) {
-        out << fmt::format("pdyn: frames written to {}\n", fs::absolute(scene.output.path).string());
+        out << fmt::format("pdyn: frames written to {}\n",
+                           fs::absolute(scene.output.path).string());
       }
       if (!scene.output.energy.empty()) {
         out << fmt::format("pdyn: energy written to {}\n",
@@ -208,8 +208,10 @@ std::string range_text(const ParamSpec& s) {
 
 nlohmann::json to_json(const PluginRecord& r) {
   const PluginDescriptor& d = *r.descriptor;
-  nlohmann::json j{{"kind", kind_name(d.kind)}, {"name", d.name},
-                   {"version", d.version},      {"description", d.description},
+  nlohmann::json j{{"kind", kind_name(d.kind)},
+                   {"name", d.name},
+                   {"version", d.version},
+                   {"description", d.description},
                    {"library", r.library.string()}};
   if (d.kind == PluginKind::Solver) {
     j["order"] = d.solver_traits.order;
@@ -221,8 +223,11 @@ nlohmann::json to_json(const PluginRecord& r) {
   }
   auto params = nlohmann::json::array();
   for (const auto& p : d.params) {
-    nlohmann::json pj{{"name", p.name}, {"type", type_name(p.type)}, {"unit", p.unit},
-                      {"doc", p.doc},   {"required", p.required}};
+    nlohmann::json pj{{"name", p.name},
+                      {"type", type_name(p.type)},
+                      {"unit", p.unit},
+                      {"doc", p.doc},
+                      {"required", p.required}};
     if (p.fallback) pj["default"] = format_value(*p.fallback);
     if (p.min) pj[p.min_exclusive ? "exclusive_minimum" : "minimum"] = *p.min;
     if (p.max) pj["maximum"] = *p.max;
@@ -314,8 +319,8 @@ int cmd_describe(const Common& c, const std::string& name, std::ostream& out, st
   out << fmt::format("\n  {:<12} {:<14} {:<18} {:<10} {:<12} {}\n", "KEY", "TYPE", "DEFAULT",
                      "UNIT", "RANGE", "MEANING");
   for (const auto& p : d.params) {
-    const std::string def = p.fallback ? format_value(*p.fallback)
-                                       : (p.required ? "(required)" : "(optional)");
+    const std::string def =
+        p.fallback ? format_value(*p.fallback) : (p.required ? "(required)" : "(optional)");
     out << fmt::format("  {:<12} {:<14} {:<18} {:<10} {:<12} {}\n", p.name, type_name(p.type), def,
                        p.unit.empty() ? "-" : p.unit, range_text(p), p.doc);
   }

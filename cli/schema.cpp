@@ -123,7 +123,9 @@ Json param_schema(const ParamSpec& s, bool indices_checked) {
     case ParamType::IndexTriples:
       j = {{"type", "array"}, {"items", tuples(3, indices_checked)}};
       break;
-    case ParamType::StringList: j = {{"type", "array"}, {"items", {{"type", "string"}}}}; break;
+    case ParamType::StringList:
+      j = {{"type", "array"}, {"items", {{"type", "string"}}}};
+      break;
     case ParamType::NamedReals:
       // Names are identifiers (the loader's rule), each mapped to a number.
       j = {{"type", "object"},

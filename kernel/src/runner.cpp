@@ -3,7 +3,6 @@
 #include "runner.hpp"
 
 #include <fmt/format.h>
-#include <pdyn/parallel.hpp>
 #include <unistd.h>
 
 #include <atomic>
@@ -12,6 +11,7 @@
 #include <csignal>
 #include <cstring>
 #include <ostream>
+#include <pdyn/parallel.hpp>
 #include <tuple>
 
 namespace pdyn {
@@ -55,8 +55,8 @@ AtomicFile::AtomicFile(fs::path path, const OutputMark* resume) : path_(std::mov
   temp_ += fmt::format(".tmp-{}", ::getpid());
   file_ = std::fopen(temp_.c_str(), "wb");
   if (!file_) {
-    throw Error(fmt::format("{}: cannot create output file ({})", path_.string(),
-                            std::strerror(errno)));
+    throw Error(
+        fmt::format("{}: cannot create output file ({})", path_.string(), std::strerror(errno)));
   }
   if (!resume) return;
   try {
@@ -108,8 +108,8 @@ AtomicFile::~AtomicFile() {
 
 void AtomicFile::write(const char* data, std::size_t n) {
   if (std::fwrite(data, 1, n, file_) != n) {
-    throw Error(fmt::format("{}: cannot write output file ({})", path_.string(),
-                            std::strerror(errno)));
+    throw Error(
+        fmt::format("{}: cannot write output file ({})", path_.string(), std::strerror(errno)));
   }
   crc_.process_bytes(data, n);
   bytes_ += n;
@@ -171,7 +171,8 @@ class SignalGuard {
 
  private:
   bool active_;
-  struct sigaction old_int_ {}, old_term_ {};
+  struct sigaction old_int_ {
+  }, old_term_{};
 };
 
 // ---------------------------------------------------------------------------
@@ -227,10 +228,11 @@ class Progress {
     const double eta = frac > 0 ? elapsed * (1 - frac) / frac : 0.0;
     constexpr int kWidth = 30;
     const int filled = static_cast<int>(frac * kWidth);
-    *out_ << fmt::format("\r[{:<{}}] {:>3.0f}%  step {}/{}  t = {:.4g}/{:.4g} s  {:.0f} steps/s  "
-                         "ETA {:.1f} s ",
-                         std::string(static_cast<std::size_t>(filled), '#'), kWidth, 100 * frac,
-                         step, total_, t, end_time_, rate, eta)
+    *out_ << fmt::format(
+                 "\r[{:<{}}] {:>3.0f}%  step {}/{}  t = {:.4g}/{:.4g} s  {:.0f} steps/s  "
+                 "ETA {:.1f} s ",
+                 std::string(static_cast<std::size_t>(filled), '#'), kWidth, 100 * frac, step,
+                 total_, t, end_time_, rate, eta)
           << std::flush;
   }
   void start_at(std::int64_t step) { first_ = step; }
@@ -270,8 +272,9 @@ class Output {
   // taken after it records the output without it, so that a resumed run
   // continues the files exactly as an uninterrupted run would have.
   void emit_extra() {
-    if (!held_) held_.emplace(frames_ ? frames_->mark() : OutputMark{},
-                              energy_ ? energy_->mark() : OutputMark{});
+    if (!held_)
+      held_.emplace(frames_ ? frames_->mark() : OutputMark{},
+                    energy_ ? energy_->mark() : OutputMark{});
     emit();
   }
   fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame, bool has_dense) {
@@ -420,7 +423,7 @@ struct Loop {
   RunResult& result;
   Eigen::VectorXd previous;  // the state before the current step
   double t_previous = 0.0;
-  bool last_written = true;  // the current state's frame has been written
+  bool last_written = true;     // the current state's frame has been written
   std::int64_t next_frame = 1;  // adaptive runs: index m of the next frame, due at m every dt
   // Adaptive runs: a step has shown that the solver interpolates (dense
   // output). Until then each step stops on the next frame time. Carried by
@@ -550,8 +553,7 @@ void run_fixed(Loop& loop, std::int64_t k0) {
   const std::int64_t n_steps = scene.steps, every = scene.output.every;
   const std::int64_t ckpt_every = scene.output.checkpoint_every;
   for (std::int64_t k = k0 + 1; k <= n_steps; ++k) {
-    const double t_end =
-        k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
+    const double t_end = k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
     auto take = [&] {
       const double h = t_end - sys.time();
       scene.solver->step(sys, h);
@@ -652,9 +654,9 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
 
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
-  set_threads(options.threads > 0     ? options.threads
-              : scene.threads > 0     ? scene.threads
-                                      : available_threads());
+  set_threads(options.threads > 0 ? options.threads
+              : scene.threads > 0 ? scene.threads
+                                  : available_threads());
   RunResult result;
   SignalGuard signals(options.handle_signals);
   Output out(scene, options.resume);

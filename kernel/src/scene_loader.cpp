@@ -41,8 +41,9 @@ SceneError::SceneError(std::vector<Diagnostic> diagnostics)
 Override parse_override(const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
-    throw SceneError({{"--set " + text, "an override needs a key path and a value "
-                                        "(expected KEY.PATH=VALUE, e.g. simulation.dt=0.001)"}});
+    throw SceneError({{"--set " + text,
+                       "an override needs a key path and a value "
+                       "(expected KEY.PATH=VALUE, e.g. simulation.dt=0.001)"}});
   }
   return {text.substr(0, eq), text.substr(eq + 1)};
 }
@@ -115,8 +116,12 @@ std::vector<BuilderSpec> builder_specs() {
       {"grid",
        "a rectangular sheet of nx x ny particles, optionally joined by springs",
        grid_specs(),
-       {{"springs", "Provot's spring families of the `spring` plugin", "spring", "pairs",
-         {"structural", "shear", "bend"}, {}}}}};
+       {{"springs",
+         "Provot's spring families of the `spring` plugin",
+         "spring",
+         "pairs",
+         {"structural", "shear", "bend"},
+         {}}}}};
   for (auto& b : more_builder_specs()) all.push_back(std::move(b));
   return all;
 }
@@ -271,8 +276,7 @@ class Loader final : public BuilderHost {
   std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
                                     const char* expected);
   void read_particle_file(const YAML::Node& item, const std::string& path);
-  const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path,
-                                  PluginKind kind);
+  const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path, PluginKind kind);
   void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
                         std::vector<PendingPlugin>& out);
   std::optional<Params> read_plugin_params(const YAML::Node& item, const std::string& path,
@@ -394,11 +398,11 @@ void Loader::check_keys(const YAML::Node& map, const std::string& path,
     }
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
     const std::string guess = closest_match(key, allowed);
-    error(kv.first, key_path,
-          fmt::format("unknown key '{}' in {} ({}expected one of: {})", key,
-                      path.empty() ? "the scene" : path,
-                      guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess),
-                      join(allowed)));
+    error(
+        kv.first, key_path,
+        fmt::format("unknown key '{}' in {} ({}expected one of: {})", key,
+                    path.empty() ? "the scene" : path,
+                    guess.empty() ? "" : fmt::format("did you mean '{}'? ", guess), join(allowed)));
   }
 }
 
@@ -411,15 +415,15 @@ std::optional<double> Loader::read_number(const YAML::Node& n, const std::string
     return std::nullopt;
   }
   if (!std::isfinite(x)) {
-    error(n, path, fmt::format("{}: {} is not finite (expected {})", path, n.Scalar(),
-                               expectation(spec)));
+    error(n, path,
+          fmt::format("{}: {} is not finite (expected {})", path, n.Scalar(), expectation(spec)));
     return std::nullopt;
   }
   const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
   const bool above = spec.max && x > *spec.max;
   if (below || above) {
-    error(n, path, fmt::format("{}: {} is out of range (expected {})", path, n.Scalar(),
-                               expectation(spec)));
+    error(n, path,
+          fmt::format("{}: {} is out of range (expected {})", path, n.Scalar(), expectation(spec)));
     return std::nullopt;
   }
   return x;
@@ -436,8 +440,7 @@ std::optional<std::int64_t> Loader::read_integer(const YAML::Node& n, const std:
   }
   const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
   if (below || (spec.max && x > *spec.max)) {
-    error(n, path, fmt::format("{}: {} is out of range (expected {})", path, x,
-                               expectation(spec)));
+    error(n, path, fmt::format("{}: {} is out of range (expected {})", path, x, expectation(spec)));
     return std::nullopt;
   }
   return static_cast<std::int64_t>(x);
@@ -495,14 +498,15 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML:
   const char* expected = K == 2 ? "a list of particle index pairs [[i, j], ...]"
                                 : "a list of particle index triples [[i, j, k], ...]";
   if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file
-    const auto file = side_file(n, path, K == 2 ? "{ file: pairs.csv } with header i,j"
-                                                : "{ file: triples.csv } with header i,j,k");
+    const auto file = side_file(
+        n, path,
+        K == 2 ? "{ file: pairs.csv } with header i,j" : "{ file: triples.csv } with header i,j,k");
     if (!file) return std::nullopt;
     return side_files::read_tuples<K>(*file, file->string(), n_particles, diags_);
   }
   if (!n.IsSequence()) {
-    error(n, path, fmt::format("{}: is not a list (expected {} or {{ file: NAME.csv }})", path,
-                               expected));
+    error(n, path,
+          fmt::format("{}: is not a list (expected {} or {{ file: NAME.csv }})", path, expected));
     return std::nullopt;
   }
   std::vector<std::array<Index, K>> out;
@@ -544,8 +548,10 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     bool ok = true;
     for (std::size_t e = 0; e < n.size(); ++e) {
       auto x = read_one(n[e], fmt::format("{}[{}]", path, e));
-      if (x) out.push_back(*x);
-      else ok = false;
+      if (x)
+        out.push_back(*x);
+      else
+        ok = false;
     }
     if (!ok) return std::nullopt;
     return ParamValue(std::move(out));
@@ -585,18 +591,15 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
         if (auto x = read_number(n, path, element)) return ParamValue(std::vector<double>{*x});
         return std::nullopt;
       }
-      return list_of([&](const YAML::Node& e, const std::string& p) {
-        return read_number(e, p, element);
-      });
+      return list_of(
+          [&](const YAML::Node& e, const std::string& p) { return read_number(e, p, element); });
     case ParamType::VectorList:
       element.type = ParamType::Vector;
-      return list_of([&](const YAML::Node& e, const std::string& p) {
-        return read_vec3(e, p, element);
-      });
+      return list_of(
+          [&](const YAML::Node& e, const std::string& p) { return read_vec3(e, p, element); });
     case ParamType::IndexList:
-      return list_of([&](const YAML::Node& e, const std::string& p) {
-        return read_index(e, p, n_particles);
-      });
+      return list_of(
+          [&](const YAML::Node& e, const std::string& p) { return read_index(e, p, n_particles); });
     case ParamType::IndexPairs:
       if (auto t = read_tuples<2>(n, path, n_particles)) return ParamValue(std::move(*t));
       return std::nullopt;
@@ -630,10 +633,10 @@ std::optional<ParamValue> Loader::read_named_reals(const YAML::Node& n, const st
   for (const auto& kv : n) {
     const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "";
     const std::string kp = fmt::format("{}.{}", path, key);
-    const bool identifier =
-        !key.empty() && !std::isdigit(static_cast<unsigned char>(key[0])) &&
-        std::all_of(key.begin(), key.end(),
-                    [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    const bool identifier = !key.empty() && !std::isdigit(static_cast<unsigned char>(key[0])) &&
+                            std::all_of(key.begin(), key.end(), [](char c) {
+                              return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+                            });
     if (!identifier) {
       error(kv.first, kp,
             fmt::format("{}: '{}' is not a name (expected letters, digits and '_', not starting "
@@ -733,7 +736,8 @@ void Loader::apply_overrides(YAML::Node& root) {
     try {
       value = YAML::Load(ov.value);
     } catch (const YAML::Exception& e) {
-      bad(fmt::format("the value is not valid YAML: {} (expected a YAML value, e.g. 0.5 or "
+      bad(
+          fmt::format("the value is not valid YAML: {} (expected a YAML value, e.g. 0.5 or "
                       "[0, 0, -9.81])",
                       e.msg));
       continue;
@@ -747,10 +751,11 @@ void Loader::apply_overrides(YAML::Node& root) {
       if (st.index >= 0) {
         const std::string here = walked.empty() ? "the scene" : walked;
         if (!cur.IsSequence()) {
-          bad(fmt::format("{} is {}, so it has no element [{}] (expected a key path into "
-                          "the scene's existing lists)",
-                          here, cur.IsDefined() && !cur.IsNull() ? "not a list" : "not in the scene",
-                          st.index));
+          bad(fmt::format(
+              "{} is {}, so it has no element [{}] (expected a key path into "
+              "the scene's existing lists)",
+              here, cur.IsDefined() && !cur.IsNull() ? "not a list" : "not in the scene",
+              st.index));
           ok = false;
           break;
         }
@@ -769,7 +774,8 @@ void Loader::apply_overrides(YAML::Node& root) {
         }
       } else {
         if (!(cur.IsMap() || cur.IsNull())) {
-          bad(fmt::format("{} is not a mapping, so it has no key '{}' (expected a key path "
+          bad(
+              fmt::format("{} is not a mapping, so it has no key '{}' (expected a key path "
                           "that follows the scene's mappings)",
                           walked, st.key));
           ok = false;
@@ -849,8 +855,9 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
 
 void Loader::read_particles(const YAML::Node& n) {
   if (!n.IsDefined()) {
-    error(root_, "", "missing section 'particles' (expected a list of particles or builders, "
-                     "e.g. - { position: [0, 0, 1], mass: 1 })");
+    error(root_, "",
+          "missing section 'particles' (expected a list of particles or builders, "
+          "e.g. - { position: [0, 0, 1], mass: 1 })");
     particles_ok_ = false;
     return;
   }
@@ -876,9 +883,10 @@ void Loader::read_particles(const YAML::Node& n) {
                                       [&](const std::string& b) { return item[b].IsDefined(); });
     if (builder != builders.end()) {
       if (item.size() != 1) {
-        error(item, path, fmt::format("{}: a builder entry holds only its builder (expected "
-                                      "{{ {}: {{ ... }} }})",
-                                      path, *builder));
+        error(item, path,
+              fmt::format("{}: a builder entry holds only its builder (expected "
+                          "{{ {}: {{ ... }} }})",
+                          path, *builder));
         continue;
       }
       read_builder(*this, *builder, item[*builder], path + "." + *builder);
@@ -886,9 +894,10 @@ void Loader::read_particles(const YAML::Node& n) {
     }
     if (item["grid"].IsDefined()) {
       if (item.size() != 1) {
-        error(item, path, fmt::format("{}: a builder entry holds only its builder (expected "
-                                      "{{ grid: {{ ... }} }})",
-                                      path));
+        error(item, path,
+              fmt::format("{}: a builder entry holds only its builder (expected "
+                          "{{ grid: {{ ... }} }})",
+                          path));
         continue;
       }
       read_grid(item["grid"], path + ".grid");
@@ -903,8 +912,9 @@ void Loader::read_particles(const YAML::Node& n) {
   }
   if (diags_.size() != before) particles_ok_ = false;
   if (particles_ok_ && x_.empty()) {
-    error(n, "particles", "particles: the scene has no particles (expected at least one "
-                          "particle or builder)");
+    error(n, "particles",
+          "particles: the scene has no particles (expected at least one "
+          "particle or builder)");
     particles_ok_ = false;
   }
 }
@@ -929,9 +939,10 @@ void Loader::read_particle_file(const YAML::Node& item, const std::string& path)
   auto rows = side_files::read_particles(*file, file->string(), diags_);
   if (!rows) return;
   if (static_cast<std::int64_t>(x_.size() + rows->x.size()) > kMaxParticles) {
-    error(item, path, fmt::format("{}: {} particles is too many (expected at most {} particles "
-                                  "in a scene)",
-                                  path, x_.size() + rows->x.size(), kMaxParticles));
+    error(item, path,
+          fmt::format("{}: {} particles is too many (expected at most {} particles "
+                      "in a scene)",
+                      path, x_.size() + rows->x.size(), kMaxParticles));
     return;
   }
   x_.insert(x_.end(), rows->x.begin(), rows->x.end());
@@ -950,9 +961,10 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
   const std::int64_t nx = p->integer("nx"), ny = p->integer("ny");
   if (nx > kMaxParticles || ny > kMaxParticles ||
       static_cast<std::int64_t>(x_.size()) + nx * ny > kMaxParticles) {
-    error(g, path, fmt::format("{}: {} x {} particles is too many (expected at most {} particles "
-                               "in a scene)",
-                               path, nx, ny, kMaxParticles));
+    error(g, path,
+          fmt::format("{}: {} x {} particles is too many (expected at most {} particles "
+                      "in a scene)",
+                      path, nx, ny, kMaxParticles));
     return;
   }
   const Index base = static_cast<Index>(x_.size());
@@ -1019,9 +1031,10 @@ void Loader::read_grid(const YAML::Node& g, const std::string& path) {
       registry_.require_healthy("spring");
       spring = registry_.find(PluginKind::Force, "spring");
       if (!spring) {
-        error(s, fp, fmt::format("{}: grid springs need the 'spring' force plugin, which was "
-                                 "not found (expected it on the plugin path)",
-                                 fp));
+        error(s, fp,
+              fmt::format("{}: grid springs need the 'spring' force plugin, which was "
+                          "not found (expected it on the plugin path)",
+                          fp));
         return;
       }
     }
@@ -1060,9 +1073,10 @@ bool Loader::can_add(std::int64_t count, const YAML::Node& at, const std::string
   if (count <= kMaxParticles && static_cast<std::int64_t>(x_.size()) + count <= kMaxParticles) {
     return true;
   }
-  error(at, path, fmt::format("{}: {} particles is too many (expected at most {} particles in a "
-                              "scene)",
-                              path, count, kMaxParticles));
+  error(at, path,
+        fmt::format("{}: {} particles is too many (expected at most {} particles in a "
+                    "scene)",
+                    path, count, kMaxParticles));
   return false;
 }
 
@@ -1103,8 +1117,9 @@ const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::strin
   const YAML::Node t = item["type"];
   const char* kname = kind_name(kind);
   if (!t.IsDefined() || t.IsNull()) {
-    error(item, path, fmt::format("{}: missing key 'type' (expected the name of a {} plugin: {})",
-                                  path, kname, join(registry_.names(kind))));
+    error(item, path,
+          fmt::format("{}: missing key 'type' (expected the name of a {} plugin: {})", path, kname,
+                      join(registry_.names(kind))));
     return nullptr;
   }
   if (!t.IsScalar() || !is_valid_plugin_name(t.Scalar())) {
@@ -1145,17 +1160,16 @@ std::optional<Params> Loader::read_plugin_params(const YAML::Node& item, const s
   }
   const Index n = particles_ok_ ? static_cast<Index>(x_.size()) : -1;
   const bool is_builder = !generated.empty();
-  return read_params(item, path, specs, is_builder ? std::vector<std::string>{}
-                                                   : std::vector<std::string>{"type"},
-                     n);
+  return read_params(item, path, specs,
+                     is_builder ? std::vector<std::string>{} : std::vector<std::string>{"type"}, n);
 }
 
 void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
                               std::vector<PendingPlugin>& out) {
   if (!n.IsDefined() || n.IsNull()) return;
   if (!n.IsSequence()) {
-    error(n, section, fmt::format("{}: is not a list (expected a list of {{ type: NAME, ... }})",
-                                  section));
+    error(n, section,
+          fmt::format("{}: is not a list (expected a list of {{ type: NAME, ... }})", section));
     return;
   }
   for (std::size_t i = 0; i < n.size(); ++i) {
@@ -1178,9 +1192,10 @@ void Loader::read_output(const YAML::Node& n, Scene& scene) {
   auto file_name = [&](const YAML::Node& at, const std::string& key_path, const std::string& v) {
     std::error_code ec;
     if (v.empty() || v.back() == '/' || fs::is_directory(v, ec)) {
-      error(at, key_path, fmt::format("{}: '{}' is a folder, not a file (expected a file name, "
-                                      "e.g. out/run.csv)",
-                                      key_path, v));
+      error(at, key_path,
+            fmt::format("{}: '{}' is a folder, not a file (expected a file name, "
+                        "e.g. out/run.csv)",
+                        key_path, v));
       return false;
     }
     return true;
@@ -1246,13 +1261,15 @@ Scene Loader::load(const std::string& text) {
     fail();
   }
   if (!root.IsDefined() || root.IsNull()) {
-    diags_.push_back({file_ + ":1:1", "the scene is empty (expected the sections simulation, "
-                                      "particles, and optionally output, forces, colliders)"});
+    diags_.push_back({file_ + ":1:1",
+                      "the scene is empty (expected the sections simulation, "
+                      "particles, and optionally output, forces, colliders)"});
     fail();
   }
   if (!root.IsMap()) {
-    error(root, "", "the scene is not a mapping (expected the sections simulation, particles, "
-                    "and optionally output, forces, colliders)");
+    error(root, "",
+          "the scene is not a mapping (expected the sections simulation, particles, "
+          "and optionally output, forces, colliders)");
     fail();
   }
   apply_overrides(root);
@@ -1365,8 +1382,9 @@ Scene load_scene(const fs::path& file, const PluginRegistry& registry,
                  const std::vector<Override>& overrides) {
   std::ifstream in(file, std::ios::binary);
   if (!in) {
-    throw SceneError({{file.string(), "cannot read the scene file (expected a readable YAML "
-                                      "file)"}});
+    throw SceneError({{file.string(),
+                       "cannot read the scene file (expected a readable YAML "
+                       "file)"}});
   }
   std::ostringstream ss;
   ss << in.rdbuf();
