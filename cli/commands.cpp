@@ -57,6 +57,7 @@ struct RunArgs {
   std::optional<double> duration;
   std::string resume;             // checkpoint to continue from
   bool force = false;             // resume even if the scene changed
+  bool strict = false;            // an energy that grows without a driving force: exit 4
   int threads = 0;                // --threads; 0: the scene's simulation.threads, else all cores
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
@@ -107,10 +108,11 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
     Scene scene = load(a, c, registry);
     if (!c.quiet) {
       out << fmt::format(
-          "{}: ok: {} particles, {} force objects, {} colliders, solver {}, "
-          "{} steps of {} s\n",
-          a.scene, scene.system->size(), scene.system->force_objects().size(),
-          scene.system->collider_objects().size(), scene.solver_name, scene.steps, scene.dt);
+          "{}: ok: {}, {}, {}, solver {}, {} of {} s\n", a.scene,
+          count_of(scene.system->size(), "particle"),
+          count_of(static_cast<long long>(scene.system->force_objects().size()), "force object"),
+          count_of(static_cast<long long>(scene.system->collider_objects().size()), "collider"),
+          scene.solver_name, count_of(scene.steps, "step"), scene.dt);
     }
     return kOk;
   } catch (...) {
@@ -129,6 +131,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     options.log = &err;
     options.handle_signals = true;
     options.threads = a.threads;
+    options.strict = a.strict;
     std::optional<Checkpoint> checkpoint;
     if (!a.resume.empty()) {
       checkpoint = read_checkpoint(a.resume);
@@ -143,6 +146,8 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     const crash::ReportCrashes report_crashes;
     const auto start = std::chrono::steady_clock::now();
     const RunResult r = run_scene(scene, options);
+    // Printed even with --quiet: the run's result is probably wrong.
+    if (!r.energy_warning.empty()) err << "pdyn: warning: " << r.energy_warning << "\n";
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     switch (r.exit_code) {
@@ -161,11 +166,18 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
         return kNonFinite;
     }
     if (!c.quiet) {
-      out << fmt::format("pdyn: {} steps of {} particles with {} to t = {} s in {:.3g} s{}\n",
-                         r.steps_done, scene.system->size(), scene.solver_name, r.time, wall,
+      // A resumed run took only the steps after its checkpoint's.
+      const std::int64_t first = checkpoint ? checkpoint->step : 0;
+      const std::string steps =
+          checkpoint ? fmt::format("{} (resumed at step {}; {} in all)",
+                                   count_of(r.steps_done - first, "step"), first, r.steps_done)
+                     : count_of(r.steps_done, "step");
+      out << fmt::format("pdyn: {} of {} with {} to t = {} s in {:.3g} s{}\n", steps,
+                         count_of(scene.system->size(), "particle"), scene.solver_name, r.time,
+                         wall,
                          scene.solver->adaptive()
-                             ? fmt::format(" ({} steps accepted, {} rejected)", r.counts.accepted,
-                                           r.counts.rejected)
+                             ? fmt::format(" ({} accepted, {} rejected)",
+                                           count_of(r.counts.accepted, "step"), r.counts.rejected)
                              : "");
       if (!scene.output.path.empty()) {
         out << fmt::format("pdyn: frames written to {}\n",
@@ -175,6 +187,10 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
         out << fmt::format("pdyn: energy written to {}\n",
                            fs::absolute(scene.output.energy).string());
       }
+      if (!r.checkpoint.empty()) {
+        out << fmt::format("pdyn: checkpoint written to {}\n", fs::absolute(r.checkpoint).string());
+      }
+      if (!r.energy_warning.empty()) out << "pdyn: warning: " << r.energy_warning << "\n";
     }
     return kOk;
   } catch (...) {
@@ -380,6 +396,20 @@ void add_scene_options(CLI::App* sub, std::vector<std::string>& sets,
   add_plugin_path_option(sub, plugin_path);
 }
 
+// A lower bound, printed as "at least 0". CLI11's NonNegativeNumber checks
+// the range [0, DBL_MAX] and prints the upper bound in full: 309 digits.
+// Text that is not a number is left to the option's own conversion.
+CLI::Validator at_least(double min) {
+  return CLI::Validator(
+      [min](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || x >= min) return {};
+        return fmt::format("{} is out of range (expected at least {})", text, min);
+      },
+      fmt::format(">= {}", min));
+}
+
 int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                 bool terminal) {
   CLI::App app{"pdyn: plugin-based particle dynamics (Witkin's particle systems)", "pdyn"};
@@ -399,9 +429,9 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   CLI::App* run = app.add_subcommand("run", "run a scene");
   scene_options(run);
   auto* steps = run->add_option("--steps", run_args.steps, "number of steps (replaces the scene's)")
-                    ->check(CLI::NonNegativeNumber);
+                    ->check(at_least(0));
   run->add_option("--duration", run_args.duration, "simulated time in s (replaces the scene's)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(at_least(0))
       ->excludes(steps);
   run->add_option("--threads", run_args.threads,
                   "threads for forces and solvers (default: simulation.threads, else all "
@@ -411,6 +441,9 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
                   "continue from a checkpoint written by an earlier run of this scene");
   run->add_flag("--force", run_args.force,
                 "with --resume: continue even if the scene changed (says what differs)");
+  run->add_flag("--strict", run_args.strict,
+                "stop with exit status 4 when the total energy grows more than a millionfold "
+                "with no force driving it (default: a warning)");
 
   CLI::App* validate = app.add_subcommand("validate", "check a scene without simulating");
   scene_options(validate);

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -24,6 +25,7 @@
 #include "pdyn/error.hpp"
 #include "registry.hpp"
 #include "runner.hpp"
+#include "text.hpp"
 
 namespace pdyn::cli {
 
@@ -253,9 +255,20 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   char x = 0, rest = 0;
   if (std::sscanf(a.size.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || x != 'x' ||
       width < 16 || height < 16 || width > 16384 || height > 16384) {
-    err << fmt::format("pdyn render: --size '{}' is not a picture size (expected WIDTHxHEIGHT in "
-                       "pixels, each 16..16384, e.g. 1200x800)\n",
-                       a.size);
+    err << fmt::format(
+        "pdyn render: --size '{}' is not a picture size (expected WIDTHxHEIGHT in "
+        "pixels, each 16..16384, e.g. 1200x800)\n",
+        a.size);
+    return kBadInput;
+  }
+  // Cairo writes PNG bytes whatever the name: a .jpg file would hold a PNG.
+  std::string extension = fs::path(a.png).extension().string();
+  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (extension != ".png") {
+    err << fmt::format(
+        "pdyn render: --png '{}' does not end in .png (expected a .png file name: "
+        "pictures are written as PNG only, e.g. out/frame.png)\n",
+        a.png);
     return kBadInput;
   }
   render::View view;
@@ -322,9 +335,8 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()),
                                                          cairo_destroy);
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    const std::string caption =
-        fmt::format("{}   t = {:.3f} s   {} particles   view {}", name, frames[k].t,
-                    frames[k].x.cols(), a.view);
+    const std::string caption = fmt::format("{}   t = {:.3f} s   {}   view {}", name, frames[k].t,
+                                            count_of(frames[k].x.cols(), "particle"), a.view);
     render::draw(cr.get(), cam, frames[k], drawn, patches, width, height, caption);
     cairo_surface_flush(surface.get());
     const fs::path path = picture_path(a.png, k, frames.size());

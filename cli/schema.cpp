@@ -95,7 +95,9 @@ Json param_schema(const ParamSpec& s, bool indices_checked) {
       j = number(s, "integer");
       break;
     case ParamType::Boolean:
-      j = {{"type", "boolean"}};
+      // The loader takes 0 and 1 as well, as CSV side files do.
+      j = Json::object();
+      j["anyOf"] = Json::array({Json{{"type", "boolean"}}, Json{{"enum", Json::array({0, 1})}}});
       break;
     case ParamType::String:
       j = {{"type", "string"}};
@@ -104,7 +106,10 @@ Json param_schema(const ParamSpec& s, bool indices_checked) {
       j = vec3(s);
       break;
     case ParamType::RealList:
-      j = {{"type", "array"}, {"items", number(s, "number")}};
+      // A single number is the one-element list (`rest: 0.1`, one for all).
+      j = Json::object();
+      j["anyOf"] = Json::array(
+          {number(s, "number"), Json{{"type", "array"}, {"items", number(s, "number")}}});
       break;
     case ParamType::VectorList:
       j = {{"type", "array"}, {"items", vec3(s)}};

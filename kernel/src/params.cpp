@@ -114,10 +114,10 @@ const char* describe(ParamType type) {
   switch (type) {
     case ParamType::Real: return "a number";
     case ParamType::Integer: return "a whole number";
-    case ParamType::Boolean: return "true or false";
+    case ParamType::Boolean: return "true, false, 1 or 0";
     case ParamType::String: return "a string";
     case ParamType::Vector: return "a vector [x, y, z]";
-    case ParamType::RealList: return "a list of numbers [a, b, ...]";
+    case ParamType::RealList: return "a number or a list of numbers [a, b, ...]";
     case ParamType::VectorList: return "a list of vectors [[x, y, z], ...]";
     case ParamType::IndexList: return "a list of particle indices [i, j, ...]";
     case ParamType::IndexPairs: return "a list of particle index pairs [[i, j], ...]";

@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "runner.hpp"
+#include "text.hpp"
 
 namespace pdyn {
 
@@ -62,9 +63,10 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
     if (differences) *differences = lines;
   }
   if (c.mass.size() != sys.size()) {
-    throw CheckpointError(fmt::format("the checkpoint holds {} particles but the scene has {} "
-                                      "(expected the same particles)",
-                                      c.mass.size(), sys.size()));
+    throw CheckpointError(
+        fmt::format("the checkpoint holds {} but the scene has {} "
+                    "(expected the same particles)",
+                    count_of(static_cast<long long>(c.mass.size()), "particle"), sys.size()));
   }
   const std::size_t expected = 1 + sys.force_objects().size() + sys.collider_objects().size();
   if (c.plugin_states.size() != expected) {

@@ -351,6 +351,93 @@ std::string blow_up_message(const System& sys, Index bad, std::int64_t step, dou
       step, t, bad, x(0), x(1), x(2), culprit.empty() ? "" : "; " + culprit, step - 1);
 }
 
+// The energy check: a run that diverges without ever becoming NaN (explicit
+// Euler on a stiff chain reaches 1e293 J) must not pass for a success.
+//
+// It applies when every force object either reports a potential energy
+// that does not depend on time (checked once, at the start, by evaluating
+// it at the start, middle and end times of the run with the state held) or
+// declares the `dissipative` trait: then no force drives the system and its
+// total energy E = K + U can only be kept or lost, up to the solver's error.
+// Colliders only take energy away. The rule: E - E0 > 1e6 S, where
+// S = max(|E0|, K0 + sum |U_i|) at the start (if that is 0, as for a
+// particle at rest at the potential's zero, the first nonzero K + sum |U_i|
+// seen at a check). Checked every kEvery steps and after the last step:
+// about one force evaluation per 64 steps, and no allocation.
+class EnergyWatch {
+ public:
+  static constexpr std::int64_t kEvery = 64;
+  static constexpr double kFactor = 1e6;
+
+  EnergyWatch(const Scene& scene) : sys_(*scene.system) {
+    System& sys = *scene.system;
+    const double t0 = sys.time();
+    for (const auto& f : sys.force_objects()) {
+      const auto traits = scene.force_traits.find(f.label);
+      const bool dissipative = traits != scene.force_traits.end() && traits->second.dissipative;
+      const auto u0 = f.force->potential_energy(sys.view());
+      if (!u0) {
+        if (dissipative) continue;
+        return;  // a force whose work is not accounted for: no check
+      }
+      // A potential that changes with time at a fixed state (a moving
+      // trap) pumps energy in: a driving force.
+      for (const double t : {0.5 * (t0 + scene.end_time), scene.end_time}) {
+        sys.set_time(t);
+        const auto u = f.force->potential_energy(sys.view());
+        sys.set_time(t0);
+        if (!u || std::abs(*u - *u0) > 1e-12 * std::max(1.0, std::abs(*u0))) return;
+      }
+    }
+    double magnitude = 0.0;
+    e0_ = energy(magnitude);
+    scale_ = std::max(std::abs(e0_), magnitude);
+    active_ = std::isfinite(e0_);
+  }
+
+  bool active() const { return active_; }
+  bool due(std::int64_t k, bool last) const {
+    return active_ && !tripped_ && (last || k % kEvery == 0);
+  }
+
+  // True once when the energy has grown past the bound; `message` then says so.
+  bool grew(std::int64_t k, const Scene& scene, std::string& message) {
+    double magnitude = 0.0;
+    const double e = energy(magnitude);
+    if (!(scale_ > 0.0)) {  // no scale yet: the first nonzero magnitude is it
+      scale_ = magnitude;
+      return false;
+    }
+    if (!(e - e0_ > kFactor * scale_)) return false;
+    tripped_ = true;
+    message = fmt::format(
+        "the total energy grew from {:.6g} J to {:.6g} J by step {} (t = {:.6g} s), more than "
+        "{:.0e} times its initial scale of {:.6g} J, with no force driving it: the solver '{}' is "
+        "probably unstable at dt = {} s. Try a smaller dt or a stable solver (implicit_euler, "
+        "verlet)",
+        e0_, e, k, sys_.time(), kFactor, scale_, scene.solver_name, scene.dt);
+    return true;
+  }
+
+ private:
+  double energy(double& magnitude) const {
+    const double k = sys_.kinetic_energy();
+    double u = 0.0, abs_u = 0.0;
+    for (const auto& f : sys_.force_objects()) {
+      if (const auto ui = f.force->potential_energy(sys_.view())) {
+        u += *ui;
+        abs_u += std::abs(*ui);
+      }
+    }
+    magnitude = k + abs_u;
+    return k + u;
+  }
+
+  const System& sys_;
+  bool active_ = false, tripped_ = false;
+  double e0_ = 0.0, scale_ = 0.0;
+};
+
 // Shared state of one run's loop.
 struct Loop {
   Scene& scene;
@@ -367,6 +454,28 @@ struct Loop {
   // checkpoints, since it changes the steps taken.
   bool has_dense = false;
   bool replaying = false;  // a failed step is being replayed: write no frames
+  EnergyWatch* energy = nullptr;
+  bool strict = false;
+
+  // After step k (`last`: the run's final step): the energy check. Returns
+  // false if the run must stop (--strict), like a blow-up, with exit code 4.
+  bool energy_ok(std::int64_t k, bool last) {
+    if (!energy || !energy->due(k, last)) return true;
+    std::string message;
+    if (!energy->grew(k, scene, message)) return true;
+    if (!strict) {
+      result.energy_warning = std::move(message);
+      return true;
+    }
+    // The state is finite and is the step's end: written as the final frame.
+    result.exit_code = 4;
+    result.message = message +
+                     " (--strict: stopped here; this state was written as the final "
+                     "frame)";
+    if (!last_written) out.emit_extra();
+    last_written = true;
+    return false;
+  }
 
   // One step or accepted adaptive step: returns its length, or nothing if
   // the run must stop (result says why; the last good state is restored).
@@ -483,6 +592,7 @@ void run_fixed(Loop& loop, std::int64_t k0) {
     // run resumed from this one's checkpoint does not write it.
     loop.last_written = every > 0 && k % every == 0;
     if (loop.last_written) loop.out.emit();
+    if (!loop.energy_ok(k, k == n_steps)) return;
     if (ckpt_every > 0 && k % ckpt_every == 0 && k != n_steps) {
       loop.result.checkpoint = loop.out.write_checkpoint_now(k, 0, false);
     }
@@ -557,6 +667,7 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
       ++next_frame;
     }
     const bool done = t_new >= t_end;
+    if (!loop.energy_ok(k, done)) break;
     if (ckpt_every > 0 && k % ckpt_every == 0 && !done) {
       loop.result.checkpoint = loop.out.write_checkpoint_now(k, next_frame, has_dense);
     }
@@ -593,6 +704,9 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   progress.start_at(k0);
   if (!options.resume) out.emit();
   Loop loop{scene, out, progress, signals, result, Eigen::VectorXd(sys.dimension())};
+  EnergyWatch energy(scene);
+  loop.energy = &energy;
+  loop.strict = options.strict;
   const bool adaptive = scene.solver->adaptive();
   if (options.resume) {
     loop.next_frame = options.resume->next_frame;

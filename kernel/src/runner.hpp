@@ -27,6 +27,10 @@ struct RunOptions {
   /// simulation.threads, else every core (pdyn::available_threads()). The
   /// results are bit-identical for every count.
   int threads = 0;
+  /// pdyn run --strict: a run whose energy grows without a driving force
+  /// (see EnergyWatch in runner.cpp) stops with exit code 4 instead of
+  /// finishing with a warning.
+  bool strict = false;
 };
 
 struct RunResult {
@@ -37,6 +41,9 @@ struct RunResult {
   std::string message;              ///< one line for the user when exit_code != 0
   StepCounts counts;                ///< adaptive solvers: accepted and rejected steps
   std::filesystem::path checkpoint; ///< the last checkpoint written, if any
+  /// Set when the total energy grew more than a millionfold with no force
+  /// driving it: one line naming the step, the energies and the solver.
+  std::string energy_warning;
 };
 
 /// Runs `scene` to its end: steps the solver, applies collider responses

@@ -79,6 +79,9 @@ struct Scene {
   std::vector<PluginUse> uses;
   /// The library of each plugin object, by its label: named in fault messages.
   std::map<std::string, std::filesystem::path> libraries;
+  /// The traits each force object's plugin declares, by its label: the
+  /// runner's energy check needs to know which forces only dissipate.
+  std::map<std::string, ForceTraits> force_traits;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`

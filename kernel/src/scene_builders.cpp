@@ -12,6 +12,8 @@
 #include <numbers>
 #include <random>
 
+#include "text.hpp"
+
 namespace pdyn {
 
 namespace {
@@ -65,10 +67,11 @@ void pin(BuilderHost& host, const Params& p, const YAML::Node& node, const std::
   for (std::size_t k = 0; k < pins.size(); ++k) {
     const Index i = pins[k] < 0 ? pins[k] + count : pins[k];
     if (i < 0 || i >= count) {
-      host.error(node["pin"][k], fmt::format("{}.pin[{}]", path, k),
-                 fmt::format("{}.pin[{}]: {} is outside the {} of {} particles (expected "
-                             "-{}..{})",
-                             path, k, pins[k], what, count, count, count - 1));
+      host.error(
+          node["pin"][k], fmt::format("{}.pin[{}]", path, k),
+          fmt::format("{}.pin[{}]: {} is outside the {} of {} (expected "
+                      "-{}..{})",
+                      path, k, pins[k], what, count_of(count, "particle"), count, count - 1));
       continue;
     }
     host.set_fixed(base + i);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -142,6 +143,22 @@ std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs) {
 
 std::string fmt_num(double x) { return fmt::format("{}", x); }
 
+// A value as the user wrote it, for a message: the scalar itself, or a list
+// or mapping in YAML's flow style ("[0, 0]"), shortened if long. Quoting a
+// description ("'a list or mapping'") instead reads as if it were the value.
+std::string shown(const YAML::Node& n) {
+  if (n.IsScalar()) return n.Scalar();
+  if (!n.IsDefined() || n.IsNull()) return "~";
+  YAML::Emitter e;
+  e.SetSeqFormat(YAML::Flow);
+  e.SetMapFormat(YAML::Flow);
+  e << n;
+  std::string text = e.c_str();
+  constexpr std::size_t kMax = 60;
+  if (text.size() > kMax) text = text.substr(0, kMax - 3) + "...";
+  return text;
+}
+
 // "a number > 0 in s"
 std::string expectation(const ParamSpec& s) {
   std::string e = describe(s.type);
@@ -255,6 +272,7 @@ class Loader final : public BuilderHost {
 
   // ---- generic readers ----
   bool check_map(const YAML::Node& n, const std::string& path, const char* what) override;
+  bool check_plugin_map(const YAML::Node& n, const std::string& path, PluginKind kind);
   void check_keys(const YAML::Node& map, const std::string& path,
                   const std::vector<std::string>& allowed);
   std::optional<ParamValue> read_value(const YAML::Node& n, const std::string& path,
@@ -360,8 +378,31 @@ std::string Loader::where(const YAML::Node& at, const std::string& path) const {
   return file_;
 }
 
+// bash expands an unquoted `~` after `=` in a word such as `output=~`, so
+// `--set output=~` arrives as `output=/home/NAME`. A value that is the home
+// folder, or a path inside it, refused by a key is most likely that.
+bool looks_like_home(const std::string& value) {
+  const char* env = std::getenv("HOME");
+  const std::string home = env ? env : "";
+  if (home.empty() || home == "/") return false;
+  return value == home || value.rfind(home + "/", 0) == 0;
+}
+
 void Loader::error(const YAML::Node& at, const std::string& path, std::string message) {
-  diags_.push_back({where(at, path), std::move(message)});
+  std::string loc = where(at, path);
+  for (const auto& ov : overrides_) {
+    if (loc != fmt::format("--set {}={}", ov.path, ov.value) || !looks_like_home(ov.value)) {
+      continue;
+    }
+    constexpr const char* hint = "did you mean null? the shell expands ~ to your home folder";
+    if (const auto open = message.rfind(" ("); open != std::string::npos && message.back() == ')') {
+      message.insert(open + 2, std::string(hint) + "; ");
+    } else {
+      message += fmt::format(" ({})", hint);
+    }
+    break;
+  }
+  diags_.push_back({std::move(loc), std::move(message)});
 }
 
 void Loader::fail() { throw SceneError(diags_); }
@@ -371,20 +412,41 @@ void Loader::fail() { throw SceneError(diags_); }
 
 bool Loader::check_map(const YAML::Node& n, const std::string& path, const char* what) {
   if (n.IsMap()) return true;
-  error(n, path, fmt::format("{}: is not a mapping (expected {})", path, what));
+  if (n.IsScalar() || n.IsSequence()) {
+    error(n, path, fmt::format("{}: '{}' is not a mapping (expected {})", path, shown(n), what));
+  } else {
+    error(n, path, fmt::format("{}: is not a mapping (expected {})", path, what));
+  }
   return false;
+}
+
+// A plugin entry, { type: NAME, ... }. `solver: verlet` or `- gravity` is
+// the plugin's name alone: suggest the mapping it was meant to be.
+bool Loader::check_plugin_map(const YAML::Node& n, const std::string& path, PluginKind kind) {
+  if (n.IsMap()) return true;
+  const char* what = "{ type: NAME, parameters... }";
+  if (n.IsScalar() && registry_.find(kind, n.Scalar())) {
+    error(n, path,
+          fmt::format("{}: '{}' is not a mapping (did you mean {{ type: {} }}? expected {})", path,
+                      n.Scalar(), n.Scalar(), what));
+    return false;
+  }
+  return check_map(n, path, what);
 }
 
 void Loader::check_keys(const YAML::Node& map, const std::string& path,
                         const std::vector<std::string>& allowed) {
-  std::set<std::string> seen;
+  std::map<std::string, YAML::Mark> seen;  // where each key was first given
   for (const auto& kv : map) {
     const std::string key = kv.first.Scalar();
     const std::string key_path = path.empty() ? key : path + "." + key;
-    if (!seen.insert(key).second) {
+    if (const auto [first, inserted] = seen.emplace(key, kv.first.Mark()); !inserted) {
+      // A --set value has no mark (line -1): it replaced the key, never repeats one.
+      const YAML::Mark m = first->second;
       error(kv.first, key_path,
-            fmt::format("duplicate key '{}' in {} (expected each key once)", key,
-                        path.empty() ? "the scene" : path));
+            fmt::format("duplicate key '{}' in {} (expected each key once; the first is at "
+                        "{}:{})",
+                        key, path.empty() ? "the scene" : path, m.line + 1, m.column + 1));
       continue;
     }
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
@@ -402,8 +464,7 @@ std::optional<double> Loader::read_number(const YAML::Node& n, const std::string
   double x = 0;
   if (!n.IsScalar() || !YAML::convert<double>::decode(n, x)) {
     error(n, path,
-          fmt::format("{}: '{}' is not a number (expected {})", path,
-                      n.IsScalar() ? n.Scalar() : "a list or mapping", expectation(spec)));
+          fmt::format("{}: '{}' is not a number (expected {})", path, shown(n), expectation(spec)));
     return std::nullopt;
   }
   if (!std::isfinite(x)) {
@@ -426,8 +487,8 @@ std::optional<std::int64_t> Loader::read_integer(const YAML::Node& n, const std:
   long long x = 0;
   if (!n.IsScalar() || !YAML::convert<long long>::decode(n, x)) {
     error(n, path,
-          fmt::format("{}: '{}' is not a whole number (expected {})", path,
-                      n.IsScalar() ? n.Scalar() : "a list or mapping", expectation(spec)));
+          fmt::format("{}: '{}' is not a whole number (expected {})", path, shown(n),
+                      expectation(spec)));
     return std::nullopt;
   }
   const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
@@ -442,16 +503,15 @@ std::optional<Index> Loader::read_index(const YAML::Node& n, const std::string& 
                                         Index n_particles) {
   long long i = 0;
   if (!n.IsScalar() || !YAML::convert<long long>::decode(n, i)) {
-    error(n, path,
-          fmt::format("{}: '{}' is not a particle index (expected a whole number)", path,
-                      n.IsScalar() ? n.Scalar() : "a list or mapping"));
+    error(
+        n, path,
+        fmt::format("{}: '{}' is not a particle index (expected a whole number)", path, shown(n)));
     return std::nullopt;
   }
   if (n_particles >= 0 && (i < 0 || i >= n_particles)) {
     error(n, path,
-          fmt::format("{}: particle index {} is out of range (expected 0..{}: the scene has {} "
-                      "particles)",
-                      path, i, n_particles - 1, n_particles));
+          fmt::format("{}: particle index {} is out of range (expected 0..{}: the scene has {})",
+                      path, i, n_particles - 1, count_of(n_particles, "particle")));
     return std::nullopt;
   }
   return static_cast<Index>(i);
@@ -460,7 +520,13 @@ std::optional<Index> Loader::read_index(const YAML::Node& n, const std::string& 
 std::optional<Vec3> Loader::read_vec3(const YAML::Node& n, const std::string& path,
                                       const ParamSpec& spec) {
   if (!n.IsSequence() || n.size() != 3) {
-    error(n, path, fmt::format("{}: is not a 3-vector (expected {})", path, expectation(spec)));
+    // Say what was found: a list of the wrong length, or another kind of value.
+    const std::string found =
+        n.IsSequence() ? fmt::format("it has {} {}", n.size(), n.size() == 1 ? "number" : "numbers")
+        : n.IsMap()    ? fmt::format("it is the mapping {}", shown(n))
+                       : fmt::format("it is '{}'", shown(n));
+    error(n, path,
+          fmt::format("{}: is not a 3-vector: {} (expected {})", path, found, expectation(spec)));
     return std::nullopt;
   }
   ParamSpec element = spec;  // bounds apply to each component
@@ -554,9 +620,13 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     case ParamType::Boolean: {
       bool b = false;
       if (n.IsScalar() && YAML::convert<bool>::decode(n, b)) return ParamValue(b);
+      // 0 and 1 too, as a CSV side file's `fixed` column takes them.
+      if (n.IsScalar() && (n.Scalar() == "0" || n.Scalar() == "1")) {
+        return ParamValue(n.Scalar() == "1");
+      }
       error(n, path,
-            fmt::format("{}: '{}' is not true or false (expected {})", path,
-                        n.IsScalar() ? n.Scalar() : "a list or mapping", expectation(spec)));
+            fmt::format("{}: '{}' is not true or false (expected {})", path, shown(n),
+                        expectation(spec)));
       return std::nullopt;
     }
     case ParamType::String:
@@ -568,6 +638,12 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
       return std::nullopt;
     case ParamType::RealList:
       element.type = ParamType::Real;
+      // A single number is the one-element list: `rest: 0.1` is `rest: [0.1]`,
+      // "one for all" as the plugins that take such lists describe it.
+      if (n.IsScalar()) {
+        if (auto x = read_number(n, path, element)) return ParamValue(std::vector<double>{*x});
+        return std::nullopt;
+      }
       return list_of(
           [&](const YAML::Node& e, const std::string& p) { return read_number(e, p, element); });
     case ParamType::VectorList:
@@ -618,7 +694,7 @@ std::optional<ParamValue> Loader::read_named_reals(const YAML::Node& n, const st
       error(kv.first, kp,
             fmt::format("{}: '{}' is not a name (expected letters, digits and '_', not starting "
                         "with a digit)",
-                        path, kv.first.IsScalar() ? key : "a list or mapping"));
+                        path, shown(kv.first)));
       ok = false;
       continue;
     }
@@ -1102,10 +1178,9 @@ const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::strin
     return nullptr;
   }
   if (!t.IsScalar() || !is_valid_plugin_name(t.Scalar())) {
-    error(
-        t, path + ".type",
-        fmt::format("{}.type: '{}' is not a plugin name (expected [a-z0-9_]+, one of: {})", path,
-                    t.IsScalar() ? t.Scalar() : "a list or mapping", join(registry_.names(kind))));
+    error(t, path + ".type",
+          fmt::format("{}.type: '{}' is not a plugin name (expected [a-z0-9_]+, one of: {})", path,
+                      shown(t), join(registry_.names(kind))));
     return nullptr;
   }
   const std::string name = t.Scalar();
@@ -1155,7 +1230,7 @@ void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKi
   for (std::size_t i = 0; i < n.size(); ++i) {
     const YAML::Node item = n[i];
     const std::string path = fmt::format("{}[{}]", section, i);
-    if (!check_map(item, path, "{ type: NAME, parameters... }")) continue;
+    if (!check_plugin_map(item, path, kind)) continue;
     const PluginRecord* rec = find_plugin(item, path, kind);
     if (!rec) continue;
     auto params = read_plugin_params(item, path, *rec, {});
@@ -1310,7 +1385,7 @@ Scene Loader::load(const std::string& text) {
   const YAML::Node sim = root["simulation"];
   if (sim.IsMap() && sim["solver"].IsDefined() && !sim["solver"].IsNull()) {
     const YAML::Node s = sim["solver"];
-    if (check_map(s, "simulation.solver", "{ type: NAME, parameters... }")) {
+    if (check_plugin_map(s, "simulation.solver", PluginKind::Solver)) {
       if (const PluginRecord* rec = find_plugin(s, "simulation.solver", PluginKind::Solver)) {
         if (auto params = read_plugin_params(s, "simulation.solver", *rec, {})) {
           solvers.push_back({rec, std::move(*params), s, "simulation.solver"});
@@ -1361,6 +1436,7 @@ Scene Loader::load(const std::string& text) {
       if (!f) continue;
       scene.system->add_force(std::move(f), label(p));
       scene.libraries[label(p)] = p.record->library;
+      scene.force_traits[label(p)] = p.record->descriptor->force_traits;
       keep(p, PluginKind::Force);
     }
   }

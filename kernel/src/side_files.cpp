@@ -13,6 +13,8 @@
 #include <sstream>
 #include <string_view>
 
+#include "text.hpp"
+
 namespace pdyn::side_files {
 
 namespace {
@@ -134,8 +136,8 @@ std::optional<double> parse_real(const Field& f, std::size_t line, std::string_v
 }
 
 std::string column_count_message(std::size_t got, std::size_t want, const std::string& header) {
-  return fmt::format("has {} fields, the header has {} (expected {} comma-separated values: {})",
-                     got, want, want, header);
+  return fmt::format("has {}, the header has {} (expected {} comma-separated values: {})",
+                     count_of(static_cast<long long>(got), "field"), want, want, header);
 }
 
 }  // namespace
@@ -288,8 +290,8 @@ std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesyst
       if (n_particles >= 0 && (i < 0 || i >= n_particles)) {
         problems.add(line, f.column,
                      fmt::format("{}: particle index {} is out of range (expected 0..{}: the "
-                                 "scene has {} particles)",
-                                 kNames[k], i, n_particles - 1, n_particles));
+                                 "scene has {})",
+                                 kNames[k], i, n_particles - 1, count_of(n_particles, "particle")));
         return;
       }
       t[k] = i;

@@ -35,6 +35,13 @@ std::string closest_match(std::string_view word, const std::vector<std::string>&
   return best;
 }
 
+std::string count_of(long long n, std::string_view singular, std::string_view plural) {
+  std::string out = std::to_string(n) + " ";
+  if (n == 1) return out.append(singular);
+  if (plural.empty()) return out.append(singular).append("s");
+  return out.append(plural);
+}
+
 std::string join(const std::vector<std::string>& words, std::string_view sep) {
   std::string out;
   for (std::size_t i = 0; i < words.size(); ++i) {

@@ -138,6 +138,11 @@ TEST(Render, BadOptionsAreRefusedWithTheirReason) {
        "pdyn render: --view 'top' is not a view (expected 3d, xy, xz or yz)\n"},
       {{scene, "--at", "0,-1", "--png", png},
        "pdyn render: --at -1 is not a time (expected times >= 0 s, e.g. --at 0,0.5,1)\n"},
+      // Cairo writes PNG only: a .jpg name would hold PNG bytes.
+      {{scene, "--at", "0", "--png", (dir / "x.jpg").string()},
+       "pdyn render: --png '" + (dir / "x.jpg").string() +
+           "' does not end in .png (expected a .png file name: pictures are written as PNG "
+           "only, e.g. out/frame.png)\n"},
   };
   for (const auto& c : cases) {
     const auto r = render(c.args);
@@ -145,6 +150,7 @@ TEST(Render, BadOptionsAreRefusedWithTheirReason) {
     EXPECT_EQ(r.err, c.message);
   }
   EXPECT_FALSE(fs::exists(png));
+  EXPECT_FALSE(fs::exists(dir / "x.jpg"));
   // A bad scene is reported as by `pdyn run`, located.
   const fs::path bad = test::write_file(dir / "bad.yaml", "simulation: { dt: -1, steps: 1 }\n"
                                                           "particles: [{ position: [0, 0, 0] }]\n");

@@ -116,7 +116,8 @@ TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
                     "  - { type: field, constants: { k: 4 }, force: [\"0\", \"-k**y\", \"0\"] }\n"),
             "test.yaml:5:54: forces[0].force[1]: unexpected operator '*' at position 3 in "
             "\"-k**y\" (expected an expression in the variables x, y, z, vx, vy, vz, t, m or the "
-            "constants k and functions such as sin, exp, sqrt)");
+            "constants k and functions such as sin, exp, sqrt; a power is written x^2, not "
+            "x**2)");
   EXPECT_EQ(Message(std::string(kOne) + "  - { type: field, force: [\"q*x\", \"0\", \"0\"] }\n"),
             "test.yaml:5:28: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
             "(expected one of the variables x, y, z, vx, vy, vz, t, m)");

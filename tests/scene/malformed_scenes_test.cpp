@@ -283,6 +283,38 @@ TEST(MalformedScenes, RunWithABadOverrideWritesNoOutput) {
   EXPECT_FALSE(fs::exists(frames));
 }
 
+// `--set output=~` in bash arrives as `output=$HOME`: the refusal says so.
+TEST(MalformedScenes, SetValueThatIsTheExpandedHomeFolderSuggestsNull) {
+  const char* saved = std::getenv("HOME");
+  const std::string old_home = saved ? saved : "";
+  ::setenv("HOME", "/home/pdyn-tester", 1);
+  const fs::path dir = test::temp_dir("set-home");
+  const fs::path scene = test::write_file(dir / "scene.yaml",
+                                          "simulation: { dt: 0.01, steps: 3 }\n"
+                                          "particles:\n"
+                                          "  - { position: [0, 0, 1], mass: 1 }\n");
+  const auto r =
+      test::pdyn({"validate", scene.string(), "--set", "simulation.steps=/home/pdyn-tester",
+                  "--set", "output=/home/pdyn-tester/x"});
+  const auto fine = test::pdyn(
+      {"validate", scene.string(), "--quiet", "--set", "output.path=/home/pdyn-tester/out.csv"});
+  if (saved) {
+    ::setenv("HOME", old_home.c_str(), 1);
+  } else {
+    ::unsetenv("HOME");
+  }
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err,
+            "--set simulation.steps=/home/pdyn-tester: simulation.steps: '/home/pdyn-tester' is "
+            "not a whole number (did you mean null? the shell expands ~ to your home folder; "
+            "expected a whole number >= 0)\n"
+            "--set output=/home/pdyn-tester/x: output: '/home/pdyn-tester/x' is not a mapping "
+            "(did you mean null? the shell expands ~ to your home folder; expected output: { "
+            "path: FILE.csv, every: N, energy: FILE.csv })\n");
+  // A path key takes a path in the home folder without comment.
+  EXPECT_EQ(fine.status, 0) << fine.err;
+}
+
 // A --set into a section the scene does not have creates it.
 TEST(MalformedScenes, SetCreatesAMissingSection) {
   const fs::path dir = test::temp_dir("set-output");

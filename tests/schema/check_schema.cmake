@@ -19,7 +19,7 @@ endif()
 # folders, NaN (a number to JSON Schema).
 set(beyond_a_schema
   box_min_above_max cloud_without_region field_constant_named_x field_invalid_expression
-  field_unknown_variable group_unknown lattice_n_not_whole selection_group_and_ids
+  field_unknown_function field_unknown_variable group_unknown lattice_n_not_whole selection_group_and_ids
   duplicate_key duplicate_section duration_too_many_steps grid_pin_outside output_path_folder
   output_same_file set_bad_value set_into_missing_list set_missing_element
   set_steps_with_duration set_unknown_section set_without_value spring_index_out_of_range

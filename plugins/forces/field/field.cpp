@@ -11,8 +11,9 @@
 // per-variable arrays would need the 3 x N state copied into 8 arrays on
 // every evaluation; the per-particle loop is fast enough for the gallery's
 // thousand-particle scenes.
-#include <fmt/format.h>
 #include <dlfcn.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <muParser.h>
 
 #include <algorithm>
@@ -21,6 +22,8 @@
 #include <memory>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -38,29 +41,102 @@ bool is_name(const std::string& s) {
          });
 }
 
+// Levenshtein distance, for suggesting a function name.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// "did you mean 'sin' or 'sinh'? ": the known names nearest to `word`, if
+// close enough to be a typo (one edit per three letters, at least two, and
+// fewer than the word's letters).
+std::string suggestion(const std::string& word, const std::vector<std::string>& known) {
+  const std::size_t limit = std::max<std::size_t>(2, word.size() / 3);
+  std::size_t best = limit + 1;
+  std::vector<std::string> nearest;
+  for (const auto& k : known) {
+    const std::size_t d = edit_distance(word, k);
+    if (d < best) {
+      best = d;
+      nearest.clear();
+    }
+    if (d == best) nearest.push_back(k);
+  }
+  // A name as short as its distance (q for x) is no typo of it.
+  if (nearest.empty() || best >= word.size()) return "";
+  std::string s = "did you mean ";
+  for (std::size_t i = 0; i < nearest.size(); ++i) {
+    s += fmt::format("{}'{}'", i == 0 ? "" : i + 1 == nearest.size() ? " or " : ", ", nearest[i]);
+  }
+  return s + "? ";
+}
+
+// The functions `parser` knows, sorted: muParser's built-ins.
+std::vector<std::string> function_names(const mu::Parser& parser) {
+  std::vector<std::string> names;
+  for (const auto& kv : parser.GetFunDef()) names.push_back(kv.first);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 // "unexpected operator '*' at position 3 in "-k**y" (expected ...)": what
 // muParser found, where (0-based character offset, as muParser counts), and
 // what the expression may contain.
-std::string explain(const mu::ParserError& e, const std::string& expr,
-                    const std::string& constants) {
+std::string explain(const mu::ParserError& e, const std::string& expr, const std::string& constants,
+                    const mu::Parser& parser, const pdyn::NamedReals& user_constants) {
   const std::string& tok = e.GetToken();
   const std::string names =
       fmt::format("the variables {}{}", kVariableList,
                   constants.empty() ? "" : fmt::format(" or the constants {}", constants));
-  std::string what, expected = fmt::format(
-                        "an expression in {} and functions such as sin, "
-                        "exp, sqrt",
-                        names);
+  std::string what, hint,
+      expected = fmt::format(
+          "an expression in {} and functions such as sin, "
+          "exp, sqrt",
+          names);
   switch (e.GetCode()) {
     case mu::ecUNEXPECTED_OPERATOR:
       what = fmt::format("unexpected operator '{}'", tok);
+      // Python's and Fortran's power operator: muParser's is '^'.
+      if (tok == "*" && e.GetPos() > 0 && expr[static_cast<std::size_t>(e.GetPos()) - 1] == '*') {
+        expected += "; a power is written x^2, not x**2";
+      }
       break;
     case mu::ecUNASSIGNABLE_TOKEN:
       if (is_name(tok)) {
-        what = fmt::format("unknown variable '{}'", tok);
-        expected = "one of " + names;
+        // muParser reports an unknown function as an unknown token too:
+        // a name followed by '(' was meant as a function.
+        const auto after =
+            e.GetPos() < 0
+                ? std::string::npos
+                : expr.find_first_not_of(" \t", static_cast<std::size_t>(e.GetPos()) + tok.size());
+        if (after != std::string::npos && expr[after] == '(') {
+          const auto functions = function_names(parser);
+          what = fmt::format("unknown function '{}'", tok);
+          hint = suggestion(tok, functions);
+          expected = fmt::format("one of the functions {}", fmt::join(functions, ", "));
+        } else {
+          what = fmt::format("unknown variable '{}'", tok);
+          // `pi` for `_pi`, a typo in a variable or constant.
+          std::vector<std::string> known(kVariables.begin(), kVariables.end());
+          for (const auto& kv : parser.GetConst()) known.push_back(kv.first);
+          for (const auto& kv : user_constants) known.push_back(kv.first);
+          hint = suggestion(tok, known);
+          expected = "one of " + names;
+        }
       } else {
-        what = fmt::format("unexpected '{}'", tok);
+        // muParser's token is the rest of the expression ("% 2 "): name
+        // its first character, where the position points.
+        what = fmt::format("unexpected '{}'", tok.empty() ? tok : tok.substr(0, 1));
       }
       break;
     case mu::ecUNEXPECTED_EOF:
@@ -104,8 +180,11 @@ std::string explain(const mu::ParserError& e, const std::string& expr,
   if (expr.find_first_not_of(" \t") == std::string::npos) {
     return fmt::format("the expression is empty (expected {})", expected);
   }
-  if (e.GetPos() < 0) return fmt::format("{} in \"{}\" (expected {})", what, expr, expected);
-  return fmt::format("{} at position {} in \"{}\" (expected {})", what, e.GetPos(), expr, expected);
+  if (e.GetPos() < 0) {
+    return fmt::format("{} in \"{}\" ({}expected {})", what, expr, hint, expected);
+  }
+  return fmt::format("{} at position {} in \"{}\" ({}expected {})", what, e.GetPos(), expr, hint,
+                     expected);
 }
 
 class Field final : public pdyn::Force {
@@ -142,11 +221,28 @@ class Field final : public pdyn::Force {
                                                   "muParser's functions and constants)",
                                                   e.GetMsg()));
       }
+      // muParser's '=' assigns to a variable, which would change x (say) for
+      // the components evaluated after this one: refused, '==' compares.
+      for (std::size_t k = 0; k < expr.size(); ++k) {
+        if (expr[k] != '=') continue;
+        const char before = k > 0 ? expr[k - 1] : ' ';
+        const char after = k + 1 < expr.size() ? expr[k + 1] : ' ';
+        if (after == '=') {
+          ++k;  // '=='
+          continue;
+        }
+        if (before == '<' || before == '>' || before == '!') continue;
+        throw ParamError(param,
+                         fmt::format("'=' at position {} in \"{}\" would assign to a variable "
+                                     "(expected '==' to compare)",
+                                     k, expr),
+                         element);
+      }
       try {
         parser.SetExpr(expr);
         parser.Eval();  // parses and compiles now, so errors are found at load time
       } catch (const mu::ParserError& e) {
-        throw ParamError(param, explain(e, expr, constant_names), element);
+        throw ParamError(param, explain(e, expr, constant_names, parser, constants), element);
       }
       if (parser.GetNumResults() != 1) {
         throw ParamError(param,
@@ -156,8 +252,8 @@ class Field final : public pdyn::Force {
       }
     };
     if (force.size() != 3) {
-      throw ParamError("force", fmt::format("has {} expressions (expected 3: [fx, fy, fz], in N)",
-                                            force.size()));
+      throw ParamError("force", fmt::format("has {} expression{} (expected 3: [fx, fy, fz], in N)",
+                                            force.size(), force.size() == 1 ? "" : "s"));
     }
     for (int c = 0; c < 3; ++c) compile(component_[c], force[c], "force", c);
     if (potential) {
