@@ -107,12 +107,18 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
   try {
     Scene scene = load(a, c, registry);
     if (!c.quiet) {
+      // An adaptive solver chooses its own steps: dt is only the first one.
+      const std::string stepping =
+          scene.solver->adaptive()
+              ? fmt::format("to t = {} s, first step {} s, then as the error tolerance allows",
+                            scene.end_time, scene.dt)
+              : fmt::format("{} of {} s", count_of(scene.steps, "step"), scene.dt);
       out << fmt::format(
-          "{}: ok: {}, {}, {}, solver {}, {} of {} s\n", a.scene,
+          "{}: ok: {}, {}, {}, solver {}{}, {}\n", a.scene,
           count_of(scene.system->size(), "particle"),
           count_of(static_cast<long long>(scene.system->force_objects().size()), "force object"),
           count_of(static_cast<long long>(scene.system->collider_objects().size()), "collider"),
-          scene.solver_name, count_of(scene.steps, "step"), scene.dt);
+          scene.solver_name, scene.solver->adaptive() ? " (adaptive)" : "", stepping);
     }
     return kOk;
   } catch (...) {
@@ -144,6 +150,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     }
     // A plugin that crashes is named in one line (crash_report.hpp).
     const crash::ReportCrashes report_crashes;
+    const std::uint64_t evaluations_before = scene.system->force_evaluations();
     const auto start = std::chrono::steady_clock::now();
     const RunResult r = run_scene(scene, options);
     // Printed even with --quiet: the run's result is probably wrong.
@@ -179,6 +186,13 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
                              ? fmt::format(" ({} accepted, {} rejected)",
                                            count_of(r.counts.accepted, "step"), r.counts.rejected)
                              : "");
+      // The cost of the run: what a solver or a plugin change is judged by.
+      const std::uint64_t evaluations = scene.system->force_evaluations() - evaluations_before;
+      const double particle_steps =
+          static_cast<double>(r.steps_done - first) * static_cast<double>(scene.system->size());
+      out << fmt::format("pdyn: {}, {:.3g} particle-steps/s\n",
+                         count_of(static_cast<long long>(evaluations), "force evaluation"),
+                         wall > 0 ? particle_steps / wall : 0.0);
       if (!scene.output.path.empty()) {
         out << fmt::format("pdyn: frames written to {}\n",
                            fs::absolute(scene.output.path).string());

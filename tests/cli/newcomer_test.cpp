@@ -93,5 +93,47 @@ TEST(Newcomer, CheckWarnsAboutAnUnoptimisedPlugin) {
   EXPECT_EQ(fast.out.find("without optimisation"), std::string::npos) << fast.out;
 }
 
+// `validate` on an adaptive scene says that the steps are the solver's
+// choice, not "3000 steps of 0.001 s"; `run` says what the run cost.
+TEST(Newcomer, AdaptiveValidateAndTheRunsCost) {
+  const fs::path dir = temp_dir("cost");
+  const std::string base =
+      "simulation: { dt: 0.001, duration: 3, solver: { type: SOLVER } }\n"
+      "particles:\n  - { position: [0, 0, 1], velocity: [0, 1, 0], mass: 1 }\n"
+      "forces:\n  - { type: attractor, center: [0, 0, 0], strength: 1 }\n";
+  auto scene = [&](const std::string& solver) {
+    std::string text = base;
+    text.replace(text.find("SOLVER"), 6, solver);
+    return write_file(dir / (solver + ".yaml"), text).string();
+  };
+  const auto v = pdyn({"validate", scene("rk45")});
+  ASSERT_EQ(v.status, 0) << v.err;
+  EXPECT_NE(v.out.find("solver rk45 (adaptive), to t = 3 s, first step 0.001 s, then as the error "
+                       "tolerance allows"),
+            std::string::npos)
+      << v.out;
+  EXPECT_EQ(v.out.find("3000 steps"), std::string::npos) << v.out;
+
+  // rk4 evaluates the forces exactly four times a step, euler once.
+  const auto rk4 = pdyn({"run", scene("rk4"), "--steps", "250"});
+  ASSERT_EQ(rk4.status, 0) << rk4.err;
+  EXPECT_NE(rk4.out.find("pdyn: 1000 force evaluations, "), std::string::npos) << rk4.out;
+  EXPECT_NE(rk4.out.find(" particle-steps/s\n"), std::string::npos) << rk4.out;
+  const auto euler = pdyn({"run", scene("euler"), "--steps", "250"});
+  EXPECT_NE(euler.out.find("pdyn: 250 force evaluations, "), std::string::npos) << euler.out;
+  // Dormand-Prince: 6 new evaluations per attempted step (the 7th stage is
+  // the next step's first, FSAL), plus the very first.
+  const auto rk45 = pdyn({"run", scene("rk45")});
+  ASSERT_EQ(rk45.status, 0) << rk45.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(rk45.out, m,
+                                std::regex("\\(([0-9]+) steps? accepted, ([0-9]+) rejected\\)")))
+      << rk45.out;
+  const long attempts = std::stol(m[1]) + std::stol(m[2]);
+  ASSERT_TRUE(std::regex_search(rk45.out, m, std::regex("pdyn: ([0-9]+) force evaluations")))
+      << rk45.out;
+  EXPECT_EQ(std::stol(m[1]), 6 * attempts + 1) << rk45.out;
+}
+
 }  // namespace
 }  // namespace pdyn
