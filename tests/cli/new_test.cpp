@@ -30,7 +30,7 @@ TEST(New, WritesAProjectForEachKind) {
     const fs::path dir = root / name;
     const auto r = test::pdyn({"new", kind, name, dir.string()});
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_EQ(entries(dir), 4u);
+    EXPECT_EQ(entries(dir), 5u);  // CMakeLists.txt, NAME.cpp, test_NAME.cpp, README.md, scene.yaml
     const std::string cmake = read(dir / "CMakeLists.txt");
     EXPECT_NE(cmake.find("find_package(pdyn 0.1 REQUIRED)"), std::string::npos) << cmake;
     EXPECT_NE(

@@ -7,7 +7,7 @@
 #include <pdyn/conformance.hpp>
 #include <pdyn/plugin.hpp>
 
-TEST(@NAME @, PassesTheConformanceKit) {
+TEST(@NAME@, PassesTheConformanceKit) {
   const auto results = pdyn::conformance::run_checks(*pdyn_plugin_descriptor(), {.seed = 1});
   ASSERT_FALSE(results.empty());
   for (const auto& r : results) {
@@ -15,4 +15,6 @@ TEST(@NAME @, PassesTheConformanceKit) {
   }
 }
 
-TEST(@NAME @, DescriptorNamesThisPlugin) { EXPECT_EQ(pdyn_plugin_descriptor()->name, "@NAME@"); }
+TEST(@NAME@, DescriptorNamesThisPlugin) {
+  EXPECT_EQ(pdyn_plugin_descriptor()->name, "@NAME@");
+}
