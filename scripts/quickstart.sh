@@ -55,7 +55,11 @@ npm ci --prefix viewer --no-audit --no-fund --loglevel=error
 # ccache, where the machine has it, makes a second build of the same sources
 # (another preset, another clone) mostly a copy.
 launcher=()
-command -v ccache >/dev/null 2>&1 && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  # Paths relative to the clone, so that another clone's objects are reused.
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
+fi
 
 if [[ "$what" == demo ]]; then
   # Only what the demo needs: the program and the shipped plugins.
