@@ -28,8 +28,11 @@ function(build_project source build)
   if(ARGC GREATER 2)
     set(build_type "-DCMAKE_BUILD_TYPE=${ARGV2}")
   endif()
+  # The flags pdyn was built with (sanitizers, in the asan preset): a test
+  # program linking an instrumented libpdyn_kernel must be linked alike.
   run("configuring ${source}" ${CMAKE_COMMAND} -S "${source}" -B "${build}" -G "${GENERATOR}"
-      -DCMAKE_CXX_COMPILER=${CXX} ${build_type}
+      -DCMAKE_CXX_COMPILER=${CXX} ${build_type} "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}"
+      "-DCMAKE_EXE_LINKER_FLAGS=${CXX_FLAGS}"
       -DCMAKE_PREFIX_PATH=${PREFIX} -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF)
   file(STRINGS "${build}/CMakeCache.txt" pdyn_dir REGEX "^pdyn_DIR:")
   string(FIND "${pdyn_dir}" "${PREFIX}/" at)
