@@ -25,14 +25,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The name a file is written under until it is complete. The fatal-signal
-// report (crash_report.hpp) removes these names, so they come from here only.
-fs::path temporary_name(const fs::path& path) {
-  fs::path temp = path;
-  temp += fmt::format(".tmp-{}", ::getpid());
-  return temp;
-}
-
 // Copies the first mark.bytes bytes of `source` into `dest`, returning false
 // (and copying nothing usable) if the file is shorter or its CRC differs. On
 // success `crc` holds the running CRC of the copied bytes, ready to go on.
@@ -61,7 +53,10 @@ bool copy_prefix(const fs::path& source, const OutputMark& mark, std::FILE* dest
 AtomicFile::AtomicFile(fs::path path, const OutputMark* resume) : path_(std::move(path)) {
   std::error_code ec;
   if (path_.has_parent_path()) fs::create_directories(path_.parent_path(), ec);
-  temp_ = temporary_name(path_);
+  // The name written to until commit(); the fatal-signal report
+  // (crash_report.hpp) gets it from temp_path().
+  temp_ = path_;
+  temp_ += fmt::format(".tmp-{}", ::getpid());
   file_ = std::fopen(temp_.c_str(), "wb");
   if (!file_) {
     throw Error(
@@ -323,8 +318,8 @@ class Output {
   }
   std::vector<fs::path> temp_files() const {
     std::vector<fs::path> files;
-    if (frames_) files.push_back(temporary_name(scene_.output.path));
-    if (energy_) files.push_back(temporary_name(scene_.output.energy));
+    if (frames_) files.push_back(frames_->temp_path());
+    if (energy_) files.push_back(energy_->temp_path());
     return files;
   }
   void set_crash_report(crash::FatalSignalReport* report) { crash_report_ = report; }

@@ -14,8 +14,8 @@
 namespace pdyn {
 
 struct RunOptions {
-  bool progress = false;            ///< draw a progress bar on `log`
-  std::ostream* log = nullptr;      ///< where the progress bar goes
+  bool progress = false;        ///< draw a progress bar on `log`
+  std::ostream* log = nullptr;  ///< where the progress bar goes
   /// Catch SIGINT and SIGTERM: finish the current step, write the final
   /// frame, energy row and a checkpoint, and stop with exit code 130. A
   /// second signal exits at once (temporary files keep their temporary names).
@@ -38,9 +38,9 @@ struct RunResult {
   int exit_code = 0;
   std::int64_t steps_done = 0;
   double time = 0.0;
-  std::string message;              ///< one line for the user when exit_code != 0
-  StepCounts counts;                ///< adaptive solvers: accepted and rejected steps
-  std::filesystem::path checkpoint; ///< the last checkpoint written, if any
+  std::string message;               ///< one line for the user when exit_code != 0
+  StepCounts counts;                 ///< adaptive solvers: accepted and rejected steps
+  std::filesystem::path checkpoint;  ///< the last checkpoint written, if any
   /// Set when the total energy grew more than a millionfold with no force
   /// driving it: one line naming the step, the energies and the solver.
   std::string energy_warning;
@@ -85,6 +85,8 @@ class AtomicFile {
   OutputMark mark();
   /// Flushes, fsyncs, closes and renames to the final name. Throws Error on failure.
   void commit();
+  /// The temporary name written to until commit().
+  const std::filesystem::path& temp_path() const noexcept { return temp_; }
 
  private:
   void resume_from(const OutputMark& mark);

@@ -521,10 +521,10 @@ std::optional<Vec3> Loader::read_vec3(const YAML::Node& n, const std::string& pa
                                       const ParamSpec& spec) {
   if (!n.IsSequence() || n.size() != 3) {
     // Say what was found: a list of the wrong length, or another kind of value.
-    const std::string found =
-        n.IsSequence() ? fmt::format("it has {} {}", n.size(), n.size() == 1 ? "number" : "numbers")
-        : n.IsMap()    ? fmt::format("it is the mapping {}", shown(n))
-                       : fmt::format("it is '{}'", shown(n));
+    const std::string found = n.IsSequence()
+                                  ? "it has " + count_of(static_cast<long long>(n.size()), "number")
+                              : n.IsMap() ? fmt::format("it is the mapping {}", shown(n))
+                                          : fmt::format("it is '{}'", shown(n));
     error(n, path,
           fmt::format("{}: is not a 3-vector: {} (expected {})", path, found, expectation(spec)));
     return std::nullopt;
