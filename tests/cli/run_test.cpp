@@ -109,8 +109,7 @@ TEST(RunCommand, EnergyGrowingWithoutADrivingForceIsWarnedAbout) {
   // --strict: the same run stops there with exit status 4.
   const auto strict = test::pdyn({"run", scene.string(), "--strict"});
   EXPECT_EQ(strict.status, 4) << strict.err;
-  EXPECT_EQ(strict.err.rfind("pdyn: the total energy grew from 0.981 J to ", 0), 0u)
-      << strict.err;
+  EXPECT_EQ(strict.err.rfind("pdyn: the total energy grew from 0.981 J to ", 0), 0u) << strict.err;
   EXPECT_NE(strict.err.find("(--strict: stopped here"), std::string::npos) << strict.err;
   EXPECT_EQ(strict.out, "");
 }

@@ -30,10 +30,12 @@ TEST(DocAgreement, ASpringTakesOneRestLengthAsANumber) {
       "  - { position: [0.3, 0, 0], mass: 1 }\n"
       "  - { position: [0, 0.5, 0], mass: 1 }\n"
       "forces:\n";
-  Scene scalar = test::load_text(head + "  - { type: spring, pairs: [[0, 1], [0, 2]], ks: 10, "
-                                        "rest: 0.1 }\n");
-  Scene list = test::load_text(head + "  - { type: spring, pairs: [[0, 1], [0, 2]], ks: 10, "
-                                      "rest: [0.1] }\n");
+  Scene scalar = test::load_text(head +
+                                 "  - { type: spring, pairs: [[0, 1], [0, 2]], ks: 10, "
+                                 "rest: 0.1 }\n");
+  Scene list = test::load_text(head +
+                               "  - { type: spring, pairs: [[0, 1], [0, 2]], ks: 10, "
+                               "rest: [0.1] }\n");
   const Matrix3X f = test::ForcesOf(*scalar.system, 0);
   EXPECT_EQ(f, test::ForcesOf(*list.system, 0));
   EXPECT_NEAR(f(0, 1), -10 * (0.3 - 0.1), 1e-12);  // stretched by 0.2 m
