@@ -33,10 +33,10 @@
 #include <vector>
 
 #include "fused_cloth.hpp"
-#include "registry.hpp"
-#include "runner.hpp"
-#include "scene.hpp"
-#include "side_files.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
+#include "pdyn/host/side_files.hpp"
 
 namespace {
 

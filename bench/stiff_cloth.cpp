@@ -27,9 +27,9 @@
 #include <vector>
 
 #include "implicit_euler_solver.hpp"
-#include "registry.hpp"
-#include "runner.hpp"
-#include "scene.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace {
 

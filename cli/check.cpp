@@ -12,9 +12,9 @@
 
 #include "commands.hpp"
 #include "pdyn/conformance.hpp"
-#include "registry.hpp"
+#include "pdyn/host/registry.hpp"
 #include "sdk_commands.hpp"
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn::cli {
 

@@ -11,13 +11,13 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 
-#include "crash_report.hpp"
-#include "registry.hpp"
+#include "pdyn/host/crash_report.hpp"
+#include "pdyn/host/registry.hpp"
 #include "render.hpp"
-#include "runner.hpp"
-#include "scene.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
 #include "sdk_commands.hpp"
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn::cli {
 

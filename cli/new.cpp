@@ -14,7 +14,7 @@
 #include <system_error>
 
 #include "commands.hpp"
-#include "registry.hpp"
+#include "pdyn/host/registry.hpp"
 #include "sdk_commands.hpp"
 #include "templates.hpp"
 

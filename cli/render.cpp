@@ -23,9 +23,9 @@
 
 #include "commands.hpp"
 #include "pdyn/error.hpp"
-#include "registry.hpp"
-#include "runner.hpp"
-#include "text.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn::cli {
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "pdyn/types.hpp"
-#include "scene.hpp"
-#include "scene_drawables.hpp"
+#include "pdyn/host/scene.hpp"
+#include "pdyn/host/scene_drawables.hpp"
 #include "sdk_commands.hpp"
 
 namespace pdyn::cli {

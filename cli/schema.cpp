@@ -17,8 +17,8 @@
 #include <ostream>
 
 #include "commands.hpp"
-#include "registry.hpp"
-#include "scene_specs.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/scene_specs.hpp"
 #include "sdk_commands.hpp"
 
 namespace pdyn::cli {

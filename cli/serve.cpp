@@ -11,7 +11,7 @@
 
 #include "commands.hpp"
 #include "pdyn/parallel.hpp"
-#include "registry.hpp"
+#include "pdyn/host/registry.hpp"
 #include "sdk_commands.hpp"
 #include "server.hpp"
 #include "session.hpp"

@@ -10,9 +10,9 @@
 #include <sstream>
 #include <string>
 
-#include "registry.hpp"
-#include "runner.hpp"
-#include "scene.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace {
 

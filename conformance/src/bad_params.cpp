@@ -15,8 +15,8 @@
 
 #include "checks.hpp"
 #include "pdyn/system.hpp"
-#include "registry.hpp"
-#include "scene.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn::conformance::detail {
 

@@ -14,7 +14,7 @@
 #include <cstring>
 #include <optional>
 
-#include "crash_report.hpp"
+#include "pdyn/host/crash_report.hpp"
 #include "pdyn/parallel.hpp"
 
 namespace pdyn::conformance::detail {

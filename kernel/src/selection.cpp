@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <unordered_set>
 
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn {
 

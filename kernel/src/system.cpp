@@ -5,10 +5,9 @@
 
 #include <algorithm>
 
-#include "crash_report.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/parallel.hpp"
-#include "registry.hpp"
+#include "pdyn/plugin_call.hpp"
 
 namespace pdyn {
 

@@ -1,4 +1,4 @@
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 #include <algorithm>
 #include <numeric>

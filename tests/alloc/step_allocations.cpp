@@ -14,9 +14,9 @@
 #include <new>
 #include <pdyn/parallel.hpp>
 
-#include "registry.hpp"
-#include "runner.hpp"
-#include "scene.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
 
 extern "C" {
 void* __libc_malloc(std::size_t);

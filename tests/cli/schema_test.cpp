@@ -6,7 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "scene_specs.hpp"
+#include "pdyn/host/scene_specs.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {

@@ -10,7 +10,7 @@
 //   dup/        pdyn_force_gravity.so      a second valid `gravity`
 //   push/       pdyn_force_test_push.so    a valid force, test_push
 //   construct/  pdyn_force_throwing_factory.so, pdyn_force_throwing_descriptor.so
-#include "registry.hpp"
+#include "pdyn/host/registry.hpp"
 
 #include <dlfcn.h>
 #include <gtest/gtest.h>
@@ -26,7 +26,7 @@
 #include "pdyn/system.hpp"
 #include "pdyn/version.hpp"
 #include "support/test_support.hpp"
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn {
 namespace {

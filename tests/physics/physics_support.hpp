@@ -12,7 +12,7 @@
 
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn::test {
 

@@ -13,7 +13,7 @@
 
 #include "pdyn/targets.hpp"
 #include "plugins/force_support.hpp"
-#include "runner.hpp"
+#include "pdyn/host/runner.hpp"
 
 namespace pdyn {
 namespace {

@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "plugins/force_support.hpp"
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn {
 namespace {

@@ -15,7 +15,7 @@
 #include <iostream>
 
 #include "plugins/force_support.hpp"
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn {
 namespace {

@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "plugins/force_support.hpp"
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn {
 namespace {

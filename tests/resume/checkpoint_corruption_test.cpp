@@ -17,7 +17,7 @@
 #include <random>
 
 #include "resume/resume_support.hpp"
-#include "runner.hpp"
+#include "pdyn/host/runner.hpp"
 
 namespace pdyn {
 namespace {

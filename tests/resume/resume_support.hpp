@@ -22,7 +22,7 @@
 #include <thread>
 #include <vector>
 
-#include "checkpoint.hpp"
+#include "pdyn/host/checkpoint.hpp"
 #include "support/test_support.hpp"
 
 extern char** environ;

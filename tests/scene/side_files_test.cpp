@@ -1,6 +1,6 @@
 // CSV side files (kernel/src/side_files.cpp): particles and spring pairs
 // read from files a scene names, with exact located messages for bad rows.
-#include "side_files.hpp"
+#include "pdyn/host/side_files.hpp"
 
 #include <gtest/gtest.h>
 

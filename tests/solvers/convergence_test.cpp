@@ -6,7 +6,7 @@
 
 #include <iostream>
 
-#include "runner.hpp"
+#include "pdyn/host/runner.hpp"
 #include "solvers/solver_support.hpp"
 
 namespace pdyn {

@@ -9,7 +9,7 @@
 #include <map>
 
 #include "pdyn/error.hpp"
-#include "runner.hpp"
+#include "pdyn/host/runner.hpp"
 #include "solvers/solver_support.hpp"
 
 namespace pdyn {

@@ -14,7 +14,7 @@
 #include <iostream>
 
 #include "pdyn/error.hpp"
-#include "runner.hpp"
+#include "pdyn/host/runner.hpp"
 #include "solvers/solver_support.hpp"
 
 namespace pdyn {

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "registry.hpp"
-#include "runner.hpp"
-#include "scene.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn::test {
 

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "pdyn/targets.hpp"
-#include "scene_drawables.hpp"
+#include "pdyn/host/scene_drawables.hpp"
 
 namespace pdyn::viewer {
 

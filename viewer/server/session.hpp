@@ -22,8 +22,8 @@
 
 #include "pdyn/error.hpp"
 #include "protocol.hpp"
-#include "registry.hpp"
-#include "scene.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn::viewer {
 

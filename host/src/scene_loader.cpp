@@ -18,12 +18,12 @@
 #include <set>
 #include <sstream>
 
-#include "runner.hpp"
-#include "scene.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/host/scene.hpp"
 #include "scene_builders.hpp"
-#include "scene_specs.hpp"
-#include "side_files.hpp"
-#include "text.hpp"
+#include "pdyn/host/scene_specs.hpp"
+#include "pdyn/host/side_files.hpp"
+#include "pdyn/text.hpp"
 #include "written_paths.hpp"
 
 namespace pdyn {

@@ -13,25 +13,6 @@
 
 namespace pdyn {
 
-/// A plugin library could not be used: exit status 3. The message names the
-/// library path and, where known, the plugin.
-class PluginError : public Error {
- public:
-  using Error::Error;
-};
-
-/// A plugin object threw while the simulation ran: exit status 3. `label`
-/// names the plugin and its place in the scene.
-class PluginRuntimeError : public PluginError {
- public:
-  PluginRuntimeError(std::string label, const std::string& what)
-      : PluginError(label + ": " + what), label_(std::move(label)) {}
-  const std::string& label() const noexcept { return label_; }
-
- private:
-  std::string label_;
-};
-
 /// One plugin found on the search path.
 struct PluginRecord {
   const PluginDescriptor* descriptor = nullptr;

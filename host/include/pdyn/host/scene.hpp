@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "pdyn/system.hpp"
-#include "registry.hpp"
+#include "pdyn/host/registry.hpp"
 
 namespace pdyn {
 

@@ -13,7 +13,7 @@
 //
 // The length and CRC are checked before any field is parsed, and every read
 // is bounds-checked, so a truncated or corrupted file is refused whole.
-#include "checkpoint.hpp"
+#include "pdyn/host/checkpoint.hpp"
 
 #include <fcntl.h>
 #include <fmt/format.h>

@@ -8,8 +8,8 @@
 #include <optional>
 #include <string>
 
-#include "checkpoint.hpp"
-#include "scene.hpp"
+#include "pdyn/host/checkpoint.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn {
 

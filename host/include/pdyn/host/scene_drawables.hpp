@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "pdyn/types.hpp"
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn {
 

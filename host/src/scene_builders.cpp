@@ -12,7 +12,7 @@
 #include <numbers>
 #include <random>
 
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn {
 

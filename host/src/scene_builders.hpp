@@ -16,7 +16,7 @@
 
 #include "pdyn/params.hpp"
 #include "pdyn/types.hpp"
-#include "scene_specs.hpp"
+#include "pdyn/host/scene_specs.hpp"
 
 namespace pdyn {
 

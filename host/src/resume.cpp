@@ -2,8 +2,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "runner.hpp"
-#include "text.hpp"
+#include "pdyn/host/runner.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn {
 

@@ -1,6 +1,6 @@
 // The current-plugin-call record and `pdyn run`'s fatal-signal handler
 // (see crash_report.hpp).
-#include "crash_report.hpp"
+#include "pdyn/host/crash_report.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -9,13 +9,11 @@
 #include <csignal>
 #include <cstring>
 
-#include "scene.hpp"
+#include "pdyn/host/scene.hpp"
 
 namespace pdyn::crash {
 
 namespace fs = std::filesystem;
-
-thread_local const PluginCall* t_current_call = nullptr;
 
 namespace {
 

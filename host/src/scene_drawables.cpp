@@ -1,5 +1,5 @@
 // Links and obstacles of a scene, for pictures and the viewer.
-#include "scene_drawables.hpp"
+#include "pdyn/host/scene_drawables.hpp"
 
 namespace pdyn {
 

@@ -1,7 +1,7 @@
 // CSV side files (see side_files.hpp). One pass over the file held in
 // memory, fields split at commas, numbers parsed with std::from_chars: no
 // streams, no locale, no allocation per field.
-#include "side_files.hpp"
+#include "pdyn/host/side_files.hpp"
 
 #include <fmt/format.h>
 
@@ -13,7 +13,7 @@
 #include <sstream>
 #include <string_view>
 
-#include "text.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn::side_files {
 

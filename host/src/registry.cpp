@@ -6,7 +6,7 @@
 // is touched: a library built against another kernel may lay out
 // PluginDescriptor differently, so nothing else of it is trusted until the
 // versions agree.
-#include "registry.hpp"
+#include "pdyn/host/registry.hpp"
 
 #include <fmt/format.h>
 

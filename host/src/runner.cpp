@@ -1,6 +1,6 @@
 // The step loop: Witkin's simulation loop plus output, checkpoints, signals
 // and fault handling.
-#include "runner.hpp"
+#include "pdyn/host/runner.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -14,7 +14,7 @@
 #include <pdyn/parallel.hpp>
 #include <tuple>
 
-#include "crash_report.hpp"
+#include "pdyn/host/crash_report.hpp"
 
 namespace pdyn {
 

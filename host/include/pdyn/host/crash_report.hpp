@@ -1,6 +1,6 @@
-// Naming the plugin that crashed: the "current plugin call" record that the
-// step loop keeps around every call into a plugin, and the fatal-signal
-// handler of `pdyn run` that reads it.
+// Naming the plugin that crashed: the fatal-signal handler of `pdyn run`,
+// which reads the "current plugin call" record that the kernel keeps around
+// every call into a plugin (pdyn/plugin_call.hpp).
 //
 // A plugin that dereferences a null pointer kills the process with SIGSEGV;
 // no exception is thrown, so the step loop's own fault handling never sees
@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/plugin_call.hpp"
+
 namespace pdyn {
 
 struct Scene;
@@ -25,36 +27,6 @@ namespace crash {
 /// "SIGSEGV", "SIGABRT", ... for the usual signals; nullptr for others.
 /// Async-signal-safe (returns a string literal).
 const char* signal_name(int sig) noexcept;
-
-/// One plugin call in progress: the label the System holds for the object
-/// (its address identifies the object) and the hook being called.
-struct PluginCall {
-  const std::string* label;
-  const char* hook;  ///< a string literal: "add_forces", "step", ...
-};
-
-/// The calling thread's innermost plugin call, or null.
-extern thread_local const PluginCall* t_current_call;
-
-/// Marks a plugin call for its lifetime. Nested scopes (the forces a
-/// solver's step calls) restore the outer one on exit. Per thread, so two
-/// systems stepped in two threads keep apart; the fatal-signal handler
-/// falls back to the thread that installed it when the crash happens in a
-/// plugin's own worker thread (OpenMP).
-class CallScope {
- public:
-  CallScope(const std::string& label, const char* hook) noexcept
-      : call_{&label, hook}, previous_(t_current_call) {
-    t_current_call = &call_;
-  }
-  ~CallScope() { t_current_call = previous_; }
-  CallScope(const CallScope&) = delete;
-  CallScope& operator=(const CallScope&) = delete;
-
- private:
-  PluginCall call_;
-  const PluginCall* previous_;
-};
 
 /// The step the runner is taking, for the crash message (one store).
 void set_step(std::int64_t step) noexcept;
