@@ -37,6 +37,7 @@
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/side_files.hpp"
+#include "pdyn/stepper.hpp"
 
 namespace {
 
@@ -114,9 +115,9 @@ bool same_state_check(int n, int steps) {
   pdyn::Scene scene = load_pdyn(n, steps);
   const pdyn::RunResult r = pdyn::run_scene(scene);
   pdyn::Scene direct = load_pdyn(n, steps);
+  pdyn::Stepper direct_stepper(*direct.system, *direct.solver, direct.solver_label);
   for (int k = 0; k < steps; ++k) {
-    direct.solver->step(*direct.system, kDt);
-    direct.system->set_time((k + 1) * kDt);
+    if (!direct_stepper.step_to((k + 1) * kDt)) return false;
   }
   FusedCloth fused(spec(n));
   for (int k = 0; k < steps; ++k) fused.step(kDt);
@@ -168,9 +169,9 @@ void BM_pdyn_step(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   pdyn::set_threads(static_cast<int>(state.range(1)));
   pdyn::Scene scene = load_pdyn(n, 1);
+  pdyn::Stepper stepper(*scene.system, *scene.solver, scene.solver_label);
   for (auto _ : state) {
-    scene.solver->step(*scene.system, kDt);
-    scene.system->respond_to_collisions(kDt);
+    if (!stepper.step(kDt)) state.SkipWithError(stepper.fault().what.c_str());
   }
   set_counters(state, n);
 }
@@ -348,7 +349,10 @@ int run_only(const std::string& variant, int n, int steps, int threads) {
   if (variant == "pdyn_step") {
     pdyn::set_threads(threads);
     pdyn::Scene scene = load_pdyn(n, steps);
-    for (int k = 0; k < steps; ++k) scene.solver->step(*scene.system, kDt);
+    pdyn::Stepper stepper(*scene.system, *scene.solver, scene.solver_label);
+    for (int k = 0; k < steps; ++k) {
+      if (!stepper.step(kDt)) return 1;
+    }
     return 0;
   }
   if (variant == "fused") {

@@ -13,8 +13,8 @@
 #include "commands.hpp"
 #include "pdyn/conformance.hpp"
 #include "pdyn/host/registry.hpp"
-#include "sdk_commands.hpp"
 #include "pdyn/text.hpp"
+#include "sdk_commands.hpp"
 
 namespace pdyn::cli {
 

@@ -13,11 +13,11 @@
 
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/registry.hpp"
-#include "render.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
-#include "sdk_commands.hpp"
 #include "pdyn/text.hpp"
+#include "render.hpp"
+#include "sdk_commands.hpp"
 
 namespace pdyn::cli {
 

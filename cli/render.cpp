@@ -7,11 +7,11 @@
 // one framing and can be flipped through.
 #include "render.hpp"
 
-#include <Eigen/Geometry>
 #include <cairo.h>
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -34,11 +34,16 @@ namespace fs = std::filesystem;
 namespace render {
 
 bool parse_view(const std::string& text, View& view) {
-  if (text == "3d") view = View::Oblique;
-  else if (text == "xy") view = View::XY;
-  else if (text == "xz") view = View::XZ;
-  else if (text == "yz") view = View::YZ;
-  else return false;
+  if (text == "3d")
+    view = View::Oblique;
+  else if (text == "xy")
+    view = View::XY;
+  else if (text == "xz")
+    view = View::XZ;
+  else if (text == "yz")
+    view = View::YZ;
+  else
+    return false;
   return true;
 }
 
@@ -52,9 +57,21 @@ constexpr int kLabelHeight = 24;  // px reserved at the top for the caption
 // -y (azimuth -60 deg from +x) and 25 degrees above the horizon, with z up.
 void axes(View view, Vec3& right, Vec3& up, Vec3& toward) {
   switch (view) {
-    case View::XY: right = Vec3::UnitX(); up = Vec3::UnitY(); toward = Vec3::UnitZ(); return;
-    case View::XZ: right = Vec3::UnitX(); up = Vec3::UnitZ(); toward = -Vec3::UnitY(); return;
-    case View::YZ: right = Vec3::UnitY(); up = Vec3::UnitZ(); toward = Vec3::UnitX(); return;
+    case View::XY:
+      right = Vec3::UnitX();
+      up = Vec3::UnitY();
+      toward = Vec3::UnitZ();
+      return;
+    case View::XZ:
+      right = Vec3::UnitX();
+      up = Vec3::UnitZ();
+      toward = -Vec3::UnitY();
+      return;
+    case View::YZ:
+      right = Vec3::UnitY();
+      up = Vec3::UnitZ();
+      toward = Vec3::UnitX();
+      return;
     case View::Oblique: {
       const double az = -60.0 * kPi / 180.0, el = 25.0 * kPi / 180.0;
       toward = Vec3(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
@@ -185,9 +202,8 @@ void draw(cairo_t* cr, const Camera& cam, const Frame& f, const Drawables& d,
   // picture is the same on every run.
   std::vector<Index> order(static_cast<std::size_t>(n));
   std::iota(order.begin(), order.end(), Index{0});
-  std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
-    return cam.depth(f.x.col(a)) < cam.depth(f.x.col(b));
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](Index a, Index b) { return cam.depth(f.x.col(a)) < cam.depth(f.x.col(b)); });
   // At least 1.6 px, so that the pixel under a particle's centre is wholly
   // inside its disc (a pixel's far corner is at most sqrt(2) px away).
   const double r =
@@ -279,15 +295,16 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   }
   for (double t : a.at) {
     if (!std::isfinite(t) || t < 0) {
-      err << fmt::format("pdyn render: --at {} is not a time (expected times >= 0 s, e.g. "
-                         "--at 0,0.5,1)\n",
-                         t);
+      err << fmt::format(
+          "pdyn render: --at {} is not a time (expected times >= 0 s, e.g. "
+          "--at 0,0.5,1)\n",
+          t);
       return kBadInput;
     }
   }
   PluginRegistry registry;
-  registry.discover(
-      PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+  registry.discover(PluginRegistry::search_path(
+      std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
   std::vector<Override> base;
   for (const auto& s : a.sets) base.push_back(parse_override(s));
 
@@ -332,8 +349,7 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
   const std::string name = fs::path(a.scene).filename().string();
   std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
       cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), cairo_surface_destroy);
-  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()),
-                                                         cairo_destroy);
+  std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()), cairo_destroy);
   for (std::size_t k = 0; k < frames.size(); ++k) {
     const std::string caption = fmt::format("{}   t = {:.3f} s   {}   view {}", name, frames[k].t,
                                             count_of(frames[k].x.cols(), "particle"), a.view);

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "pdyn/types.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/scene_drawables.hpp"
+#include "pdyn/types.hpp"
 #include "sdk_commands.hpp"
 
 namespace pdyn::cli {

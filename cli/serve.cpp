@@ -10,8 +10,8 @@
 #include <ostream>
 
 #include "commands.hpp"
-#include "pdyn/parallel.hpp"
 #include "pdyn/host/registry.hpp"
+#include "pdyn/parallel.hpp"
 #include "sdk_commands.hpp"
 #include "server.hpp"
 #include "session.hpp"
@@ -45,12 +45,13 @@ std::vector<fs::path> viewer_candidates(const ServeArgs& a) {
 
 int cmd_serve(const ServeArgs& a, std::ostream& out, std::ostream& err) {
   if (a.port < 0 || a.port > 65535) {
-    err << fmt::format("pdyn serve: --port {} is out of range (expected 0..65535; 0 picks a free port)\n",
-                       a.port);
+    err << fmt::format(
+        "pdyn serve: --port {} is out of range (expected 0..65535; 0 picks a free port)\n", a.port);
     return kBadInput;
   }
   if (a.threads < 0) {
-    err << fmt::format("pdyn serve: --threads {} (expected >= 1, or 0 for the default)\n", a.threads);
+    err << fmt::format("pdyn serve: --threads {} (expected >= 1, or 0 for the default)\n",
+                       a.threads);
     return kBadInput;
   }
   fs::path root;
@@ -64,10 +65,11 @@ int cmd_serve(const ServeArgs& a, std::ostream& out, std::ostream& err) {
     looked += (looked.empty() ? "" : ", ") + c.string();
   }
   if (root.empty()) {
-    err << fmt::format("pdyn serve: the viewer's page was not found (looked for index.html in {}; "
-                       "expected pdyn built with the viewer after `npm ci --prefix viewer`, or "
-                       "--viewer DIR)\n",
-                       looked.empty() ? "no folder" : looked);
+    err << fmt::format(
+        "pdyn serve: the viewer's page was not found (looked for index.html in {}; "
+        "expected pdyn built with the viewer after `npm ci --prefix viewer`, or "
+        "--viewer DIR)\n",
+        looked.empty() ? "no folder" : looked);
     return kFailure;
   }
   try {
@@ -80,7 +82,7 @@ int cmd_serve(const ServeArgs& a, std::ostream& out, std::ostream& err) {
     options.host = a.host;
     options.port = static_cast<unsigned short>(a.port);
     options.root = root;
-    options.threads = a.threads > 0                   ? a.threads
+    options.threads = a.threads > 0                 ? a.threads
                       : session.scene_threads() > 0 ? session.scene_threads()
                                                     : available_threads();
     viewer::serve(session, options, out, a.scene);
@@ -94,8 +96,8 @@ int cmd_serve(const ServeArgs& a, std::ostream& out, std::ostream& err) {
 
 SdkCommand add_serve_command(CLI::App& app) {
   auto a = std::make_shared<ServeArgs>();
-  CLI::App* sub = app.add_subcommand(
-      "serve", "run a scene in the interactive browser viewer (docs/viewer.md)");
+  CLI::App* sub =
+      app.add_subcommand("serve", "run a scene in the interactive browser viewer (docs/viewer.md)");
   sub->add_option("scene", a->scene, "scene file (YAML)")->required();
   sub->add_option("--port", a->port, "TCP port (default 8080; 0: any free port, printed)");
   sub->add_option("--host", a->host,

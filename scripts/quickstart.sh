@@ -29,6 +29,7 @@ packages=(
   python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
   libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
   libbenchmark-dev                 # bench/ (Google Benchmark)
+  clang-format-14                  # the formatting check (tests/format.cmake)
 )
 # pdyn serve's page takes three.js from the npm registry (viewer/package.json
 # and its lock file); Node.js and npm come from Debian unless the machine

@@ -14,9 +14,9 @@
 #include <optional>
 
 #include "checks.hpp"
-#include "pdyn/system.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/system.hpp"
 
 namespace pdyn::conformance::detail {
 

@@ -109,8 +109,7 @@ std::size_t non_finite(const Matrix3X& m) {
   return count;
 }
 
-CheckResult result(std::string name, bool pass, double measured, double bound,
-                   std::string detail) {
+CheckResult result(std::string name, bool pass, double measured, double bound, std::string detail) {
   return {std::move(name), pass ? Verdict::Pass : Verdict::Fail, measured, bound,
           std::move(detail)};
 }
@@ -464,8 +463,9 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
     const Index bad = (y.array().isFinite() == false).count();
     const double drift = (sys->positions() - x).cwiseAbs().maxCoeff();
     return result("finite_on_degenerate", bad == 0 && drift == 0, static_cast<double>(bad) + drift,
-                  0, "coincident particles at rest, far from the origin, no force: state finite "
-                     "and unchanged");
+                  0,
+                  "coincident particles at rest, far from the origin, no force: state finite "
+                  "and unchanged");
   });
 
   const int order = d.solver_traits.order;
@@ -495,8 +495,8 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
       for (int s = 0; s < 10; ++s) solver->step(*sys, 0.1);
       const double t = sys->time();
       const Vec3 x = kX0 + kV0 * t + 0.5 * g * t * t, v = kV0 + g * t;
-      const double err = std::max((sys->positions().col(0) - x).norm(),
-                                  (sys->velocities().col(0) - v).norm());
+      const double err =
+          std::max((sys->positions().col(0) - x).norm(), (sys->velocities().col(0) - v).norm());
       const double bound = 1e-12 * (1.0 + x.norm() + v.norm());
       return result("solver.exact_constant_acceleration", err <= bound, err, bound,
                     "declared order >= 2: 10 steps of 0.1 s under constant g, m and m/s");
@@ -557,9 +557,9 @@ bool inside(Collider& c, const Vec3& x) {
 }
 
 struct Drop {
-  Vec3 direction;                  // unit, the direction of travel
-  bool hit = false;                // respond() changed the velocity
-  bool ended_inside = false;       // some step ended inside
+  Vec3 direction;                   // unit, the direction of travel
+  bool hit = false;                 // respond() changed the velocity
+  bool ended_inside = false;        // some step ended inside
   Vec3 v_in, v_out, contact_point;  // at the first response
 };
 
@@ -610,7 +610,9 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
   for (const auto& spec : d.params) {
     if (spec.name == "friction" && spec.type == ParamType::Real) params.set("friction", 0.0);
   }
-  auto make = [&] { return std::shared_ptr<Collider>(d.create_collider(params, context_of(home))); };
+  auto make = [&] {
+    return std::shared_ptr<Collider>(d.create_collider(params, context_of(home)));
+  };
   std::shared_ptr<Collider> c;
   guarded(out, "construct.defaults", [&] {
     c = make();
@@ -705,8 +707,8 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
     }
   }
   if (!normal) {
-    out.push_back(result("collider.restitution", false, 0, 0,
-                         "no axis-aligned drop was a normal impact"));
+    out.push_back(
+        result("collider.restitution", false, 0, 0, "no axis-aligned drop was a normal impact"));
     return;
   }
   const Vec3 n = -normal->direction;  // outward normal at the contact point
@@ -716,9 +718,9 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
     for (const auto& spec : d.params) {
       if (spec.name == "restitution" && spec.type == ParamType::Real) {
         const double kr = params.real("restitution");
-        return result("collider.restitution", std::abs(e - kr) <= 1e-9, std::abs(e - kr), 1e-9,
-                      fmt::format("normal impact at 5 m/s: |v_out|/|v_in| = {:.6g}, declared {}",
-                                  e, kr));
+        return result(
+            "collider.restitution", std::abs(e - kr) <= 1e-9, std::abs(e - kr), 1e-9,
+            fmt::format("normal impact at 5 m/s: |v_out|/|v_in| = {:.6g}, declared {}", e, kr));
       }
     }
     return result("collider.restitution", e <= 1.0 + 1e-12, e, 1.0,
@@ -751,9 +753,9 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
       worst = std::max(worst, (dv - dv.dot(*m) * *m).norm());
     }
     if (oblique == 0) return skip("collider.frictionless_tangential", "no oblique impact");
-    return result("collider.frictionless_tangential", worst <= 1e-12 * 5.0, worst, 1e-12 * 5.0,
-                  fmt::format("{} oblique impacts at 5 m/s: |tangential change of v|, m/s",
-                              oblique));
+    return result(
+        "collider.frictionless_tangential", worst <= 1e-12 * 5.0, worst, 1e-12 * 5.0,
+        fmt::format("{} oblique impacts at 5 m/s: |tangential change of v|, m/s", oblique));
   });
 
   guarded(out, "collider.contact_force_normal_only", [&] {
@@ -774,7 +776,6 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
                   "unchanged; error, N");
   });
 }
-
 
 // ---- every kind: two threads, two systems ----
 //
@@ -880,9 +881,12 @@ CheckResult check_threads(const PluginDescriptor& d, const Options& o) {
 
 const char* verdict_name(Verdict v) {
   switch (v) {
-    case Verdict::Pass: return "pass";
-    case Verdict::Fail: return "FAIL";
-    case Verdict::Skip: return "skip";
+    case Verdict::Pass:
+      return "pass";
+    case Verdict::Fail:
+      return "FAIL";
+    case Verdict::Skip:
+      return "skip";
   }
   return "?";
 }
@@ -904,22 +908,42 @@ Params sample_params(const PluginDescriptor& d, Index n) {
     if (s.min && x <= *s.min) x = *s.min + 1.0;
     if (s.max && x > *s.max) x = s.min ? 0.5 * (*s.min + *s.max) : *s.max - 1.0;
     switch (s.type) {
-      case ParamType::Real: p.set(s.name, x); break;
-      case ParamType::Integer: p.set(s.name, static_cast<std::int64_t>(std::ceil(x))); break;
-      case ParamType::Boolean: p.set(s.name, false); break;
-      case ParamType::String: p.set(s.name, std::string{}); break;
-      case ParamType::Vector: p.set(s.name, Vec3(0.3, -0.2, 0.9)); break;
-      case ParamType::RealList: p.set(s.name, std::vector<double>{x}); break;
-      case ParamType::VectorList: p.set(s.name, std::vector<Vec3>{Vec3(0.3, -0.2, 0.9)}); break;
-      case ParamType::IndexList: p.set(s.name, std::vector<Index>{0, 1, n - 1}); break;
+      case ParamType::Real:
+        p.set(s.name, x);
+        break;
+      case ParamType::Integer:
+        p.set(s.name, static_cast<std::int64_t>(std::ceil(x)));
+        break;
+      case ParamType::Boolean:
+        p.set(s.name, false);
+        break;
+      case ParamType::String:
+        p.set(s.name, std::string{});
+        break;
+      case ParamType::Vector:
+        p.set(s.name, Vec3(0.3, -0.2, 0.9));
+        break;
+      case ParamType::RealList:
+        p.set(s.name, std::vector<double>{x});
+        break;
+      case ParamType::VectorList:
+        p.set(s.name, std::vector<Vec3>{Vec3(0.3, -0.2, 0.9)});
+        break;
+      case ParamType::IndexList:
+        p.set(s.name, std::vector<Index>{0, 1, n - 1});
+        break;
       case ParamType::IndexPairs:
         p.set(s.name, std::vector<IndexPair>{{0, 1}, {1, 2}, {2, 3}, {0, n - 1}});
         break;
       case ParamType::IndexTriples:
         p.set(s.name, std::vector<IndexTriple>{{0, 1, 2}, {1, 2, 3}});
         break;
-      case ParamType::StringList: p.set(s.name, std::vector<std::string>{"1"}); break;
-      case ParamType::NamedReals: p.set(s.name, NamedReals{{"a", x}}); break;
+      case ParamType::StringList:
+        p.set(s.name, std::vector<std::string>{"1"});
+        break;
+      case ParamType::NamedReals:
+        p.set(s.name, NamedReals{{"a", x}});
+        break;
     }
   }
   return p;
@@ -931,9 +955,15 @@ void check_sequence(const PluginDescriptor& d, const Options& o, std::vector<Che
   out.push_back(check_descriptor(d));
   try {
     switch (d.kind) {
-      case PluginKind::Force: force_checks(d, o, out); break;
-      case PluginKind::Solver: solver_checks(d, o, out); break;
-      case PluginKind::Collider: collider_checks(d, o, out); break;
+      case PluginKind::Force:
+        force_checks(d, o, out);
+        break;
+      case PluginKind::Solver:
+        solver_checks(d, o, out);
+        break;
+      case PluginKind::Collider:
+        collider_checks(d, o, out);
+        break;
     }
     // Only for a plugin that can be built at all: the rest would fail for
     // the same reason as construct.defaults.
@@ -976,8 +1006,8 @@ std::string table(const std::vector<CheckResult>& results) {
                               "MEASURED", "BOUND", "DETAIL");
   for (const auto& r : results) {
     if (r.verdict == Verdict::Skip) {
-      s += fmt::format("{:<{}}  {:<7} {:>11} {:>11}  {}\n", r.name, w, verdict_name(r.verdict),
-                       "-", "-", r.detail);
+      s += fmt::format("{:<{}}  {:<7} {:>11} {:>11}  {}\n", r.name, w, verdict_name(r.verdict), "-",
+                       "-", r.detail);
     } else {
       s += fmt::format("{:<{}}  {:<7} {:>11.3g} {:>11.3g}  {}\n", r.name, w,
                        verdict_name(r.verdict), r.measured, r.bound, r.detail);
@@ -991,11 +1021,20 @@ std::string xml_escape(const std::string& in) {
   std::string out;
   for (char ch : in) {
     switch (ch) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += ch;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += ch;
     }
   }
   return out;
@@ -1008,13 +1047,14 @@ std::string junit_xml(const PluginDescriptor& d, const std::vector<CheckResult>&
   const auto skipped = std::count_if(results.begin(), results.end(),
                                      [](const auto& r) { return r.verdict == Verdict::Skip; });
   std::string s = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  s += fmt::format("<testsuite name=\"pdyn.check.{}\" tests=\"{}\" failures=\"{}\" skipped=\"{}\">\n",
-                   xml_escape(d.name), results.size(), failures, skipped);
+  s += fmt::format(
+      "<testsuite name=\"pdyn.check.{}\" tests=\"{}\" failures=\"{}\" skipped=\"{}\">\n",
+      xml_escape(d.name), results.size(), failures, skipped);
   for (const auto& r : results) {
     s += fmt::format("  <testcase classname=\"{}.{}\" name=\"{}\"", kind_name(d.kind),
                      xml_escape(d.name), xml_escape(r.name));
-    const std::string text = fmt::format("measured {:.6g}, bound {:.6g}: {}", r.measured, r.bound,
-                                         r.detail);
+    const std::string text =
+        fmt::format("measured {:.6g}, bound {:.6g}: {}", r.measured, r.bound, r.detail);
     if (r.verdict == Verdict::Fail) {
       s += fmt::format(">\n    <failure message=\"{}\"/>\n  </testcase>\n", xml_escape(text));
     } else if (r.verdict == Verdict::Skip) {

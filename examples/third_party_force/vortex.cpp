@@ -37,11 +37,13 @@ pdyn::PluginDescriptor describe() {
   d.kind = pdyn::PluginKind::Force;
   d.name = "vortex";
   d.version = "1.0.0";
-  d.description = "swirl around an axis: f = s (a x r) / (|r|^2 + core^2), r the offset from the axis";
+  d.description =
+      "swirl around an axis: f = s (a x r) / (|r|^2 + core^2), r the offset from the axis";
   d.params = {
       pdyn::param::vec3("center", {0, 0, 0}, "m", "a point on the vortex axis"),
       pdyn::param::vec3("axis", {0, 0, 1}, "", "direction a of the axis (normalised)").not_zero(),
-      pdyn::param::real("strength", 1.0, "N m", "strength s; positive swirls counter-clockwise about a"),
+      pdyn::param::real("strength", 1.0, "N m",
+                        "strength s; positive swirls counter-clockwise about a"),
       pdyn::param::real("core", 0.1, "m", "core radius: keeps the force finite on the axis")
           .greater_than(0),
   };

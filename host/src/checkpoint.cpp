@@ -77,9 +77,10 @@ class Reader {
   }
   bool done() const { return pos_ == data_.size(); }
   [[noreturn]] void fail(const std::string& what) const {
-    throw CheckpointError(fmt::format("{}: corrupt checkpoint: {} (expected a file written by "
-                                      "pdyn run)",
-                                      file_, what));
+    throw CheckpointError(
+        fmt::format("{}: corrupt checkpoint: {} (expected a file written by "
+                    "pdyn run)",
+                    file_, what));
   }
 
  private:
@@ -162,8 +163,8 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   if (ok) fs::rename(temp, path, ec);
   if (!ok || ec) {
     fs::remove(temp, ec);
-    throw Error(fmt::format("{}: cannot write checkpoint ({})", path.string(),
-                            std::strerror(errno)));
+    throw Error(
+        fmt::format("{}: cannot write checkpoint ({})", path.string(), std::strerror(errno)));
   }
 }
 
@@ -184,9 +185,10 @@ Checkpoint read_checkpoint(const fs::path& path) {
     if (!in) why = std::strerror(errno);
   }
   if (!why.empty()) {
-    throw CheckpointError(fmt::format("{}: cannot read checkpoint: {} (expected a file written "
-                                      "by pdyn run)",
-                                      path.string(), why));
+    throw CheckpointError(
+        fmt::format("{}: cannot read checkpoint: {} (expected a file written "
+                    "by pdyn run)",
+                    path.string(), why));
   }
   std::ostringstream ss;
   ss << in.rdbuf();
@@ -194,49 +196,55 @@ Checkpoint read_checkpoint(const fs::path& path) {
   const std::string file = path.string();
   constexpr std::size_t kHeader = sizeof(kMagic) + sizeof(std::uint32_t) + sizeof(std::uint64_t);
   if (data.empty()) {
-    throw CheckpointError(fmt::format("{}: checkpoint is empty (expected a file written by "
-                                      "pdyn run)",
-                                      file));
+    throw CheckpointError(
+        fmt::format("{}: checkpoint is empty (expected a file written by "
+                    "pdyn run)",
+                    file));
   }
   if (std::memcmp(data.data(), kMagic, std::min(data.size(), sizeof(kMagic))) != 0) {
-    throw CheckpointError(fmt::format("{}: not a pdyn checkpoint (expected a file written by "
-                                      "pdyn run)",
-                                      file));
+    throw CheckpointError(
+        fmt::format("{}: not a pdyn checkpoint (expected a file written by "
+                    "pdyn run)",
+                    file));
   }
   if (data.size() < kHeader) {
-    throw CheckpointError(fmt::format("{}: checkpoint is truncated ({} bytes, shorter than its "
-                                      "{}-byte header)",
-                                      file, data.size(), kHeader));
+    throw CheckpointError(
+        fmt::format("{}: checkpoint is truncated ({} bytes, shorter than its "
+                    "{}-byte header)",
+                    file, data.size(), kHeader));
   }
   std::uint32_t version = 0;
   std::uint64_t length = 0;
   std::memcpy(&version, data.data() + sizeof(kMagic), sizeof(version));
   std::memcpy(&length, data.data() + sizeof(kMagic) + sizeof(version), sizeof(length));
   if (version != Checkpoint::kFormatVersion) {
-    throw CheckpointError(fmt::format("{}: checkpoint format version {} is not supported "
-                                      "(expected version {})",
-                                      file, version, Checkpoint::kFormatVersion));
+    throw CheckpointError(
+        fmt::format("{}: checkpoint format version {} is not supported "
+                    "(expected version {})",
+                    file, version, Checkpoint::kFormatVersion));
   }
   // As unsigned sums, so that a corrupted length cannot wrap around.
   const std::uint64_t have = data.size() - kHeader;
   if (have < sizeof(std::uint32_t) || length > have - sizeof(std::uint32_t)) {
-    throw CheckpointError(fmt::format("{}: checkpoint is truncated ({} bytes; its header "
-                                      "announces a {}-byte payload)",
-                                      file, data.size(), length));
+    throw CheckpointError(
+        fmt::format("{}: checkpoint is truncated ({} bytes; its header "
+                    "announces a {}-byte payload)",
+                    file, data.size(), length));
   }
   if (length < have - sizeof(std::uint32_t)) {
-    throw CheckpointError(fmt::format("{}: checkpoint has {} trailing bytes after its checksum "
-                                      "(expected {} bytes)",
-                                      file, have - sizeof(std::uint32_t) - length,
-                                      kHeader + length + sizeof(std::uint32_t)));
+    throw CheckpointError(fmt::format(
+        "{}: checkpoint has {} trailing bytes after its checksum "
+        "(expected {} bytes)",
+        file, have - sizeof(std::uint32_t) - length, kHeader + length + sizeof(std::uint32_t)));
   }
   const std::string payload = data.substr(kHeader, length);
   std::uint32_t stored = 0;
   std::memcpy(&stored, data.data() + kHeader + length, sizeof(stored));
   if (crc32(payload) != stored) {
-    throw CheckpointError(fmt::format("{}: checkpoint checksum mismatch: the file is corrupted "
-                                      "(expected CRC-32 {:08x}, computed {:08x})",
-                                      file, stored, crc32(payload)));
+    throw CheckpointError(
+        fmt::format("{}: checkpoint checksum mismatch: the file is corrupted "
+                    "(expected CRC-32 {:08x}, computed {:08x})",
+                    file, stored, crc32(payload)));
   }
   Reader r(payload, file);
   Checkpoint c;

@@ -32,7 +32,8 @@ void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path,
     return;
   }
   if (a.IsSequence() && b.IsSequence() && a.size() == b.size()) {
-    for (std::size_t i = 0; i < a.size(); ++i) diff(a[i], b[i], fmt::format("{}[{}]", path, i), out);
+    for (std::size_t i = 0; i < a.size(); ++i)
+      diff(a[i], b[i], fmt::format("{}[{}]", path, i), out);
     return;
   }
   const std::string fa = flow(a), fb = flow(b);
@@ -56,9 +57,8 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
       throw CheckpointError(fmt::format(
           "the checkpoint was written for a different scene ({}): {} (expected the same scene; "
           "--force resumes anyway)",
-          c.scene_file, lines.front() + (lines.size() > 1
-                                             ? fmt::format(" and {} more", lines.size() - 1)
-                                             : "")));
+          c.scene_file,
+          lines.front() + (lines.size() > 1 ? fmt::format(" and {} more", lines.size() - 1) : "")));
     }
     if (differences) *differences = lines;
   }
@@ -70,18 +70,20 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
   }
   const std::size_t expected = 1 + sys.force_objects().size() + sys.collider_objects().size();
   if (c.plugin_states.size() != expected) {
-    throw CheckpointError(fmt::format("the checkpoint holds the state of {} plugin objects but "
-                                      "the scene has {} (expected the same solver, forces and "
-                                      "colliders)",
-                                      c.plugin_states.size(), expected));
+    throw CheckpointError(
+        fmt::format("the checkpoint holds the state of {} plugin objects but "
+                    "the scene has {} (expected the same solver, forces and "
+                    "colliders)",
+                    c.plugin_states.size(), expected));
   }
   // An adaptive solver's steps are accepted steps, unrelated to the scene's
   // nominal step count: only the time tells whether it is past the end.
   const bool adaptive = scene.solver && scene.solver->adaptive();
   if ((!adaptive && c.step > scene.steps) || c.time > scene.end_time) {
-    throw CheckpointError(fmt::format("the checkpoint is at step {} (t = {} s), past the end of "
-                                      "this run (step {}, t = {} s); expected a longer run",
-                                      c.step, c.time, scene.steps, scene.end_time));
+    throw CheckpointError(
+        fmt::format("the checkpoint is at step {} (t = {} s), past the end of "
+                    "this run (step {}, t = {} s); expected a longer run",
+                    c.step, c.time, scene.steps, scene.end_time));
   }
   // Every check passed: apply. A plugin that refuses its bytes leaves the
   // run unstarted (the caller exits), so nothing half-applied is simulated.

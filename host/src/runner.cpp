@@ -15,6 +15,7 @@
 #include <tuple>
 
 #include "pdyn/host/crash_report.hpp"
+#include "pdyn/stepper.hpp"
 
 namespace pdyn {
 
@@ -206,17 +207,6 @@ void write_energy(AtomicFile& f, const System& sys) {
   f.write(fmt::format("{:.17g},{:.17g},{:.17g},{:.17g}\n", sys.time(), k, u, k + u));
 }
 
-// Index of the first particle whose position or velocity is not finite, or -1.
-Index first_non_finite(const System& sys) {
-  if (sys.state().allFinite()) return -1;
-  const auto x = sys.positions();
-  const auto v = sys.velocities();
-  for (Index i = 0; i < sys.size(); ++i) {
-    if (!x.col(i).allFinite() || !v.col(i).allFinite()) return i;
-  }
-  return -1;
-}
-
 class Progress {
  public:
   Progress(std::ostream* out, std::int64_t total, double end_time)
@@ -336,14 +326,13 @@ class Output {
 // ---------------------------------------------------------------------------
 // The loops
 
-std::string blow_up_message(const System& sys, Index bad, std::int64_t step, double t,
-                            const std::string& culprit) {
-  const auto x = sys.positions().col(bad);
+std::string blow_up_message(const StepFault& f, std::int64_t step, const std::string& culprit) {
   return fmt::format(
       "the state became non-finite at step {} (t = {:.17g} s): particle {} has position "
       "[{}, {}, {}]{}; the last good state (step {}) was written as the final frame. Try a "
       "smaller dt or a more stable solver.",
-      step, t, bad, x(0), x(1), x(2), culprit.empty() ? "" : "; " + culprit, step - 1);
+      step, f.end_time, f.particle, f.position(0), f.position(1), f.position(2),
+      culprit.empty() ? "" : "; " + culprit, step - 1);
 }
 
 // The energy check: a run that diverges without ever becoming NaN (explicit
@@ -440,15 +429,13 @@ struct Loop {
   Progress& progress;
   SignalGuard& signals;
   RunResult& result;
-  Eigen::VectorXd previous;  // the state before the current step
-  double t_previous = 0.0;
+  Stepper& stepper;
   bool last_written = true;     // the current state's frame has been written
   std::int64_t next_frame = 1;  // adaptive runs: index m of the next frame, due at m every dt
   // Adaptive runs: a step has shown that the solver interpolates (dense
   // output). Until then each step stops on the next frame time. Carried by
   // checkpoints, since it changes the steps taken.
   bool has_dense = false;
-  bool replaying = false;  // a failed step is being replayed: write no frames
   EnergyWatch* energy = nullptr;
   bool strict = false;
 
@@ -472,78 +459,44 @@ struct Loop {
     return false;
   }
 
-  // One step or accepted adaptive step: returns its length, or nothing if
-  // the run must stop (result says why; the last good state is restored).
-  // `take` is a template parameter, not a std::function: converting the
-  // step lambda to one allocates on every step.
+  // One step or accepted adaptive step through the Stepper (`take` calls
+  // it): returns its length, or nothing if the run must stop (result says
+  // why; the Stepper has restored the last good state).
   template <class Take>
   std::optional<double> guarded_step(const Take& take, std::int64_t k) {
-    System& sys = *scene.system;
-    previous = sys.state();
-    t_previous = sys.time();
     crash::set_step(k);
-    double h = 0.0;
-    try {
-      h = take();
-      sys.respond_to_collisions(h);
-    } catch (const PluginRuntimeError& e) {
-      return stop(3, fmt::format("plugin {} at step {}{}", e.what(), k, library_of(e.label())));
-    } catch (const std::exception& e) {
-      // The solver failed on its own account, or so it seems: it may have
-      // called a force directly (finite-difference Jacobians) that threw,
-      // or given up on a NaN a force fed it. Replay the step to find out.
-      const std::string solver = fmt::format("{} reported: {}", scene.solver_label, e.what());
-      if (const auto thrower = replay(take, false)) {
-        return stop(3, fmt::format("plugin {} at step {} (found by replaying the step; {})",
-                                   *thrower, k, solver));
-      }
-      if (const auto culprit = replay(take, true)) {
-        return stop(4, fmt::format("a force produced a non-finite value at step {} (t = {:.17g} "
-                                   "s): {}; then {}; the last good state (step {}) was written "
+    if (const auto h = take()) return h;
+    const StepFault& f = stepper.fault();
+    using Kind = StepFault::Kind;
+    const std::string solver = fmt::format("{} reported: {}", scene.solver_label, f.solver_message);
+    switch (f.kind) {
+      case Kind::PluginThrew:
+        if (f.found_by_replay) {
+          return stop(f, fmt::format("plugin {}{} at step {} (found by replaying the step; {})",
+                                     f.what, library_of(f.label), k, solver));
+        }
+        return stop(f, fmt::format("plugin {} at step {}{}", f.what, k, library_of(f.label)));
+      case Kind::NonFiniteForce:
+        return stop(f, fmt::format("a force produced a non-finite value at step {} (t = {:.17g} "
+                                   "s): {}{}; then {}; the last good state (step {}) was written "
                                    "as the final frame",
-                                   k, t_previous, *culprit, solver, k - 1));
-      }
-      return stop(3, fmt::format("plugin {}: step threw at step {}: {}{}", scene.solver_label, k,
-                                 e.what(), library_of(scene.solver_label)));
-    } catch (...) {
-      return stop(3, fmt::format("plugin {}: step threw a non-standard exception at step {}{}",
-                                 scene.solver_label, k, library_of(scene.solver_label)));
+                                   k, f.start_time, f.what, library_of(f.label), solver, k - 1));
+      case Kind::SolverThrew:
+        if (f.non_standard) {
+          return stop(f, fmt::format("plugin {}: step threw a non-standard exception at step {}{}",
+                                     f.label, k, library_of(f.label)));
+        }
+        return stop(f, fmt::format("plugin {}: step threw at step {}: {}{}", f.label, k, f.what,
+                                   library_of(f.label)));
+      case Kind::NonFiniteState:
+        return stop(f,
+                    blow_up_message(f, k,
+                                    f.label.empty()
+                                        ? ""
+                                        : fmt::format("the first non-finite force came from {}{}",
+                                                      f.what, library_of(f.label))));
     }
-    if (const Index bad = first_non_finite(sys); bad >= 0) {
-      const auto culprit = replay(take, true);
-      result.message = blow_up_message(
-          sys, bad, k, sys.time(),
-          culprit ? fmt::format("the first non-finite force came from {}", *culprit) : "");
-      return stop(4, result.message);
-    }
-    return h;
-  }
-
-  // Replays the failed step from the last good state, with finite checks on
-  // or off, and returns what the first plugin that threw (PluginRuntimeError,
-  // which names it) said, if one did. With finite checks on, that names the
-  // force object that first produced a NaN or infinity. Writes no frames.
-  template <class Take>
-  std::optional<std::string> replay(const Take& take, bool finite_checks) {
-    System& sys = *scene.system;
-    const Eigen::VectorXd bad_state = sys.state();
-    const double bad_time = sys.time();
-    sys.state() = previous;
-    sys.set_time(t_previous);
-    sys.set_finite_checks(finite_checks);
-    replaying = true;
-    std::optional<std::string> culprit;
-    try {
-      take();
-    } catch (const PluginRuntimeError& e) {
-      culprit = e.what() + library_of(e.label());
-    } catch (...) {
-    }
-    replaying = false;
-    sys.set_finite_checks(false);
-    sys.state() = bad_state;
-    sys.set_time(bad_time);
-    return culprit;
+    return std::nullopt;
   }
 
   // " (library PATH)": which file a faulty plugin object came from.
@@ -552,12 +505,11 @@ struct Loop {
     return it == scene.libraries.end() ? "" : fmt::format(" (library {})", it->second.string());
   }
 
-  std::nullopt_t stop(int code, std::string message) {
-    System& sys = *scene.system;
-    result.exit_code = code;
+  // The Stepper has restored the last good state: written as the final
+  // frame unless it already was.
+  std::nullopt_t stop(const StepFault& f, std::string message) {
+    result.exit_code = f.exit_code();
     result.message = std::move(message);
-    sys.state() = previous;
-    sys.set_time(t_previous);
     if (!last_written) out.emit_extra();
     return std::nullopt;
   }
@@ -568,20 +520,12 @@ struct Loop {
 // computes the same times); the last step of a `duration` run is shortened
 // to end exactly on it.
 void run_fixed(Loop& loop, std::int64_t k0) {
-  Scene& scene = loop.scene;
-  System& sys = *scene.system;
+  const Scene& scene = loop.scene;
   const std::int64_t n_steps = scene.steps, every = scene.output.every;
   const std::int64_t ckpt_every = scene.output.checkpoint_every;
   for (std::int64_t k = k0 + 1; k <= n_steps; ++k) {
     const double t_end = k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
-    auto take = [&] {
-      const double h = t_end - sys.time();
-      const crash::CallScope call(scene.solver_label, "step");
-      scene.solver->step(sys, h);
-      sys.set_time(t_end);
-      return h;
-    };
-    if (!loop.guarded_step(take, k)) return;
+    if (!loop.guarded_step([&] { return loop.stepper.step_to(t_end); }, k)) return;
     loop.result.steps_done = k;
     // The final frame is extra unless it falls on the schedule: a longer
     // run resumed from this one's checkpoint does not write it.
@@ -624,17 +568,10 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
   Eigen::VectorXd dense(sys.dimension()), current(sys.dimension());
   // Until a step has shown that the solver interpolates, stop on frame times.
   bool& has_dense = loop.has_dense;
-  // One accepted step, then the frames strictly inside it from the dense
-  // output, before the collision response changes the state at its end.
-  auto take = [&] {
-    const double t_begin = sys.time();
-    double h = 0.0;
-    {
-      const crash::CallScope call(scene.solver_label, "advance");
-      h = solver.advance(sys, has_dense ? t_end : frame_time(next_frame), scene.dt);
-    }
-    const double t_new = t_begin + h;
-    if (loop.replaying) return h;
+  // The frames strictly inside the accepted step that ended at t_new, from
+  // the dense output (the solver's own record of the step, which the
+  // collision response at its end does not change).
+  auto dense_frames = [&](double t_new) {
     auto interpolate = [&](double t) {
       const crash::CallScope call(scene.solver_label, "interpolate");
       return solver.interpolate(t, dense);
@@ -650,11 +587,14 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
       sys.set_time(t_new);
       ++next_frame;
     }
-    return h;
+  };
+  auto take = [&] {
+    return loop.stepper.advance(has_dense ? t_end : frame_time(next_frame), scene.dt);
   };
   for (std::int64_t k = k0 + 1; sys.time() < t_end; ++k) {
     if (!loop.guarded_step(take, k)) break;
     const double t_new = sys.time();
+    dense_frames(t_new);
     loop.result.steps_done = k;
     loop.last_written = on_schedule(next_frame) && frame_time(next_frame) <= t_new;
     if (loop.last_written) {
@@ -698,7 +638,8 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   const std::int64_t k0 = options.resume ? options.resume->step : 0;
   progress.start_at(k0);
   if (!options.resume) out.emit();
-  Loop loop{scene, out, progress, signals, result, Eigen::VectorXd(sys.dimension())};
+  Stepper stepper(sys, *scene.solver, scene.solver_label);
+  Loop loop{scene, out, progress, signals, result, stepper};
   EnergyWatch energy(scene);
   loop.energy = &energy;
   loop.strict = options.strict;

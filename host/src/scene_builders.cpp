@@ -112,7 +112,7 @@ std::vector<ParamSpec> chain_specs() {
       name_spec(),
       param::optional("pin", ParamType::IndexList, "",
                       "chain positions of nailed particles; negative counts from the end"),
-    };
+  };
 }
 
 void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path) {
@@ -173,7 +173,7 @@ std::vector<ParamSpec> lattice_specs() {
       param::optional("pin", ParamType::IndexTriples, "",
                       "lattice coordinates [i, j, k] of nailed particles; negative counts from "
                       "the end"),
-    };
+  };
 }
 
 void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
@@ -424,10 +424,7 @@ std::vector<ParamSpec> polygon_specs() {
 // the plane (of y if the normal is within 25 degrees of x) and b = N x a.
 void read_ring(BuilderHost& host, const YAML::Node& r, const std::string& path) {
   if (!host.check_map(r, path, "ring: { center, radius, n, mass, ... }")) return;
-  auto p = host.read_params(
-      r, path,
-      ring_specs(),
-      {"springs", "area"});
+  auto p = host.read_params(r, path, ring_specs(), {"springs", "area"});
   if (!p) return;
   const std::int64_t n = p->integer("n");
   if (!host.can_add(n, r, path)) return;
@@ -448,10 +445,7 @@ void read_ring(BuilderHost& host, const YAML::Node& r, const std::string& path) 
 // Any closed loop through the given points, in order.
 void read_polygon(BuilderHost& host, const YAML::Node& g, const std::string& path) {
   if (!host.check_map(g, path, "polygon: { points: [[x, y, z], ...], mass, ... }")) return;
-  auto p =
-      host.read_params(g, path,
-                       polygon_specs(),
-                       {"springs", "area"});
+  auto p = host.read_params(g, path, polygon_specs(), {"springs", "area"});
   if (!p) return;
   const auto& pts = p->vec3s("points");
   const auto n = static_cast<std::int64_t>(pts.size());
@@ -486,24 +480,42 @@ const std::vector<std::string>& builder_names() {
 }
 
 std::vector<BuilderSpec> more_builder_specs() {
-  const BuilderNested springs{"springs", "springs of the `spring` plugin between neighbours",
-                              "spring", "pairs", {}, {}};
-  const BuilderNested loop_area{"area", "area springs of the `area` plugin on a fan of triangles",
-                                "area", "triples", {}, {}};
+  const BuilderNested springs{
+      "springs", "springs of the `spring` plugin between neighbours", "spring", "pairs", {}, {}};
+  const BuilderNested loop_area{
+      "area", "area springs of the `area` plugin on a fan of triangles", "area", "triples", {}, {}};
   return {
-      {"chain", "a rope of n particles from `from` to `to`", chain_specs(),
+      {"chain",
+       "a rope of n particles from `from` to `to`",
+       chain_specs(),
        {springs,
-        {"bend", "angle springs of the `angle` plugin on consecutive triples", "angle",
-         "triples", {}, {}}}},
-      {"lattice", "a 3-D block of nx x ny x nz particles (a jelly cube)", lattice_specs(),
-       {{"springs", "spring families of the `spring` plugin", "spring", "pairs",
-         {"structural", "shear", "body"}, {}}}},
-      {"cloud", "n particles uniform in a box or a ball, reproducible from `seed`", cloud_specs(),
+        {"bend",
+         "angle springs of the `angle` plugin on consecutive triples",
+         "angle",
+         "triples",
+         {},
+         {}}}},
+      {"lattice",
+       "a 3-D block of nx x ny x nz particles (a jelly cube)",
+       lattice_specs(),
+       {{"springs",
+         "spring families of the `spring` plugin",
+         "spring",
+         "pairs",
+         {"structural", "shear", "body"},
+         {}}}},
+      {"cloud",
+       "n particles uniform in a box or a ball, reproducible from `seed`",
+       cloud_specs(),
        {{"box", "the region: an axis-aligned box", "", "", {}, cloud_box_specs()},
         {"sphere", "the region: a ball", "", "", {}, cloud_sphere_specs()}}},
-      {"ring", "a closed loop of n particles on a circle (a 2-D soft blob)", ring_specs(),
+      {"ring",
+       "a closed loop of n particles on a circle (a 2-D soft blob)",
+       ring_specs(),
        {springs, loop_area}},
-      {"polygon", "a closed loop of particles through given points", polygon_specs(),
+      {"polygon",
+       "a closed loop of particles through given points",
+       polygon_specs(),
        {springs, loop_area}},
   };
 }

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/host/scene_specs.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/types.hpp"
-#include "pdyn/host/scene_specs.hpp"
 
 namespace pdyn {
 

@@ -20,10 +20,10 @@
 
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
-#include "scene_builders.hpp"
 #include "pdyn/host/scene_specs.hpp"
 #include "pdyn/host/side_files.hpp"
 #include "pdyn/text.hpp"
+#include "scene_builders.hpp"
 #include "written_paths.hpp"
 
 namespace pdyn {

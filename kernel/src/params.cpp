@@ -69,8 +69,8 @@ void Params::set(std::string name, ParamValue value) {
 const ParamValue& Params::get(std::string_view name) const {
   auto it = values_.find(name);
   if (it == values_.end()) {
-    throw Error(fmt::format("parameter '{}' has no value (declare a default or check has())",
-                            name));
+    throw Error(
+        fmt::format("parameter '{}' has no value (declare a default or check has())", name));
   }
   return it->second;
 }
@@ -106,42 +106,64 @@ const std::vector<IndexTriple>& Params::triples(std::string_view name) const {
 const std::vector<std::string>& Params::strings(std::string_view name) const {
   return as<std::vector<std::string>>(name);
 }
-const NamedReals& Params::named_reals(std::string_view name) const {
-  return as<NamedReals>(name);
-}
+const NamedReals& Params::named_reals(std::string_view name) const { return as<NamedReals>(name); }
 
 const char* describe(ParamType type) {
   switch (type) {
-    case ParamType::Real: return "a number";
-    case ParamType::Integer: return "a whole number";
-    case ParamType::Boolean: return "true, false, 1 or 0";
-    case ParamType::String: return "a string";
-    case ParamType::Vector: return "a vector [x, y, z]";
-    case ParamType::RealList: return "a number or a list of numbers [a, b, ...]";
-    case ParamType::VectorList: return "a list of vectors [[x, y, z], ...]";
-    case ParamType::IndexList: return "a list of particle indices [i, j, ...]";
-    case ParamType::IndexPairs: return "a list of particle index pairs [[i, j], ...]";
-    case ParamType::IndexTriples: return "a list of particle index triples [[i, j, k], ...]";
-    case ParamType::StringList: return "a list of strings [\"a\", \"b\", ...]";
-    case ParamType::NamedReals: return "a mapping of names to numbers { name: value, ... }";
+    case ParamType::Real:
+      return "a number";
+    case ParamType::Integer:
+      return "a whole number";
+    case ParamType::Boolean:
+      return "true, false, 1 or 0";
+    case ParamType::String:
+      return "a string";
+    case ParamType::Vector:
+      return "a vector [x, y, z]";
+    case ParamType::RealList:
+      return "a number or a list of numbers [a, b, ...]";
+    case ParamType::VectorList:
+      return "a list of vectors [[x, y, z], ...]";
+    case ParamType::IndexList:
+      return "a list of particle indices [i, j, ...]";
+    case ParamType::IndexPairs:
+      return "a list of particle index pairs [[i, j], ...]";
+    case ParamType::IndexTriples:
+      return "a list of particle index triples [[i, j, k], ...]";
+    case ParamType::StringList:
+      return "a list of strings [\"a\", \"b\", ...]";
+    case ParamType::NamedReals:
+      return "a mapping of names to numbers { name: value, ... }";
   }
   return "?";
 }
 
 const char* type_name(ParamType type) {
   switch (type) {
-    case ParamType::Real: return "real";
-    case ParamType::Integer: return "integer";
-    case ParamType::Boolean: return "bool";
-    case ParamType::String: return "string";
-    case ParamType::Vector: return "vec3";
-    case ParamType::RealList: return "real list";
-    case ParamType::VectorList: return "vec3 list";
-    case ParamType::IndexList: return "index list";
-    case ParamType::IndexPairs: return "index pairs";
-    case ParamType::IndexTriples: return "index triples";
-    case ParamType::StringList: return "string list";
-    case ParamType::NamedReals: return "named reals";
+    case ParamType::Real:
+      return "real";
+    case ParamType::Integer:
+      return "integer";
+    case ParamType::Boolean:
+      return "bool";
+    case ParamType::String:
+      return "string";
+    case ParamType::Vector:
+      return "vec3";
+    case ParamType::RealList:
+      return "real list";
+    case ParamType::VectorList:
+      return "vec3 list";
+    case ParamType::IndexList:
+      return "index list";
+    case ParamType::IndexPairs:
+      return "index pairs";
+    case ParamType::IndexTriples:
+      return "index triples";
+    case ParamType::StringList:
+      return "string list";
+    case ParamType::NamedReals:
+      return "named reals";
   }
   return "?";
 }
@@ -175,18 +197,15 @@ std::string format_value(const ParamValue& value) {
     std::string operator()(const std::vector<Index>& x) const {
       return list(x, [](Index i) { return std::to_string(i); });
     }
-    std::string operator()(const std::vector<IndexPair>& x) const {
-      return list(x, tuple<2>);
-    }
-    std::string operator()(const std::vector<IndexTriple>& x) const {
-      return list(x, tuple<3>);
-    }
+    std::string operator()(const std::vector<IndexPair>& x) const { return list(x, tuple<2>); }
+    std::string operator()(const std::vector<IndexTriple>& x) const { return list(x, tuple<3>); }
     std::string operator()(const std::vector<std::string>& x) const {
       return list(x, [](const std::string& e) { return "\"" + e + "\""; });
     }
     std::string operator()(const NamedReals& x) const {
       std::string s = "{";
-      for (const auto& [name, value] : x) s += (s.size() > 1 ? ", " : " ") + name + ": " + num(value);
+      for (const auto& [name, value] : x)
+        s += (s.size() > 1 ? ", " : " ") + name + ": " + num(value);
       return s + (x.empty() ? "}" : " }");
     }
   };

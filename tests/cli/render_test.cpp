@@ -30,8 +30,8 @@ class Picture {
   int width() const { return cairo_image_surface_get_width(surface_.get()); }
   int height() const { return cairo_image_surface_get_height(surface_.get()); }
   Rgb at(int x, int y) const {
-    const unsigned char* row =
-        cairo_image_surface_get_data(surface_.get()) + y * cairo_image_surface_get_stride(surface_.get());
+    const unsigned char* row = cairo_image_surface_get_data(surface_.get()) +
+                               y * cairo_image_surface_get_stride(surface_.get());
     std::uint32_t px;
     std::memcpy(&px, row + 4 * x, 4);  // native-endian 0x00RRGGBB
     return {static_cast<int>((px >> 16) & 0xff), static_cast<int>((px >> 8) & 0xff),
@@ -64,8 +64,8 @@ test::CommandResult render(const std::vector<std::string>& extra) {
 TEST(Render, ParticlesAndSpringsLandWhereTheCameraPutsThem) {
   const fs::path dir = test::temp_dir("render-cloth");
   const std::string scene = test::source_path("configs/hanging_cloth.yaml").string();
-  const auto r = render({scene, "--at", "0", "--png", (dir / "cloth.png").string(), "--view",
-                         "xz", "--size", "600x500"});
+  const auto r = render({scene, "--at", "0", "--png", (dir / "cloth.png").string(), "--view", "xz",
+                         "--size", "600x500"});
   ASSERT_EQ(r.status, 0) << r.err;
   const Picture pic(dir / "cloth.png");
   ASSERT_TRUE(pic.ok());
@@ -102,15 +102,16 @@ TEST(Render, ParticlesAndSpringsLandWhereTheCameraPutsThem) {
 TEST(Render, SameSceneSameBytesAndOneFilePerTime) {
   const fs::path dir = test::temp_dir("render-repeat");
   const std::string scene = test::source_path("configs/demo.yaml").string();
-  const auto a = render({scene, "--at", "0,0.05", "--png", (dir / "a.png").string(), "--size",
-                         "320x240"});
-  const auto b = render({scene, "--at", "0,0.05", "--png", (dir / "b.png").string(), "--size",
-                         "320x240"});
+  const auto a =
+      render({scene, "--at", "0,0.05", "--png", (dir / "a.png").string(), "--size", "320x240"});
+  const auto b =
+      render({scene, "--at", "0,0.05", "--png", (dir / "b.png").string(), "--size", "320x240"});
   ASSERT_EQ(a.status, 0) << a.err;
   ASSERT_EQ(b.status, 0) << b.err;
   EXPECT_NE(a.out.find("a-1.png"), std::string::npos) << a.out;
   for (const char* k : {"-0.png", "-1.png"}) {
-    const std::string pa = bytes(dir / (std::string("a") + k)), pb = bytes(dir / (std::string("b") + k));
+    const std::string pa = bytes(dir / (std::string("a") + k)),
+                      pb = bytes(dir / (std::string("b") + k));
     ASSERT_GT(pa.size(), 1000u);
     EXPECT_EQ(pa, pb) << k;
   }
@@ -152,8 +153,9 @@ TEST(Render, BadOptionsAreRefusedWithTheirReason) {
   EXPECT_FALSE(fs::exists(png));
   EXPECT_FALSE(fs::exists(dir / "x.jpg"));
   // A bad scene is reported as by `pdyn run`, located.
-  const fs::path bad = test::write_file(dir / "bad.yaml", "simulation: { dt: -1, steps: 1 }\n"
-                                                          "particles: [{ position: [0, 0, 0] }]\n");
+  const fs::path bad = test::write_file(dir / "bad.yaml",
+                                        "simulation: { dt: -1, steps: 1 }\n"
+                                        "particles: [{ position: [0, 0, 0] }]\n");
   const auto r = render({bad.string(), "--at", "0", "--png", png});
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("bad.yaml:1:19: simulation.dt:"), std::string::npos) << r.err;

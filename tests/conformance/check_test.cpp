@@ -25,8 +25,8 @@ TEST(Check, EveryShippedPluginPasses) {
 TEST(Check, ShippedPluginsPassInProcess) {
   for (const auto& r : test::shipped_plugins().plugins()) {
     const auto results = conformance::run_checks(*r.descriptor, {.seed = 7});
-    EXPECT_TRUE(conformance::all_passed(results))
-        << r.descriptor->name << ":\n" << conformance::table(results);
+    EXPECT_TRUE(conformance::all_passed(results)) << r.descriptor->name << ":\n"
+                                                  << conformance::table(results);
   }
 }
 
@@ -47,16 +47,18 @@ TEST_P(CheckBroken, FailsNamingTheCheck) {
   EXPECT_NE(summary.find(GetParam().failed_check), std::string::npos) << res.out;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Fixtures, CheckBroken,
-    testing::Values(BrokenCase{"one_sided", "force.net_force_zero"},
-                    BrokenCase{"one_sided", "force.net_torque_zero"},
-                    BrokenCase{"bad_potential", "force.gradient_of_potential"},
-                    BrokenCase{"fake_rk4", "solver.convergence_order"},
-                    BrokenCase{"leaky_plane", "collider.obstacle_found"},
-                    BrokenCase{"shared_scratch", "threads.two_systems"},
-                    BrokenCase{"bad_default", "params.bad_rejected"}),
-    [](const auto& param_info) { return std::string(param_info.param.plugin) + "_" + std::to_string(param_info.index); });
+INSTANTIATE_TEST_SUITE_P(Fixtures, CheckBroken,
+                         testing::Values(BrokenCase{"one_sided", "force.net_force_zero"},
+                                         BrokenCase{"one_sided", "force.net_torque_zero"},
+                                         BrokenCase{"bad_potential", "force.gradient_of_potential"},
+                                         BrokenCase{"fake_rk4", "solver.convergence_order"},
+                                         BrokenCase{"leaky_plane", "collider.obstacle_found"},
+                                         BrokenCase{"shared_scratch", "threads.two_systems"},
+                                         BrokenCase{"bad_default", "params.bad_rejected"}),
+                         [](const auto& param_info) {
+                           return std::string(param_info.param.plugin) + "_" +
+                                  std::to_string(param_info.index);
+                         });
 
 TEST(Check, MeasuresTheFakeSolversRealOrder) {
   const auto res = test::pdyn({"check", "fake_rk4", "--plugin-path", kBroken});
@@ -88,8 +90,8 @@ TEST(Check, UnknownPluginIsBadInputWithSuggestion) {
 }
 
 TEST(Check, UnloadableLibraryIsPluginFault) {
-  const auto res = test::pdyn(
-      {"check", std::string(PDYN_FIXTURE_DIR) + "/abi/pdyn_force_abi_broken.so"});
+  const auto res =
+      test::pdyn({"check", std::string(PDYN_FIXTURE_DIR) + "/abi/pdyn_force_abi_broken.so"});
   EXPECT_EQ(res.status, 3) << res.out << res.err;
   EXPECT_NE(res.err.find("pdyn_force_abi_broken.so"), std::string::npos) << res.err;
 }
@@ -97,8 +99,8 @@ TEST(Check, UnloadableLibraryIsPluginFault) {
 TEST(Check, WritesJUnit) {
   const auto dir = test::temp_dir("check_junit");
   const auto file = dir / "report.xml";
-  const auto res = test::pdyn({"check", "one_sided", "--plugin-path", kBroken, "--junit",
-                               file.string()});
+  const auto res =
+      test::pdyn({"check", "one_sided", "--plugin-path", kBroken, "--junit", file.string()});
   EXPECT_EQ(res.status, 1);
   std::ifstream in(file);
   const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -29,7 +29,7 @@ TEST(RopeOverSphere, NeverEntersTheSphereAndDrapesOverIt) {
             << " s the middle is at z = " << middle_z << " m, the ends at z <= " << end_z << " m\n";
   EXPECT_LE(worst, 1e-12);
   EXPECT_NEAR(middle_z, kR, 0.01);  // resting on top of the ball
-  EXPECT_LT(end_z, 0.3);  // hanging down its sides (0.17 m when written)
+  EXPECT_LT(end_z, 0.3);            // hanging down its sides (0.17 m when written)
 }
 
 }  // namespace

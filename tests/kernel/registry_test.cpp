@@ -24,9 +24,9 @@
 #include <sstream>
 
 #include "pdyn/system.hpp"
+#include "pdyn/text.hpp"
 #include "pdyn/version.hpp"
 #include "support/test_support.hpp"
-#include "pdyn/text.hpp"
 
 namespace pdyn {
 namespace {
@@ -479,7 +479,6 @@ TEST(Registry, SceneObjectsOutliveTheRegistry) {
   EXPECT_EQ(dydt(3), 2.0);  // a = f / m
 }
 
-
 // ---- the rest of the bad libraries: missing, throwing descriptor, throwing
 // factory, and descriptors registered in memory (the conformance kit's way) ----
 
@@ -524,10 +523,10 @@ TEST(Registry, ThrowingFactoryRefusesTheSceneNamingPluginAndLibrary) {
     if (l.rfind("pdyn: warning: ", 0) != 0) errors.push_back(l);
   }
   ASSERT_EQ(errors.size(), 1u) << res.err;
-  EXPECT_TRUE(contains(errors[0], scene.string() + ":5:5: forces[0]: plugin 'throwing_factory' (" +
-                                      (fixture("construct") / "pdyn_force_throwing_factory.so")
-                                          .string() +
-                                      ") refused its parameters: fixture constructor failure"))
+  EXPECT_TRUE(
+      contains(errors[0], scene.string() + ":5:5: forces[0]: plugin 'throwing_factory' (" +
+                              (fixture("construct") / "pdyn_force_throwing_factory.so").string() +
+                              ") refused its parameters: fixture constructor failure"))
       << errors[0];
 }
 

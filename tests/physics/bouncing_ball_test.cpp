@@ -24,17 +24,20 @@ constexpr double kG = 9.81;        // m/s^2, along -z
 constexpr double kEpsilon = 1e-4;  // the collider's contact tolerance, m and m/s
 
 Scene Ball(double h0, const Vec3& v0, double kr, double dt, int steps) {
-  return test::load_text(
-      "simulation: { dt: " + test::Num(dt) + ", steps: " + std::to_string(steps) +
-      ", solver: { type: rk4 } }\n"
-      "particles:\n"
-      "  - { position: [0, 0, " + test::Num(h0) + "], velocity: " + test::Vec(v0) +
-      ", mass: 0.2 }\n"
-      "forces:\n"
-      "  - { type: gravity, g: [0, 0, " + test::Num(-kG) + "] }\n"
-      "colliders:\n"
-      "  - { type: plane, point: [0, 0, 0], normal: [0, 0, 1], restitution: " + test::Num(kr) +
-      ", epsilon: " + test::Num(kEpsilon) + " }\n");
+  return test::load_text("simulation: { dt: " + test::Num(dt) +
+                         ", steps: " + std::to_string(steps) +
+                         ", solver: { type: rk4 } }\n"
+                         "particles:\n"
+                         "  - { position: [0, 0, " +
+                         test::Num(h0) + "], velocity: " + test::Vec(v0) +
+                         ", mass: 0.2 }\n"
+                         "forces:\n"
+                         "  - { type: gravity, g: [0, 0, " +
+                         test::Num(-kG) +
+                         "] }\n"
+                         "colliders:\n"
+                         "  - { type: plane, point: [0, 0, 0], normal: [0, 0, 1], restitution: " +
+                         test::Num(kr) + ", epsilon: " + test::Num(kEpsilon) + " }\n");
 }
 
 class BouncingBall : public ::testing::TestWithParam<double> {};
@@ -191,9 +194,13 @@ TEST(PlaneContact, SlidesDownAFrictionlessInclineWithTheTangentialPartOfGravity)
       "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
       ", solver: { type: rk4 } }\n"
       "particles:\n"
-      "  - { position: [0, 0, 0], velocity: " + test::Vec(v0) + ", mass: 0.2 }\n"
+      "  - { position: [0, 0, 0], velocity: " +
+      test::Vec(v0) +
+      ", mass: 0.2 }\n"
       "forces:\n"
-      "  - { type: gravity, g: " + test::Vec(g) + " }\n"
+      "  - { type: gravity, g: " +
+      test::Vec(g) +
+      " }\n"
       "colliders:\n"
       "  - { type: plane, point: [0, 0, 0], normal: [0, 1, 1], restitution: 0.5, epsilon: " +
       test::Num(kEpsilon) + " }\n");

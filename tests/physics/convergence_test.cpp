@@ -22,12 +22,12 @@
 namespace pdyn {
 namespace {
 
-constexpr double kMass = 1.0;    // kg
-constexpr double kKs = 4.0;      // N/m: w = 2 rad/s, period ~3.14 s
-constexpr double kRest = 1.0;    // m
-constexpr double kU0 = 0.5;      // m
-constexpr double kUDot0 = 0.3;   // m/s
-constexpr double kEndTime = 2.0; // s
+constexpr double kMass = 1.0;       // kg
+constexpr double kKs = 4.0;         // N/m: w = 2 rad/s, period ~3.14 s
+constexpr double kRest = 1.0;       // m
+constexpr double kU0 = 0.5;         // m
+constexpr double kUDot0 = 0.3;      // m/s
+constexpr double kEndTime = 2.0;    // s
 constexpr double kCoarseDt = 0.02;  // s; wh = 0.04 keeps every method in its asymptotic range
 
 // Global error at kEndTime with step h, in phase space: sqrt(du^2 + (du'/w)^2)
@@ -35,16 +35,19 @@ constexpr double kCoarseDt = 0.02;  // s; wh = 0.04 keeps every method in its as
 // the norm cannot vanish by accident at a zero of one component.
 double ErrorAtEnd(const std::string& solver, double h) {
   const int steps = static_cast<int>(std::lround(kEndTime / h));
-  Scene scene = test::load_text(
-      "simulation: { dt: " + test::Num(h) + ", steps: " + std::to_string(steps) +
-      ", solver: { type: " + solver + " } }\n"
-      "particles:\n"
-      "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
-      "  - { position: [" + test::Num(kRest + kU0) + ", 0, 0], velocity: [" + test::Num(kUDot0) +
-      ", 0, 0], mass: " + test::Num(kMass) + " }\n"
-      "forces:\n"
-      "  - { type: spring, pairs: [[0, 1]], ks: " + test::Num(kKs) + ", rest: [" +
-      test::Num(kRest) + "] }\n");
+  Scene scene =
+      test::load_text("simulation: { dt: " + test::Num(h) + ", steps: " + std::to_string(steps) +
+                      ", solver: { type: " + solver +
+                      " } }\n"
+                      "particles:\n"
+                      "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
+                      "  - { position: [" +
+                      test::Num(kRest + kU0) + ", 0, 0], velocity: [" + test::Num(kUDot0) +
+                      ", 0, 0], mass: " + test::Num(kMass) +
+                      " }\n"
+                      "forces:\n"
+                      "  - { type: spring, pairs: [[0, 1]], ks: " +
+                      test::Num(kKs) + ", rest: [" + test::Num(kRest) + "] }\n");
   for (int k = 1; k <= steps; ++k) test::TakeStep(scene, k, h);
   const double w = std::sqrt(kKs / kMass);
   const double t = steps * h;

@@ -22,14 +22,14 @@
 namespace pdyn {
 namespace {
 
-constexpr double kMass = 0.5;    // kg
-constexpr double kKs = 20.0;     // N/m
-constexpr double kKd = 0.4;      // N s/m
-constexpr double kRest = 1.0;    // m
-constexpr double kU0 = 0.3;      // initial stretch, m
-constexpr double kUDot0 = 0.5;   // initial stretch rate, m/s
-constexpr double kDt = 1e-3;     // s
-constexpr int kSteps = 5000;     // 5 s, about five periods
+constexpr double kMass = 0.5;        // kg
+constexpr double kKs = 20.0;         // N/m
+constexpr double kKd = 0.4;          // N s/m
+constexpr double kRest = 1.0;        // m
+constexpr double kU0 = 0.3;          // initial stretch, m
+constexpr double kUDot0 = 0.5;       // initial stretch rate, m/s
+constexpr double kDt = 1e-3;         // s
+constexpr int kSteps = 5000;         // 5 s, about five periods
 constexpr double kTolerance = 1e-9;  // m and m/s; rk4 achieves ~1.5e-10 here
 
 struct Oscillator {
@@ -56,12 +56,16 @@ double MaxDeviation(const Vec3& anchor, const Vec3& axis) {
       "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
       ", solver: { type: rk4 } }\n"
       "particles:\n"
-      "  - { position: " + test::Vec(anchor) + ", mass: 1, fixed: true }\n"
-      "  - { position: " + test::Vec(anchor + (kRest + kU0) * e) +
-      ", velocity: " + test::Vec(kUDot0 * e) + ", mass: " + test::Num(kMass) + " }\n"
+      "  - { position: " +
+      test::Vec(anchor) +
+      ", mass: 1, fixed: true }\n"
+      "  - { position: " +
+      test::Vec(anchor + (kRest + kU0) * e) + ", velocity: " + test::Vec(kUDot0 * e) +
+      ", mass: " + test::Num(kMass) +
+      " }\n"
       "forces:\n"
-      "  - { type: spring, pairs: [[1, 0]], ks: " + test::Num(kKs) + ", kd: " + test::Num(kKd) +
-      ", rest: [" + test::Num(kRest) + "] }\n");
+      "  - { type: spring, pairs: [[1, 0]], ks: " +
+      test::Num(kKs) + ", kd: " + test::Num(kKd) + ", rest: [" + test::Num(kRest) + "] }\n");
   System& sys = *scene.system;
   const Oscillator exact;
   double worst = 0.0, min_length = kRest;
@@ -90,8 +94,8 @@ TEST(DampedOscillator, Rk4MatchesTheUnderdampedClosedFormAlongX) {
 // spring's vector algebra (dx, dv . dx / L, dx / L) must not favour an axis.
 TEST(DampedOscillator, Rk4MatchesTheUnderdampedClosedFormAlongAnObliqueAxis) {
   const double d = MaxDeviation(Vec3(1.0, -2.0, 0.5), Vec3(1.0, 2.0, -2.0));
-  std::cout << "rk4 damped oscillator along (1, 2, -2)/3, dt = " << kDt << ": max deviation "
-            << d << "\n";
+  std::cout << "rk4 damped oscillator along (1, 2, -2)/3, dt = " << kDt << ": max deviation " << d
+            << "\n";
   EXPECT_LT(d, kTolerance);
 }
 
@@ -104,11 +108,13 @@ TEST(DampedOscillator, ReportedEnergyMatchesTheClosedForm) {
       ", solver: { type: rk4 } }\n"
       "particles:\n"
       "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
-      "  - { position: [" + test::Num(kRest + kU0) + ", 0, 0], velocity: [" + test::Num(kUDot0) +
-      ", 0, 0], mass: " + test::Num(kMass) + " }\n"
+      "  - { position: [" +
+      test::Num(kRest + kU0) + ", 0, 0], velocity: [" + test::Num(kUDot0) +
+      ", 0, 0], mass: " + test::Num(kMass) +
+      " }\n"
       "forces:\n"
-      "  - { type: spring, pairs: [[0, 1]], ks: " + test::Num(kKs) + ", kd: " + test::Num(kKd) +
-      ", rest: [" + test::Num(kRest) + "] }\n");
+      "  - { type: spring, pairs: [[0, 1]], ks: " +
+      test::Num(kKs) + ", kd: " + test::Num(kKd) + ", rest: [" + test::Num(kRest) + "] }\n");
   System& sys = *scene.system;
   const Oscillator exact;
   auto energy = [&](double t) {

@@ -31,8 +31,8 @@ TEST(DragProjectile, Rk4MatchesTheClosedFormWithinOneNanometre) {
       {Vec3(0.0, 0.0, 1.0), Vec3(3.0, 1.0, 10.0), 1.0},
       {Vec3(-1.0, 2.0, 0.0), Vec3(-2.0, 0.0, 5.0), 3.0},
   }};
-  std::string yaml = "simulation: { dt: " + test::Num(kDt) + ", steps: " +
-                     std::to_string(kSteps) + ", solver: { type: rk4 } }\nparticles:\n";
+  std::string yaml = "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
+                     ", solver: { type: rk4 } }\nparticles:\n";
   for (const Launch& l : launches) {
     yaml += "  - { position: " + test::Vec(l.x0) + ", velocity: " + test::Vec(l.v0) +
             ", mass: " + test::Num(l.mass) + " }\n";

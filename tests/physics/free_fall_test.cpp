@@ -24,13 +24,15 @@ constexpr double kDt = 1e-3;     // s
 constexpr int kSteps = 1000;
 
 Scene FreeFall(const std::string& solver) {
-  return test::load_text("simulation: { dt: " + test::Num(kDt) + ", steps: " +
-                         std::to_string(kSteps) + ", solver: { type: " + solver + " } }\n" +
-                         "particles:\n"
-                         "  - { position: " + test::Vec(kX0) + ", velocity: " + test::Vec(kV0) +
-                         ", mass: " + test::Num(kMass) + " }\n" +
-                         "forces:\n"
-                         "  - { type: gravity, g: " + test::Vec(kG) + " }\n");
+  return test::load_text(
+      "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
+      ", solver: { type: " + solver + " } }\n" +
+      "particles:\n"
+      "  - { position: " +
+      test::Vec(kX0) + ", velocity: " + test::Vec(kV0) + ", mass: " + test::Num(kMass) + " }\n" +
+      "forces:\n"
+      "  - { type: gravity, g: " +
+      test::Vec(kG) + " }\n");
 }
 
 // Largest deviation from the exact parabola over every step (m and m/s).
@@ -96,10 +98,11 @@ TEST(FreeFall, RunnerEndsExactlyOnTheDurationOnTheParabola) {
   Scene scene = test::load_text(
       "simulation: { dt: 0.003, duration: 1, solver: { type: rk4 } }\n"
       "particles:\n"
-      "  - { position: " + test::Vec(kX0) + ", velocity: " + test::Vec(kV0) +
-      ", mass: " + test::Num(kMass) + " }\n" +
+      "  - { position: " +
+      test::Vec(kX0) + ", velocity: " + test::Vec(kV0) + ", mass: " + test::Num(kMass) + " }\n" +
       "forces:\n"
-      "  - { type: gravity, g: " + test::Vec(kG) + " }\n");
+      "  - { type: gravity, g: " +
+      test::Vec(kG) + " }\n");
   const RunResult result = run_scene(scene);
   ASSERT_EQ(result.exit_code, 0) << result.message;
   EXPECT_EQ(result.steps_done, 334);  // 333 steps of 3 ms and one of 1 ms

@@ -10,9 +10,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "pdyn/host/scene.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
-#include "pdyn/host/scene.hpp"
 
 namespace pdyn::test {
 
@@ -38,9 +38,9 @@ inline void TakeStep(Scene& scene, std::int64_t k, double h) {
   const double t0 = scene.system->time();
   scene.solver->step(*scene.system, h);
   if (std::abs(scene.system->time() - (t0 + h)) > 1e-12 * std::max(1.0, std::abs(t0))) {
-    throw std::logic_error(scene.solver_name + " step " + std::to_string(k) + " from t = " +
-                           Num(t0) + " with h = " + Num(h) + " ended at t = " +
-                           Num(scene.system->time()) + " (expected t + h)");
+    throw std::logic_error(scene.solver_name + " step " + std::to_string(k) +
+                           " from t = " + Num(t0) + " with h = " + Num(h) +
+                           " ended at t = " + Num(scene.system->time()) + " (expected t + h)");
   }
   scene.system->set_time(static_cast<double>(k) * h);
   scene.system->respond_to_collisions(h);

@@ -11,9 +11,9 @@
 
 #include <iostream>
 
+#include "pdyn/host/runner.hpp"
 #include "pdyn/targets.hpp"
 #include "plugins/force_support.hpp"
-#include "pdyn/host/runner.hpp"
 
 namespace pdyn {
 namespace {

@@ -10,8 +10,8 @@
 #include <set>
 #include <sstream>
 
-#include "plugins/force_support.hpp"
 #include "pdyn/host/scene.hpp"
+#include "plugins/force_support.hpp"
 
 namespace pdyn {
 namespace {

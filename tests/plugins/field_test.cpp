@@ -14,8 +14,8 @@
 #include <cmath>
 #include <iostream>
 
-#include "plugins/force_support.hpp"
 #include "pdyn/host/scene.hpp"
+#include "plugins/force_support.hpp"
 
 namespace pdyn {
 namespace {

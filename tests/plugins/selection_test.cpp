@@ -5,8 +5,8 @@
 // are refused at the offending key.
 #include <gtest/gtest.h>
 
-#include "plugins/force_support.hpp"
 #include "pdyn/host/scene.hpp"
+#include "plugins/force_support.hpp"
 
 namespace pdyn {
 namespace {

@@ -174,7 +174,8 @@ particles:
   - { position: [0.3, -0.2, 0.7], velocity: [1, 0, 0], mass: 1 }
   - { position: [0.3, -0.2, 0.7], velocity: [0, 2, 0], mass: 2 }
 forces:
-  - { type: spring, pairs: [[0, 1]], ks: 50, kd: 3)") + rest + " }\n");
+  - { type: spring, pairs: [[0, 1]], ks: 50, kd: 3)") +
+                                  rest + " }\n");
     System& sys = *scene.system;
     const Matrix3X f = ForcesOf(sys, 0);
     EXPECT_TRUE(f.allFinite()) << "rest" << rest;
@@ -191,8 +192,8 @@ forces:
 TEST(GravityForce, IsMassTimesGAndMinusTheGradientOfItsPotential) {
   Cloud cloud(6, 7);
   const Vec3 g(0.3, -0.2, -9.81);
-  Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: gravity, g: " + Vec(g) +
-                                " }\n");
+  Scene scene =
+      test::load_text(cloud.Yaml() + "forces:\n  - { type: gravity, g: " + Vec(g) + " }\n");
   System& sys = *scene.system;
   const Matrix3X f = ForcesOf(sys, 0);
   double u = 0.0;
@@ -209,8 +210,8 @@ TEST(GravityForce, IsMassTimesGAndMinusTheGradientOfItsPotential) {
 TEST(DragForce, IsMinusKVAndNeverDoesPositiveWork) {
   Cloud cloud(6, 8);
   constexpr double kDrag = 0.7;
-  Scene scene = test::load_text(cloud.Yaml() + "forces:\n  - { type: drag, k: " + Num(kDrag) +
-                                " }\n");
+  Scene scene =
+      test::load_text(cloud.Yaml() + "forces:\n  - { type: drag, k: " + Num(kDrag) + " }\n");
   const System& sys = *scene.system;
   const Matrix3X f = ForcesOf(sys, 0);
   for (Index i = 0; i < sys.size(); ++i) {

@@ -16,8 +16,8 @@
 #include <boost/crc.hpp>
 #include <random>
 
-#include "resume/resume_support.hpp"
 #include "pdyn/host/runner.hpp"
+#include "resume/resume_support.hpp"
 
 namespace pdyn {
 namespace {
@@ -63,8 +63,8 @@ std::string patch(std::string bytes, std::size_t at, T value) {
 class CheckpointCorruption : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = temp_dir("corruption-" + std::string(
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir_ = temp_dir("corruption-" +
+                    std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     write_file(dir_ / "scene.yaml", sheet_scene("rk4", 5, 0));
     auto r = pdyn_in(dir_, {"run", "scene.yaml", "--steps", "100", "-q"});
     ASSERT_EQ(r.status, 0) << r.err;
@@ -83,8 +83,8 @@ class CheckpointCorruption : public ::testing::Test {
   void expect_refused_path(const std::string& checkpoint, const std::vector<std::string>& expected,
                            const std::vector<std::string>& extra_args = {}) {
     const auto before = snapshot(dir_);
-    std::vector<std::string> args = {"run", "scene.yaml", "--steps", "200", "-q", "--resume",
-                                     checkpoint};
+    std::vector<std::string> args = {"run", "scene.yaml", "--steps", "200",
+                                     "-q",  "--resume",   checkpoint};
     args.insert(args.end(), extra_args.begin(), extra_args.end());
     const auto r = pdyn_in(dir_, args);
     EXPECT_EQ(r.status, 2) << r.err;
@@ -92,15 +92,18 @@ class CheckpointCorruption : public ::testing::Test {
     const auto lines = lines_of(r.err);
     EXPECT_EQ(lines.size(), 1u) << r.err;
     EXPECT_EQ(r.err.rfind("pdyn: ", 0), 0u) << r.err;
-    for (const auto& e : expected) EXPECT_TRUE(contains(r.err, e)) << "no '" << e << "' in: " << r.err;
+    for (const auto& e : expected)
+      EXPECT_TRUE(contains(r.err, e)) << "no '" << e << "' in: " << r.err;
     expect_unchanged(before);
   }
 
   void expect_unchanged(const std::map<std::string, std::string>& before) {
     const auto after = snapshot(dir_);
     for (const auto& [name, bytes] : after) {
-      if (!before.count(name)) ADD_FAILURE() << "a refused resume left " << name;
-      else if (before.at(name) != bytes) ADD_FAILURE() << "a refused resume changed " << name;
+      if (!before.count(name))
+        ADD_FAILURE() << "a refused resume left " << name;
+      else if (before.at(name) != bytes)
+        ADD_FAILURE() << "a refused resume changed " << name;
     }
     for (const auto& [name, bytes] : before) {
       if (!after.count(name)) ADD_FAILURE() << "a refused resume removed " << name;
@@ -123,9 +126,9 @@ TEST_F(CheckpointCorruption, TheGoodCheckpointResumes) {
 }
 
 TEST_F(CheckpointCorruption, Truncated) {
-  for (std::size_t n : {std::size_t{1}, std::size_t{4}, std::size_t{8}, std::size_t{12},
-                        std::size_t{19}, kHeader, kHeader + 1, good_.size() / 2, good_.size() - 5,
-                        good_.size() - 4, good_.size() - 1}) {
+  for (std::size_t n :
+       {std::size_t{1}, std::size_t{4}, std::size_t{8}, std::size_t{12}, std::size_t{19}, kHeader,
+        kHeader + 1, good_.size() / 2, good_.size() - 5, good_.size() - 4, good_.size() - 1}) {
     SCOPED_TRACE("truncated to " + std::to_string(n) + " of " + std::to_string(good_.size()) +
                  " bytes");
     expect_refused(good_.substr(0, n), {"bad.ckpt", "checkpoint is truncated"});
@@ -192,8 +195,8 @@ TEST_F(CheckpointCorruption, DifferentScene) {
   expect_refused_path("good.ckpt", {"different scene", "simulation.dt"},
                       {"--set", "simulation.dt=0.002"});
   // A changed run length is not a different scene.
-  auto longer = pdyn_in(dir_, {"run", "scene.yaml", "--duration", "0.15", "-q", "--resume",
-                               "good.ckpt"});
+  auto longer =
+      pdyn_in(dir_, {"run", "scene.yaml", "--duration", "0.15", "-q", "--resume", "good.ckpt"});
   EXPECT_EQ(longer.status, 0) << longer.err;
 
   // --force resumes anyway and says what differs.
@@ -261,20 +264,24 @@ TEST_F(CheckpointCorruption, ResealedGarbageIsRefusedOrHarmless) {
   for (int i = 0; i < 3000; ++i) {
     std::string p = payload;
     switch (i % 4) {
-      case 0: p[where(rng)] = static_cast<char>(rng()); break;           // one byte
-      case 1: {                                                           // a random u64
+      case 0:
+        p[where(rng)] = static_cast<char>(rng());
+        break;   // one byte
+      case 1: {  // a random u64
         const std::size_t at = where(rng) % (p.size() - 8);
         const std::uint64_t v = (std::uint64_t{rng()} << 32) | rng();
         std::memcpy(p.data() + at, &v, 8);
         break;
       }
-      case 2: {                                                           // a huge length
+      case 2: {  // a huge length
         const std::size_t at = where(rng) % (p.size() - 8);
         const std::uint64_t v = ~std::uint64_t{0} - (rng() % 64);
         std::memcpy(p.data() + at, &v, 8);
         break;
       }
-      case 3: p.resize(where(rng)); break;                                // cut short
+      case 3:
+        p.resize(where(rng));
+        break;  // cut short
     }
     write_bytes(dir_ / "resealed.ckpt", reseal(good_, p));
     try {

@@ -53,9 +53,9 @@ TEST(FuzzRegressions, CorpusOutcomes) {
   // The inputs committed with this test, and what each must give: the
   // overrides make the otherwise valid scene invalid.
   const fs::path corpus = source_path("tests/fuzz_regressions");
-  for (const char* name : {"deep_flow_nesting.yaml", "deep_map_nesting.yaml",
-                           "override_deep_nesting.yaml", "long_strings.yaml", "alias_bomb.yaml",
-                           "control_bytes.yaml"}) {
+  for (const char* name :
+       {"deep_flow_nesting.yaml", "deep_map_nesting.yaml", "override_deep_nesting.yaml",
+        "long_strings.yaml", "alias_bomb.yaml", "control_bytes.yaml"}) {
     SCOPED_TRACE(name);
     ASSERT_TRUE(fs::exists(corpus / name));
     EXPECT_EQ(validate(corpus / name).status, 2);
@@ -67,8 +67,9 @@ TEST(FuzzRegressions, CorpusOutcomes) {
 TEST(FuzzRegressions, TenMegabyteString) {
   const fs::path dir = temp_dir("fuzz-huge-string");
   const std::string huge(10 << 20, 'x');
-  const std::string scene = "simulation: { dt: 0.01, steps: 10 }\n"
-                            "particles:\n  - { position: [0, 0, 0], mass: 1 }\n";
+  const std::string scene =
+      "simulation: { dt: 0.01, steps: 10 }\n"
+      "particles:\n  - { position: [0, 0, 0], mass: 1 }\n";
   // As a file name it is a valid scene (validate writes nothing).
   write_file(dir / "path.yaml", scene + "output: { path: " + huge + " }\n");
   const auto ok = pdyn({"validate", (dir / "path.yaml").string(), "-q"});

@@ -38,7 +38,8 @@ std::pair<std::string, int> scene_with(const std::string& solver, const std::str
   const auto at = s.find(anchor);
   EXPECT_NE(at, std::string::npos);
   const std::size_t insert = at + anchor.size();
-  const int line_no = static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(insert), '\n')) + 1;
+  const int line_no =
+      static_cast<int>(std::count(s.begin(), s.begin() + static_cast<long>(insert), '\n')) + 1;
   s.insert(insert, line + "\n");
   return {s, line_no};
 }
@@ -135,8 +136,8 @@ TEST(PluginFaults, ThrowingColliderStopsWithExit3) {
   const Fault f = run_faulty("collider", scene);
   const std::int64_t step = expect_plugin_fault(f, "throwing_collider", line, "respond");
   EXPECT_EQ(step, 6);  // respond runs once a step
-  EXPECT_TRUE(same_bits(read_checkpoint(f.dir / "out/run.ckpt").state,
-                        plain_state_at("rk4", 5).state));
+  EXPECT_TRUE(
+      same_bits(read_checkpoint(f.dir / "out/run.ckpt").state, plain_state_at("rk4", 5).state));
 }
 
 TEST(PluginFaults, ThrowingSolverStopsWithExit3) {

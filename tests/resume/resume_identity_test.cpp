@@ -64,9 +64,10 @@ void expect_same_state(const fs::path& a, const fs::path& b) {
 }
 
 void expect_no_temporaries(const fs::path& out) {
-  for (const char* name : {"frames.csv.tmp-", "energy.csv.tmp-", "run.ckpt.tmp-", "split.ckpt.tmp-"}) {
-    EXPECT_TRUE(files_starting(out, name).empty()) << "a temporary " << name << "* was left in "
-                                                   << out;
+  for (const char* name :
+       {"frames.csv.tmp-", "energy.csv.tmp-", "run.ckpt.tmp-", "split.ckpt.tmp-"}) {
+    EXPECT_TRUE(files_starting(out, name).empty())
+        << "a temporary " << name << "* was left in " << out;
   }
 }
 
@@ -104,7 +105,8 @@ TEST(ResumeIdentity, SplitRunEqualsWholeRun) {
       expect_same_file(dir / "ref/split.ckpt", dir / "out/split.ckpt");
       expect_same_file(dir / "ref/frames.csv", dir / "out/frames.csv");
       expect_same_file(dir / "ref/energy.csv", dir / "out/energy.csv");
-      EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles), 200 / every + 1 + (200 % every != 0));
+      EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles),
+                200 / every + 1 + (200 % every != 0));
       expect_no_temporaries(dir / "out");
       ++tested;
     }
@@ -125,8 +127,8 @@ TEST(ResumeIdentity, ResumingAtTheEndRewritesTheSameFiles) {
     for (const char* f : {"frames.csv", "energy.csv", "run.ckpt"}) {
       fs::copy_file(dir / "out" / f, dir / (std::string("first-") + f));
     }
-    auto again = pdyn_in(dir, {"run", "scene.yaml", "--steps", "100", "-q", "--resume",
-                               "first-run.ckpt"});
+    auto again =
+        pdyn_in(dir, {"run", "scene.yaml", "--steps", "100", "-q", "--resume", "first-run.ckpt"});
     ASSERT_EQ(again.status, 0) << again.err;
     expect_same_file(dir / "first-frames.csv", dir / "out/frames.csv");
     expect_same_file(dir / "first-energy.csv", dir / "out/energy.csv");
@@ -140,8 +142,9 @@ TEST(ResumeIdentity, ResumingAtTheEndRewritesTheSameFiles) {
 // (after a failed expectation) if the child did not behave.
 std::optional<Checkpoint> kill_after_checkpoint(const fs::path& dir) {
   Child child({"run", "scene.yaml", "--steps", "100000000", "-q"}, dir);
-  const bool written = wait_until(
-      [&] { return fs::exists(dir / "out/run.ckpt") || !child.running(); }, std::chrono::seconds(30));
+  const bool written =
+      wait_until([&] { return fs::exists(dir / "out/run.ckpt") || !child.running(); },
+                 std::chrono::seconds(30));
   child.signal(SIGKILL);
   const bool ended = child.wait(std::chrono::seconds(10));
   if (!written || !ended || !WIFSIGNALED(child.status()) || WTERMSIG(child.status()) != SIGKILL) {
@@ -179,7 +182,8 @@ TEST(ResumeIdentity, KilledRunResumesExactly) {
     // A run long enough that the checkpoint falls in its first half.
     std::int64_t steps = 200;
     if (adaptive) {
-      steps = std::max<std::int64_t>(steps, static_cast<std::int64_t>(std::ceil(2 * mid.time / dt)));
+      steps =
+          std::max<std::int64_t>(steps, static_cast<std::int64_t>(std::ceil(2 * mid.time / dt)));
     } else {
       steps = std::max<std::int64_t>(steps, 2 * mid.step);
     }
@@ -191,8 +195,8 @@ TEST(ResumeIdentity, KilledRunResumesExactly) {
     }
 
     // Resumed from the temporary files the killed process left.
-    auto resumed = pdyn_in(killed, {"run", "scene.yaml", "--steps", n, "-q", "--resume",
-                                    "out/run.ckpt"});
+    auto resumed =
+        pdyn_in(killed, {"run", "scene.yaml", "--steps", n, "-q", "--resume", "out/run.ckpt"});
     ASSERT_EQ(resumed.status, 0) << resumed.err;
     EXPECT_EQ(resumed.err, "");
     expect_same_file(whole / "ref-frames.csv", killed / "out/frames.csv");
@@ -233,8 +237,8 @@ TEST(ResumeIdentity, AdaptiveCheckpointPastScheduledSteps) {
     ASSERT_EQ(half.status, 0) << half.err;
     const Checkpoint h = read_checkpoint(dir / "out/run.ckpt");
     ASSERT_GT(h.step, 20) << "the first half should take more accepted steps than the run's 20";
-    auto rest = pdyn_in(dir, {"run", "scene.yaml", "--steps", "20", "-q", "--resume",
-                              "out/run.ckpt"});
+    auto rest =
+        pdyn_in(dir, {"run", "scene.yaml", "--steps", "20", "-q", "--resume", "out/run.ckpt"});
     EXPECT_EQ(rest.status, 0) << rest.err;
     EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles), 21);
   }

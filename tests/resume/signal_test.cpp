@@ -36,8 +36,10 @@ std::vector<std::string> shell_words(const std::string& line) {
   for (std::size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
     if (quoted) {
-      if (c == '\'') quoted = false;
-      else word += c;
+      if (c == '\'')
+        quoted = false;
+      else
+        word += c;
     } else if (c == '\'') {
       quoted = in_word = true;
     } else if (c == '\\' && i + 1 < line.size()) {
@@ -111,7 +113,8 @@ void interrupt_and_resume(int sig, const std::string& name) {
   // Complete files under their final names, ending at step k.
   double last_t = -1;
   const int frames = check_frames_file(dir / "out/frames.csv", kParticles, &last_t);
-  EXPECT_EQ(frames, static_cast<int>(k / 50) + 1 + (k % 50 != 0)) << "frames at 0, every 50 steps, and at " << k;
+  EXPECT_EQ(frames, static_cast<int>(k / 50) + 1 + (k % 50 != 0))
+      << "frames at 0, every 50 steps, and at " << k;
   EXPECT_EQ(last_t, t_k);
   const auto energy = last_row(dir / "out/energy.csv");
   ASSERT_EQ(energy.size(), 4u);
@@ -137,9 +140,11 @@ void interrupt_and_resume(int sig, const std::string& name) {
   auto whole = pdyn_in(ref, {"run", "scene.yaml", "--steps", std::to_string(total), "-q"});
   ASSERT_EQ(whole.status, 0) << whole.err;
   for (const char* f : {"out/frames.csv", "out/energy.csv"}) {
-    EXPECT_TRUE(read_bytes(dir / f) == read_bytes(ref / f)) << f << " differs from the uninterrupted run's";
+    EXPECT_TRUE(read_bytes(dir / f) == read_bytes(ref / f))
+        << f << " differs from the uninterrupted run's";
   }
-  EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles), static_cast<int>(total / 50) + 1);
+  EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles),
+            static_cast<int>(total / 50) + 1);
 }
 
 TEST(Signals, SigintStopsCleanlyAndResumes) { interrupt_and_resume(SIGINT, "SIGINT"); }
@@ -160,7 +165,8 @@ TEST(Signals, SecondSignalExitsAtOnceLeavingNoFinalFile) {
                          std::chrono::seconds(20)));
   ASSERT_TRUE(child.running()) << child.err();
   child.signal(SIGSTOP);
-  ASSERT_TRUE(wait_until([&] { return process_state(child.pid()) == 'T'; }, std::chrono::seconds(10)));
+  ASSERT_TRUE(
+      wait_until([&] { return process_state(child.pid()) == 'T'; }, std::chrono::seconds(10)));
   child.signal(SIGINT);
   child.signal(SIGTERM);
   const auto sent = std::chrono::steady_clock::now();

@@ -3,9 +3,9 @@
 // numbers, deep nesting, unicode and invalid UTF-8, truncation) are run by
 // the real `pdyn` binary in a child process. Each must exit 0, 2, 3 or 4:
 // never a signal, never a hang, never an unclassified failure.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -46,33 +46,74 @@ std::string replace_value(const std::string& line, const std::string& with, std:
     if (colon == std::string::npos) return line + " " + with;
     return line.substr(0, colon + 1) + " " + with;
   }
-  const auto [at, len] = spots[std::uniform_int_distribution<std::size_t>(0, spots.size() - 1)(rng)];
+  const auto [at, len] =
+      spots[std::uniform_int_distribution<std::size_t>(0, spots.size() - 1)(rng)];
   return line.substr(0, at) + with + line.substr(at + len);
 }
 
 std::string mutate(std::vector<std::string> lines, std::mt19937& rng) {
-  static const std::vector<std::string> values = {
-      "1e308", "-1e308", "1e-320", "0", "-1", "-0.5", ".nan", ".inf", "-.inf", "99999999999",
-      "abc", "[1, 2]", "[]", "{}", "{a: 1}", "~", "true", "\"\"", "[0, 0, 0]", "2147483648",
-      "-9223372036854775809", "1.5", "\xc3\xa9\xe2\x98\x83", "\xff\xfe", "[[[[[[[[[[1]]]]]]]]]]",
-      "*anchor", "&a [1, 2, 3]", "!!binary aGVsbG8=", "0x1F", "1_000"};
-  auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  static const std::vector<std::string> values = {"1e308",
+                                                  "-1e308",
+                                                  "1e-320",
+                                                  "0",
+                                                  "-1",
+                                                  "-0.5",
+                                                  ".nan",
+                                                  ".inf",
+                                                  "-.inf",
+                                                  "99999999999",
+                                                  "abc",
+                                                  "[1, 2]",
+                                                  "[]",
+                                                  "{}",
+                                                  "{a: 1}",
+                                                  "~",
+                                                  "true",
+                                                  "\"\"",
+                                                  "[0, 0, 0]",
+                                                  "2147483648",
+                                                  "-9223372036854775809",
+                                                  "1.5",
+                                                  "\xc3\xa9\xe2\x98\x83",
+                                                  "\xff\xfe",
+                                                  "[[[[[[[[[[1]]]]]]]]]]",
+                                                  "*anchor",
+                                                  "&a [1, 2, 3]",
+                                                  "!!binary aGVsbG8=",
+                                                  "0x1F",
+                                                  "1_000"};
+  auto pick = [&](std::size_t n) {
+    return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng);
+  };
   const int edits = 1 + static_cast<int>(pick(3));
   for (int e = 0; e < edits && !lines.empty(); ++e) {
     const std::size_t i = pick(lines.size());
     switch (pick(8)) {
-      case 0: lines.erase(lines.begin() + static_cast<long>(i)); break;
-      case 1: lines.insert(lines.begin() + static_cast<long>(i), lines[i]); break;
+      case 0:
+        lines.erase(lines.begin() + static_cast<long>(i));
+        break;
+      case 1:
+        lines.insert(lines.begin() + static_cast<long>(i), lines[i]);
+        break;
       case 2:
-      case 3: lines[i] = replace_value(lines[i], values[pick(values.size())], rng); break;
+      case 3:
+        lines[i] = replace_value(lines[i], values[pick(values.size())], rng);
+        break;
       case 4: {  // deep nesting
         const std::size_t depth = 50 + pick(5000);
-        lines[i] = replace_value(lines[i], std::string(depth, '[') + "1" + std::string(depth, ']'), rng);
+        lines[i] =
+            replace_value(lines[i], std::string(depth, '[') + "1" + std::string(depth, ']'), rng);
         break;
       }
-      case 5: lines[i] = "  " + lines[i]; break;  // indentation
-      case 6: lines[i] = lines[i].substr(0, pick(lines[i].size() + 1)); break;  // truncation
-      case 7: std::swap(lines[i], lines[pick(lines.size())]); break;
+      case 5:
+        lines[i] = "  " + lines[i];
+        break;  // indentation
+      case 6:
+        lines[i] = lines[i].substr(0, pick(lines[i].size() + 1));
+        break;  // truncation
+      case 7:
+        std::swap(lines[i], lines[pick(lines.size())]);
+        break;
     }
   }
   std::string out;
@@ -131,11 +172,12 @@ TEST(Mutation, MutatedConfigsNeverCrashOrHang) {
                                  std::chrono::seconds(60));
     ASSERT_NE(status, -1) << "hang (killed after 60 s) on mutant " << n << ":\n" << text;
     ASSERT_NE(status, -2) << "could not start " << PDYN_BIN;
-    ASSERT_TRUE(WIFEXITED(status)) << "signal " << WTERMSIG(status) << " on mutant " << n
-                                   << ":\n" << text;
+    ASSERT_TRUE(WIFEXITED(status)) << "signal " << WTERMSIG(status) << " on mutant " << n << ":\n"
+                                   << text;
     const int code = WEXITSTATUS(status);
     ASSERT_TRUE(code == 0 || code == 2 || code == 3 || code == 4)
-        << "exit " << code << " on mutant " << n << ":\n" << text;
+        << "exit " << code << " on mutant " << n << ":\n"
+        << text;
     ++outcomes[code];
   }
   std::cout << "mutation test: " << count << " mutants; exit 0: " << outcomes[0]

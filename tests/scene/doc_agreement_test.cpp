@@ -5,8 +5,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "plugins/force_support.hpp"
 #include "pdyn/host/scene.hpp"
+#include "plugins/force_support.hpp"
 
 namespace pdyn {
 namespace {

@@ -40,7 +40,7 @@ TEST(ViewerFrame, FieldsSitAtTheDocumentedOffsets) {
   EXPECT_EQ(at<std::uint32_t>(b, 28), 1u);
   EXPECT_EQ(at<double>(b, 32), 3.5);
   EXPECT_EQ(at<double>(b, 40), -2.0);
-  EXPECT_EQ(at<float>(b, 48 + 4 * 4), 5.5f);  // y of particle 1
+  EXPECT_EQ(at<float>(b, 48 + 4 * 4), 5.5f);   // y of particle 1
   EXPECT_EQ(at<float>(b, 48 + 24 + 4), 9.0f);  // speed of particle 1
 }
 
@@ -95,8 +95,10 @@ TEST(ViewerCommand, EachMalformedMessageGetsItsReason) {
   EXPECT_EQ(not_json.rfind("message is not JSON: ", 0), 0u) << not_json;
   EXPECT_NE(not_json.find("(expected a JSON object with an 'op')"), std::string::npos);
   EXPECT_EQ(refusal("[1,2]"), "message is a JSON array (expected a JSON object with an 'op')");
-  EXPECT_EQ(refusal(R"({"id":3})").rfind("message has no 'op' string (expected one of: play, ", 0), 0u);
-  EXPECT_EQ(refusal(R"({"op":"explode"})").rfind("unknown op 'explode' (expected one of: play,", 0), 0u);
+  EXPECT_EQ(refusal(R"({"id":3})").rfind("message has no 'op' string (expected one of: play, ", 0),
+            0u);
+  EXPECT_EQ(refusal(R"({"op":"explode"})").rfind("unknown op 'explode' (expected one of: play,", 0),
+            0u);
   EXPECT_EQ(refusal(R"({"op":"nail"})"),
             "nail: field 'id' is missing (expected a particle index, an integer >= 0)");
   EXPECT_EQ(refusal(R"({"op":"nail","id":-1})"),
@@ -118,7 +120,7 @@ TEST(ViewerCommand, EachMalformedMessageGetsItsReason) {
             "solver: field 'name' is missing or not a string (expected a solver name)");
   const std::string huge = R"({"op":"play","pad":")" + std::string(70000, 'x') + "\"}";
   EXPECT_EQ(refusal(huge), "message of " + std::to_string(huge.size()) +
-                              " bytes is too long (expected at most 65536 bytes)");
+                               " bytes is too long (expected at most 65536 bytes)");
 }
 
 TEST(ViewerCommand, RepliesAreJsonWithTheirOp) {

@@ -4,23 +4,22 @@
 // stop the others; two clients see one simulation; frames stay under ~60
 // a second; SIGINT stops the server with status 0.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange unincluded
-
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
 #include <chrono>
-#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
+#include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange unincluded
 
 #include "protocol.hpp"
 #include "support/test_support.hpp"
@@ -63,8 +62,8 @@ class Server {
     posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
     posix_spawn_file_actions_addclose(&actions, out[0]);
     const std::string page = (dir / "page").string();
-    std::vector<std::string> args{PDYN_BIN, "serve", scene_.string(), "--port", "0",
-                                  "--viewer", page, "--plugin-path", PDYN_PLUGIN_DIR};
+    std::vector<std::string> args{PDYN_BIN,   "serve", scene_.string(), "--port",       "0",
+                                  "--viewer", page,    "--plugin-path", PDYN_PLUGIN_DIR};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -142,7 +141,8 @@ struct Message {
 class Client {
  public:
   explicit Client(int port) : ws_(ioc_) {
-    ws_.next_layer().connect({net::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
+    ws_.next_layer().connect(
+        {net::ip::make_address("127.0.0.1"), static_cast<unsigned short>(port)});
     ws_.handshake("127.0.0.1", "/ws");
   }
   void send(const std::string& text, bool binary = false) {
@@ -248,7 +248,8 @@ TEST(Serve, BadMessagesGetAnErrorAndTheConnectionStays) {
     EXPECT_NE(e["message"].get<std::string>().find(reason), std::string::npos) << e.dump();
   }
   c.send("\x01\x02", true);
-  EXPECT_NE(c.next("error")["message"].get<std::string>().find("binary message"), std::string::npos);
+  EXPECT_NE(c.next("error")["message"].get<std::string>().find("binary message"),
+            std::string::npos);
   // Still connected, and still obeyed.
   c.send(R"({"op":"play"})");
   EXPECT_EQ(c.next("ack")["op"], "play");

@@ -114,7 +114,7 @@ TEST(ViewerSession, NailHoldsAParticleStillAndTogglesBack) {
   const Vec3 held = x(*s, 0);
   EXPECT_EQ(s->system().velocities().col(0), Vec3::Zero());
   steps(*s, 300);
-  EXPECT_EQ(x(*s, 0), held);  // bit for bit
+  EXPECT_EQ(x(*s, 0), held);                // bit for bit
   EXPECT_LT(x(*s, 1).z(), held.z() - 0.3);  // the other one keeps falling
   s->apply(cmd(R"({"op":"nail","id":0})"), 1);
   EXPECT_FALSE(s->system().fixed()[0]);
@@ -168,7 +168,8 @@ TEST(ViewerSession, RefusedCommandsSayWhyAndChangeNothing) {
   EXPECT_EQ(refusal(*s, R"({"op":"nail","id":2})"),
             "nail: field 'id' is 2, but there are 2 particles (expected 0..1)");
   const std::string solver = refusal(*s, R"({"op":"solver","name":"rk5"})");
-  EXPECT_EQ(solver.rfind("solver: there is no solver plugin 'rk5' (expected one of: ", 0), 0u) << solver;
+  EXPECT_EQ(solver.rfind("solver: there is no solver plugin 'rk5' (expected one of: ", 0), 0u)
+      << solver;
   EXPECT_NE(solver.find("rk4"), std::string::npos);
   EXPECT_EQ(s->system().force_objects().size(), forces);
   EXPECT_EQ(s->solver_name(), "rk4");
@@ -229,7 +230,9 @@ TEST(ViewerSession, ReloadReadsTheFileAgainAndABrokenSceneKeepsTheRunningOne) {
   o.plugin_path = {PDYN_PLUGIN_DIR};
   Session s(std::move(o));
   steps(s, 10);
-  test::write_file(file, "simulation: { dt: 0.001, steps: 10 }\nparticles:\n  - { position: [0, 0], mass: 1 }\n");
+  test::write_file(
+      file,
+      "simulation: { dt: 0.001, steps: 10 }\nparticles:\n  - { position: [0, 0], mass: 1 }\n");
   const std::string e = refusal(s, R"({"op":"reload"})");
   EXPECT_EQ(e.rfind("reload: the scene has errors; the running simulation is kept\n", 0), 0u) << e;
   EXPECT_NE(e.find(file.string() + ":3:"), std::string::npos) << e;  // FILE:LINE:COLUMN
@@ -273,7 +276,8 @@ TEST(ViewerSession, StateJsonListsEveryParticle) {
   EXPECT_EQ(f.positions.size(), 6u);
   EXPECT_EQ(f.positions[3], 1.0f);
   EXPECT_NEAR(f.potential, 2 * 0.5 * 10 * 1, 1e-12);  // m g z for both
-  EXPECT_EQ(json::parse(s->scene_json())["flat"], "xy");  // z = 1 and v = 0 for all (y = 0 too: xy is tried first)
+  EXPECT_EQ(json::parse(s->scene_json())["flat"],
+            "xy");  // z = 1 and v = 0 for all (y = 0 too: xy is tried first)
 }
 
 }  // namespace

@@ -35,7 +35,8 @@ T get(std::string_view in, std::size_t at) {
 
 std::string encode_frame(const Frame& f) {
   const std::size_t n = f.speeds.size();
-  if (f.positions.size() != 3 * n) throw std::invalid_argument("encode_frame: 3N positions and N speeds");
+  if (f.positions.size() != 3 * n)
+    throw std::invalid_argument("encode_frame: 3N positions and N speeds");
   std::string out(kFrameHeaderBytes + 16 * n, '\0');
   put<std::uint32_t>(out, 0, kFrameMagic);
   put<std::uint32_t>(out, 4, f.topology);
@@ -57,7 +58,8 @@ Frame decode_frame(std::string_view in) {
     throw ProtocolError(fmt::format("frame of {} bytes is shorter than its {}-byte header",
                                     in.size(), kFrameHeaderBytes));
   }
-  if (get<std::uint32_t>(in, 0) != kFrameMagic) throw ProtocolError("frame does not start with PDYF");
+  if (get<std::uint32_t>(in, 0) != kFrameMagic)
+    throw ProtocolError("frame does not start with PDYF");
   Frame f;
   f.topology = get<std::uint32_t>(in, 4);
   f.time = get<double>(in, 8);
@@ -67,8 +69,8 @@ Frame decode_frame(std::string_view in) {
   f.kinetic = get<double>(in, 32);
   f.potential = get<double>(in, 40);
   if (in.size() != kFrameHeaderBytes + 16 * n) {
-    throw ProtocolError(fmt::format("frame of {} bytes for {} particles (expected {})", in.size(), n,
-                                    kFrameHeaderBytes + 16 * n));
+    throw ProtocolError(fmt::format("frame of {} bytes for {} particles (expected {})", in.size(),
+                                    n, kFrameHeaderBytes + 16 * n));
   }
   f.positions.resize(3 * n);
   f.speeds.resize(n);
@@ -89,10 +91,9 @@ struct OpInfo {
   Op op;
 };
 constexpr OpInfo kOps[] = {
-    {"play", Op::Play},     {"pause", Op::Pause},   {"step", Op::Step},
-    {"reset", Op::Reset},   {"reload", Op::Reload}, {"speed", Op::Speed},
-    {"solver", Op::Solver}, {"dt", Op::Dt},         {"drag", Op::Drag},
-    {"move", Op::Move},     {"release", Op::Release}, {"nail", Op::Nail},
+    {"play", Op::Play},     {"pause", Op::Pause},   {"step", Op::Step},       {"reset", Op::Reset},
+    {"reload", Op::Reload}, {"speed", Op::Speed},   {"solver", Op::Solver},   {"dt", Op::Dt},
+    {"drag", Op::Drag},     {"move", Op::Move},     {"release", Op::Release}, {"nail", Op::Nail},
     {"create", Op::Create}, {"attach", Op::Attach},
 };
 
@@ -141,7 +142,8 @@ class Fields {
     const json* v = find(key);
     const char* expected = "(expected [x, y, z], three finite numbers in m)";
     if (!v) fail(key, fmt::format("is missing {}", expected));
-    if (!v->is_array() || v->size() != 3) fail(key, fmt::format("is {} {}", short_dump(*v), expected));
+    if (!v->is_array() || v->size() != 3)
+      fail(key, fmt::format("is {} {}", short_dump(*v), expected));
     Vec3 p;
     for (int k = 0; k < 3; ++k) {
       const json& c = (*v)[static_cast<std::size_t>(k)];
@@ -178,12 +180,12 @@ Command parse_command(std::string_view text) {
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw ProtocolError(fmt::format("message is not JSON: {} (expected a JSON object with an 'op')",
-                                    e.what()));
+    throw ProtocolError(
+        fmt::format("message is not JSON: {} (expected a JSON object with an 'op')", e.what()));
   }
   if (!j.is_object()) {
-    throw ProtocolError(fmt::format("message is a JSON {} (expected a JSON object with an 'op')",
-                                    j.type_name()));
+    throw ProtocolError(
+        fmt::format("message is a JSON {} (expected a JSON object with an 'op')", j.type_name()));
   }
   const auto op_it = j.find("op");
   if (op_it == j.end() || !op_it->is_string()) {
@@ -205,16 +207,24 @@ Command parse_command(std::string_view text) {
   const Fields f(j, c.op_name);
   switch (c.op) {
     case Op::Speed:
-    case Op::Dt: c.value = f.number("value", true); break;
-    case Op::Solver: c.name = f.string("name"); break;
+    case Op::Dt:
+      c.value = f.number("value", true);
+      break;
+    case Op::Solver:
+      c.name = f.string("name");
+      break;
     case Op::Drag:
       c.id = f.index("id");
       c.point = f.point("point");
       c.ks = f.optional_nonnegative("ks");
       c.kd = f.optional_nonnegative("kd");
       break;
-    case Op::Move: c.point = f.point("point"); break;
-    case Op::Nail: c.id = f.index("id"); break;
+    case Op::Move:
+      c.point = f.point("point");
+      break;
+    case Op::Nail:
+      c.id = f.index("id");
+      break;
     case Op::Create:
       c.point = f.point("point");
       c.mass = f.number("mass", true);
@@ -225,7 +235,8 @@ Command parse_command(std::string_view text) {
       c.ks = f.optional_nonnegative("ks");
       c.kd = f.optional_nonnegative("kd");
       break;
-    default: break;
+    default:
+      break;
   }
   return c;
 }

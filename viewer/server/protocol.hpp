@@ -25,14 +25,14 @@ inline constexpr std::size_t kMaxCommandBytes = 64 * 1024;
 
 /// What one frame carries.
 struct Frame {
-  std::uint32_t topology = 0;   ///< the scene message these positions belong to
-  double time = 0.0;            ///< s
-  std::uint64_t step = 0;       ///< steps since the scene was (re)loaded
+  std::uint32_t topology = 0;  ///< the scene message these positions belong to
+  double time = 0.0;           ///< s
+  std::uint64_t step = 0;      ///< steps since the scene was (re)loaded
   bool playing = false;
-  double kinetic = 0.0;         ///< J
-  double potential = 0.0;       ///< J
-  std::vector<float> positions; ///< x0 y0 z0 x1 ..., m (3N)
-  std::vector<float> speeds;    ///< |v_i|, m/s (N)
+  double kinetic = 0.0;          ///< J
+  double potential = 0.0;        ///< J
+  std::vector<float> positions;  ///< x0 y0 z0 x1 ..., m (3N)
+  std::vector<float> speeds;     ///< |v_i|, m/s (N)
 };
 
 /// The frame as the bytes of one binary WebSocket message (little-endian).
@@ -52,17 +52,29 @@ class ProtocolError : public std::runtime_error {
 /// command does not take are left empty.
 struct Command {
   enum class Op {
-    Play, Pause, Step, Reset, Reload, Speed, Solver, Dt,
-    Drag, Move, Release, Nail, Create, Attach
+    Play,
+    Pause,
+    Step,
+    Reset,
+    Reload,
+    Speed,
+    Solver,
+    Dt,
+    Drag,
+    Move,
+    Release,
+    Nail,
+    Create,
+    Attach
   };
   Op op = Op::Play;
-  std::string op_name;           ///< as sent, for replies
-  std::optional<Index> id, a, b; ///< particle indices (>= 0; range checked by the session)
-  std::optional<Vec3> point;     ///< m
-  std::optional<double> value;   ///< speed (1) or dt (s)
-  std::optional<double> mass;    ///< kg
-  std::optional<double> ks, kd;  ///< N/m, N s/m
-  std::string name;              ///< solver name
+  std::string op_name;            ///< as sent, for replies
+  std::optional<Index> id, a, b;  ///< particle indices (>= 0; range checked by the session)
+  std::optional<Vec3> point;      ///< m
+  std::optional<double> value;    ///< speed (1) or dt (s)
+  std::optional<double> mass;     ///< kg
+  std::optional<double> ks, kd;   ///< N/m, N s/m
+  std::string name;               ///< solver name
 };
 
 /// Parses one text message. Throws ProtocolError saying what is wrong and

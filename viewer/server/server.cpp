@@ -6,9 +6,10 @@
 
 #include <fmt/format.h>
 
-#include <atomic>
+// clang-format off
 #include <utility>  // before Asio: Boost 1.74's awaitable.hpp uses std::exchange unincluded
-
+// clang-format on
+#include <atomic>
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -263,10 +264,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     parser_.emplace();
     parser_->body_limit(64 * 1024);
     stream_.expires_after(std::chrono::seconds(30));
-    http::async_read(stream_, buffer_, *parser_,
-                     [self = shared_from_this()](beast::error_code ec, std::size_t) {
-                       self->on_read(ec);
-                     });
+    http::async_read(
+        stream_, buffer_, *parser_,
+        [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
   }
 
  private:
@@ -289,8 +289,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     respond(handle(req, path));
   }
 
-  Response make(const http::request<http::string_body>& req, http::status status,
-                const char* type, std::string body) {
+  Response make(const http::request<http::string_body>& req, http::status status, const char* type,
+                std::string body) {
     Response res{status, req.version()};
     res.set(http::field::server, "pdyn serve");
     res.set(http::field::content_type, type);
@@ -361,9 +361,10 @@ void serve(Session& session, const ServerOptions& options, std::ostream& out,
   boost::system::error_code ec;
   const auto address = net::ip::make_address(options.host, ec);
   if (ec) {
-    throw Error(fmt::format("--host {}: not an IP address (expected e.g. 127.0.0.1, or 0.0.0.0 for "
-                            "every interface)",
-                            options.host));
+    throw Error(
+        fmt::format("--host {}: not an IP address (expected e.g. 127.0.0.1, or 0.0.0.0 for "
+                    "every interface)",
+                    options.host));
   }
   tcp::acceptor acceptor(ioc);
   const tcp::endpoint endpoint(address, options.port);
@@ -372,8 +373,9 @@ void serve(Session& session, const ServerOptions& options, std::ostream& out,
   if (!ec) acceptor.bind(endpoint, ec);
   if (!ec) acceptor.listen(net::socket_base::max_listen_connections, ec);
   if (ec) {
-    throw Error(fmt::format("cannot listen on {}:{}: {} (expected a free port, or --port 0 for any)",
-                            options.host, options.port, ec.message()));
+    throw Error(
+        fmt::format("cannot listen on {}:{}: {} (expected a free port, or --port 0 for any)",
+                    options.host, options.port, ec.message()));
   }
   const unsigned short port = acceptor.local_endpoint().port();
 

@@ -15,10 +15,10 @@ namespace pdyn::viewer {
 
 struct ServerOptions {
   std::string host = "127.0.0.1";
-  unsigned short port = 8080;          ///< 0: any free port
-  std::filesystem::path root;          ///< the page's files (index.html, vendor/three/...)
-  double frame_rate = 60.0;            ///< frames per second, at most
-  int threads = 0;                     ///< threads for forces and solvers; 0: OpenMP's default
+  unsigned short port = 8080;  ///< 0: any free port
+  std::filesystem::path root;  ///< the page's files (index.html, vendor/three/...)
+  double frame_rate = 60.0;    ///< frames per second, at most
+  int threads = 0;             ///< threads for forces and solvers; 0: OpenMP's default
 };
 
 /// Serves `session` until SIGINT or SIGTERM (or `stop` is called from

@@ -9,8 +9,9 @@
 #include <numbers>
 #include <sstream>
 
-#include "pdyn/targets.hpp"
 #include "pdyn/host/scene_drawables.hpp"
+#include "pdyn/stepper.hpp"
+#include "pdyn/targets.hpp"
 
 namespace pdyn::viewer {
 
@@ -23,7 +24,8 @@ namespace {
 std::string read_scene_file(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) {
-    throw SceneError({{file.string(), "cannot read the scene file (expected a readable YAML file)"}});
+    throw SceneError(
+        {{file.string(), "cannot read the scene file (expected a readable YAML file)"}});
   }
   std::ostringstream ss;
   ss << in.rdbuf();
@@ -125,32 +127,22 @@ void Session::load(bool from_disk) {
 // with a message for the page, instead of ending the server.
 void Session::step_locked() {
   if (!scene_.solver) return;
-  System& sys = *scene_.system;
-  const Eigen::VectorXd previous = sys.state();
-  const double t0 = sys.time();
-  try {
-    double h = dt_;
-    if (scene_.solver->adaptive()) {
-      h = scene_.solver->advance(sys, t0 + dt_, dt_);
+  Stepper stepper(*scene_.system, *scene_.solver, scene_.solver_label);
+  const double t0 = scene_.system->time();
+  if (!stepper.step(dt_)) {
+    const StepFault& f = stepper.fault();
+    if (f.kind == StepFault::Kind::NonFiniteState) {
+      fail(
+          fmt::format("the state became non-finite at step {} (t = {:.6g} s) with {} and dt = "
+                      "{:.3g} s; the last good state is kept (expected a smaller dt, or the "
+                      "implicit_euler solver for stiff springs)",
+                      steps_ + 1, t0, scene_.solver_name, dt_));
     } else {
-      scene_.solver->step(sys, dt_);
-      sys.set_time(t0 + dt_);
+      const std::string what =
+          f.non_standard ? f.label + ": step threw a non-standard exception" : f.what;
+      fail(fmt::format("{} at step {} (t = {:.6g} s); the last good state is kept", what,
+                       steps_ + 1, t0));
     }
-    sys.respond_to_collisions(h);
-  } catch (const std::exception& e) {
-    sys.state() = previous;
-    sys.set_time(t0);
-    fail(fmt::format("{} at step {} (t = {:.6g} s); the last good state is kept", e.what(),
-                     steps_ + 1, t0));
-    return;
-  }
-  if (!sys.state().allFinite()) {
-    sys.state() = previous;
-    sys.set_time(t0);
-    fail(fmt::format("the state became non-finite at step {} (t = {:.6g} s) with {} and dt = {:.3g} "
-                     "s; the last good state is kept (expected a smaller dt, or the implicit_euler "
-                     "solver for stiff springs)",
-                     steps_ + 1, t0, scene_.solver_name, dt_));
     return;
   }
   ++steps_;
@@ -194,8 +186,9 @@ void Session::advance(double wall_seconds, double budget_seconds) {
 void Session::check_particle(const Command& c, const char* field, Index i) const {
   const Index n = scene_.system->size();
   if (i >= n) {
-    throw CommandError(fmt::format("{}: field '{}' is {}, but there are {} particles (expected 0..{})",
-                                   c.op_name, field, i, n, n - 1));
+    throw CommandError(
+        fmt::format("{}: field '{}' is {}, but there are {} particles (expected 0..{})", c.op_name,
+                    field, i, n, n - 1));
   }
 }
 
@@ -218,9 +211,10 @@ std::shared_ptr<Force> Session::make_force(const char* type, Params params,
                                            const std::string& label) {
   const PluginRecord* r = registry_->find(PluginKind::Force, type);
   if (!r) {
-    throw CommandError(fmt::format("this needs the '{}' force plugin, which was not found on the "
-                                   "plugin path (expected pdyn_force_{}.so)",
-                                   type, type));
+    throw CommandError(
+        fmt::format("this needs the '{}' force plugin, which was not found on the "
+                    "plugin path (expected pdyn_force_{}.so)",
+                    type, type));
   }
   const Params p = defaults_of(*r, params);
   const SceneContext ctx{scene_.system->view(), &scene_.groups};
@@ -267,12 +261,15 @@ std::optional<Index> Session::apply(const Command& c, int client) {
   std::optional<Index> created;
   switch (c.op) {
     case Op::Play:
-      if (!scene_.solver) throw CommandError("play: the scene has no solver (expected a loaded scene)");
+      if (!scene_.solver)
+        throw CommandError("play: the scene has no solver (expected a loaded scene)");
       playing_ = true;
       message_.clear();
       debt_ = 0.0;
       break;
-    case Op::Pause: playing_ = false; break;
+    case Op::Pause:
+      playing_ = false;
+      break;
     case Op::Step:
       message_.clear();
       step_locked();
@@ -288,12 +285,12 @@ std::optional<Index> Session::apply(const Command& c, int client) {
         throw CommandError("reload: the scene has errors; the running simulation is kept\n" +
                            joined(e));
       } catch (const std::exception& e) {
-        throw CommandError(fmt::format(
-            "reload: {}; the running simulation is kept", e.what()));
+        throw CommandError(fmt::format("reload: {}; the running simulation is kept", e.what()));
       }
       break;
     case Op::Speed:
-      if (*c.value > 1e6) throw CommandError("speed: field 'value' is too large (expected at most 1e6)");
+      if (*c.value > 1e6)
+        throw CommandError("speed: field 'value' is too large (expected at most 1e6)");
       speed_ = *c.value;
       break;
     case Op::Dt:
@@ -304,10 +301,11 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       const PluginRecord* r = registry_->find(PluginKind::Solver, c.name);
       if (!r) {
         std::string names;
-        for (const auto& n : registry_->names(PluginKind::Solver)) names += (names.empty() ? "" : ", ") + n;
-        throw CommandError(fmt::format("solver: there is no solver plugin '{}' (expected one of: {})",
-                                       c.name.size() > 40 ? c.name.substr(0, 40) + "..." : c.name,
-                                       names));
+        for (const auto& n : registry_->names(PluginKind::Solver))
+          names += (names.empty() ? "" : ", ") + n;
+        throw CommandError(
+            fmt::format("solver: there is no solver plugin '{}' (expected one of: {})",
+                        c.name.size() > 40 ? c.name.substr(0, 40) + "..." : c.name, names));
       }
       Params p = defaults_of(*r, {});
       const SceneContext ctx{sys.view(), &scene_.groups};
@@ -333,8 +331,9 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       const std::string label = fmt::format("mouse spring (viewer client {})", client);
       auto force = make_force("anchor", std::move(p), label);
       if (!movable_targets(*force)) {
-        throw CommandError("drag: the 'anchor' plugin on the plugin path cannot move its target "
-                           "(expected it to implement pdyn::MovableTargets)");
+        throw CommandError(
+            "drag: the 'anchor' plugin on the plugin path cannot move its target "
+            "(expected it to implement pdyn::MovableTargets)");
       }
       sys.add_force(force, label);
       drags_[client] = {force, *c.id};
@@ -371,7 +370,8 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       check_particle(c, "b", *c.b);
       if (*c.a == *c.b) {
         throw CommandError(fmt::format(
-            "attach: fields 'a' and 'b' are both particle {} (expected two different particles)", *c.a));
+            "attach: fields 'a' and 'b' are both particle {} (expected two different particles)",
+            *c.a));
       }
       // Rest length = the current distance: the new spring starts at rest.
       const double rest = (sys.positions().col(*c.a) - sys.positions().col(*c.b)).norm();
@@ -422,7 +422,8 @@ Frame Session::frame() const {
   const auto x = sys.positions();
   const auto v = sys.velocities();
   for (Index i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) f.positions[static_cast<std::size_t>(3 * i + k)] = static_cast<float>(x(k, i));
+    for (int k = 0; k < 3; ++k)
+      f.positions[static_cast<std::size_t>(3 * i + k)] = static_cast<float>(x(k, i));
     f.speeds[static_cast<std::size_t>(i)] = static_cast<float>(v.col(i).norm());
   }
   return f;
@@ -453,8 +454,11 @@ std::string Session::scene_json() const {
   const std::lock_guard lock(mutex_);
   const System& sys = *scene_.system;
   const Index n = sys.size();
-  json j{{"type", "scene"}, {"version", kProtocolVersion}, {"topology", topology_},
-         {"file", options_.scene.string()}, {"count", n}};
+  json j{{"type", "scene"},
+         {"version", kProtocolVersion},
+         {"topology", topology_},
+         {"file", options_.scene.string()},
+         {"count", n}};
   json fixed = json::array();
   for (auto f : sys.fixed()) fixed.push_back(f ? 1 : 0);
   j["fixed"] = std::move(fixed);
@@ -463,9 +467,11 @@ std::string Session::scene_json() const {
   for (const auto& l : d.links) links.push_back(json::array({l[0], l[1]}));
   j["links"] = std::move(links);
   j["planes"] = json::array();
-  for (const auto& p : d.planes) j["planes"].push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
+  for (const auto& p : d.planes)
+    j["planes"].push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
   j["spheres"] = json::array();
-  for (const auto& s : d.spheres) j["spheres"].push_back({{"center", vec(s.center)}, {"radius", s.radius}});
+  for (const auto& s : d.spheres)
+    j["spheres"].push_back({{"center", vec(s.center)}, {"radius", s.radius}});
   j["boxes"] = json::array();
   for (const auto& b : d.boxes) j["boxes"].push_back({{"min", vec(b.min)}, {"max", vec(b.max)}});
   j["solvers"] = registry_->names(PluginKind::Solver);
@@ -492,12 +498,19 @@ std::string Session::status_json() const {
   const std::lock_guard lock(mutex_);
   double rtf = 0.0;
   if (rate_.size() >= 2) {
-    const double wall = std::chrono::duration<double>(rate_.back().first - rate_.front().first).count();
+    const double wall =
+        std::chrono::duration<double>(rate_.back().first - rate_.front().first).count();
     if (wall > 0) rtf = (rate_.back().second - rate_.front().second) / wall;
   }
-  json j{{"type", "status"}, {"playing", playing_}, {"speed", speed_},
-         {"solver", scene_.solver_name}, {"dt", dt_}, {"time", scene_.system->time()},
-         {"step", steps_}, {"rtf", rtf}, {"count", scene_.system->size()}};
+  json j{{"type", "status"},
+         {"playing", playing_},
+         {"speed", speed_},
+         {"solver", scene_.solver_name},
+         {"dt", dt_},
+         {"time", scene_.system->time()},
+         {"step", steps_},
+         {"rtf", rtf},
+         {"count", scene_.system->size()}};
   j["message"] = message_.empty() ? json(nullptr) : json(message_);
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
@@ -514,8 +527,12 @@ std::string Session::state_json() const {
                          {"mass", sys.masses()(i)},
                          {"fixed", sys.fixed()[static_cast<std::size_t>(i)] != 0}});
   }
-  json j{{"time", sys.time()}, {"step", steps_}, {"playing", playing_},
-         {"solver", scene_.solver_name}, {"dt", dt_}, {"count", sys.size()},
+  json j{{"time", sys.time()},
+         {"step", steps_},
+         {"playing", playing_},
+         {"solver", scene_.solver_name},
+         {"dt", dt_},
+         {"count", sys.size()},
          {"particles", std::move(particles)}};
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }

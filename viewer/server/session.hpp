@@ -21,9 +21,9 @@
 #include <vector>
 
 #include "pdyn/error.hpp"
-#include "protocol.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/scene.hpp"
+#include "protocol.hpp"
 
 namespace pdyn::viewer {
 
@@ -34,9 +34,9 @@ class CommandError : public Error {
 };
 
 struct SessionOptions {
-  std::filesystem::path scene;                    ///< the scene file
-  std::vector<Override> overrides;                ///< --set
-  std::vector<std::filesystem::path> plugin_path; ///< --plugin-path, before the default ones
+  std::filesystem::path scene;                     ///< the scene file
+  std::vector<Override> overrides;                 ///< --set
+  std::vector<std::filesystem::path> plugin_path;  ///< --plugin-path, before the default ones
 };
 
 class Session {

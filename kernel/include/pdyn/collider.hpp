@@ -13,7 +13,6 @@ namespace pdyn {
 
 class Collider : public PluginObject {
  public:
-
   /// Contact forces, during every derivative evaluation after all force
   /// objects have run: for particles in resting contact, removes the part of
   /// `f` (N) that pushes into the obstacle (Witkin's F' = F_T).

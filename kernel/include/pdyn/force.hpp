@@ -27,7 +27,6 @@ class JacobianSink {
 
 class Force : public PluginObject {
  public:
-
   /// Adds this object's forces (N) into `f` (3 x N), for every particle it
   /// influences. Called once per derivative evaluation, after the kernel has
   /// cleared `f`. Must only add: other forces' contributions are already there.

@@ -18,11 +18,11 @@ namespace pdyn {
 /// contact-force hook. Forces read it; they only ever write the force matrix
 /// they are handed.
 struct ParticleView {
-  double t;                                  ///< simulated time, s
-  Eigen::Map<const Matrix3X> x;              ///< positions, m (3 x N)
-  Eigen::Map<const Matrix3X> v;              ///< velocities, m/s (3 x N)
-  Eigen::Map<const Eigen::VectorXd> mass;    ///< masses, kg (N)
-  std::span<const std::uint8_t> fixed;       ///< 1 where a particle is nailed in place
+  double t;                                ///< simulated time, s
+  Eigen::Map<const Matrix3X> x;            ///< positions, m (3 x N)
+  Eigen::Map<const Matrix3X> v;            ///< velocities, m/s (3 x N)
+  Eigen::Map<const Eigen::VectorXd> mass;  ///< masses, kg (N)
+  std::span<const std::uint8_t> fixed;     ///< 1 where a particle is nailed in place
 
   /// Number of particles N.
   Index size() const noexcept { return x.cols(); }
@@ -31,12 +31,12 @@ struct ParticleView {
 /// Writable view given to a collider's collision response after an accepted
 /// step: it may change positions and velocities of free particles.
 struct MutableParticleView {
-  double t;                                  ///< simulated time at the end of the step, s
-  Eigen::Map<Matrix3X> x;                    ///< positions, m (3 x N)
-  Eigen::Map<Matrix3X> v;                    ///< velocities, m/s (3 x N)
-  Eigen::Map<const Matrix3X> f;              ///< forces of the step's last derivative evaluation, N
-  Eigen::Map<const Eigen::VectorXd> mass;    ///< masses, kg (N)
-  std::span<const std::uint8_t> fixed;       ///< 1 where a particle is nailed in place
+  double t;                                ///< simulated time at the end of the step, s
+  Eigen::Map<Matrix3X> x;                  ///< positions, m (3 x N)
+  Eigen::Map<Matrix3X> v;                  ///< velocities, m/s (3 x N)
+  Eigen::Map<const Matrix3X> f;            ///< forces of the step's last derivative evaluation, N
+  Eigen::Map<const Eigen::VectorXd> mass;  ///< masses, kg (N)
+  std::span<const std::uint8_t> fixed;     ///< 1 where a particle is nailed in place
 
   Index size() const noexcept { return x.cols(); }
 };

@@ -21,9 +21,8 @@ class Midpoint final : public pdyn::Solver {
         y.segment(b, e - b) = y0_.segment(b, e - b) + c * k_.segment(b, e - b);
       });
     };
-    pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
-      y0_.segment(b, e - b) = y.segment(b, e - b);
-    });
+    pdyn::parallel_ranges(
+        n, [&](pdyn::Index b, pdyn::Index e) { y0_.segment(b, e - b) = y.segment(b, e - b); });
     sys.derivative(k_);
     stage(0.5 * h);
     sys.set_time(t0 + 0.5 * h);

@@ -47,7 +47,8 @@ class Verlet final : public pdyn::Solver {
       a0_.middleCols(b, m) = a.middleCols(b, m);
       half_.middleCols(b, m) = v.middleCols(b, m) + (0.5 * h) * a0_.middleCols(b, m);  // v_half
       x.middleCols(b, m) += h * half_.middleCols(b, m);
-      v.middleCols(b, m) += h * a0_.middleCols(b, m);  // velocity predictor, only seen by a1's forces
+      v.middleCols(b, m) +=
+          h * a0_.middleCols(b, m);  // velocity predictor, only seen by a1's forces
     });
     sys.set_time(t0 + h);
 

@@ -20,22 +20,22 @@ class CheckpointError : public Error {
 /// How much of an output file belonged to the run at the checkpoint, so a
 /// resumed run can check the file is the same and continue it.
 struct OutputMark {
-  std::string path;          ///< as the scene names it; empty: no such output
-  std::uint64_t bytes = 0;   ///< length written up to the checkpoint
-  std::uint32_t crc = 0;     ///< CRC-32 of those bytes
+  std::string path;         ///< as the scene names it; empty: no such output
+  std::uint64_t bytes = 0;  ///< length written up to the checkpoint
+  std::uint32_t crc = 0;    ///< CRC-32 of those bytes
 };
 
 struct Checkpoint {
   static constexpr std::uint32_t kFormatVersion = 2;
 
-  std::string scene_file;    ///< where the scene came from (for messages)
-  std::string scene_text;    ///< canonical scene after overrides, without steps/duration
-  std::int64_t step = 0;     ///< steps done
-  double time = 0.0;         ///< simulated time, s
-  std::int64_t next_frame = 0;  ///< adaptive runs: index of the next frame due
-  bool has_dense = false;       ///< adaptive runs: the solver has shown dense output
-  Eigen::VectorXd state;     ///< [x | v], 6N
-  Eigen::VectorXd mass;      ///< N
+  std::string scene_file;           ///< where the scene came from (for messages)
+  std::string scene_text;           ///< canonical scene after overrides, without steps/duration
+  std::int64_t step = 0;            ///< steps done
+  double time = 0.0;                ///< simulated time, s
+  std::int64_t next_frame = 0;      ///< adaptive runs: index of the next frame due
+  bool has_dense = false;           ///< adaptive runs: the solver has shown dense output
+  Eigen::VectorXd state;            ///< [x | v], 6N
+  Eigen::VectorXd mass;             ///< N
   std::vector<std::uint8_t> fixed;  ///< N
   /// save_state() of the solver, then each force, then each collider, in
   /// scene order, each with a label naming the plugin.

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "pdyn/system.hpp"
 #include "pdyn/host/registry.hpp"
+#include "pdyn/system.hpp"
 
 namespace pdyn {
 
@@ -40,11 +40,11 @@ struct Override {
 Override parse_override(const std::string& text);
 
 struct OutputSpec {
-  std::filesystem::path path;    ///< frames CSV; empty: no frames
-  std::filesystem::path energy;  ///< energy CSV; empty: none
-  std::int64_t every = 1;        ///< a frame every `every` steps; 0: first and final only
-  std::filesystem::path checkpoint;     ///< checkpoint file; empty: none unless interrupted
-  std::int64_t checkpoint_every = 0;    ///< a checkpoint every N steps (and at the end); 0: end only
+  std::filesystem::path path;         ///< frames CSV; empty: no frames
+  std::filesystem::path energy;       ///< energy CSV; empty: none
+  std::int64_t every = 1;             ///< a frame every `every` steps; 0: first and final only
+  std::filesystem::path checkpoint;   ///< checkpoint file; empty: none unless interrupted
+  std::int64_t checkpoint_every = 0;  ///< a checkpoint every N steps (and at the end); 0: end only
 };
 
 /// One plugin object as the scene declared it, with its checked parameters:
@@ -69,10 +69,10 @@ struct Scene {
   /// The scene after overrides, as canonical YAML without simulation.steps
   /// and simulation.duration: what a checkpoint must match to be resumed.
   std::string canonical_text;
-  double dt = 0.0;           ///< step, s
-  std::int64_t steps = 0;    ///< number of steps
-  double end_time = 0.0;     ///< time after the last step, s (steps * dt, or the duration)
-  int threads = 0;           ///< simulation.threads; 0: not given (all cores)
+  double dt = 0.0;         ///< step, s
+  std::int64_t steps = 0;  ///< number of steps
+  double end_time = 0.0;   ///< time after the last step, s (steps * dt, or the duration)
+  int threads = 0;         ///< simulation.threads; 0: not given (all cores)
   OutputSpec output;
   std::map<std::string, std::vector<Index>> groups;
   /// Every force and collider object, in the order the system holds them.

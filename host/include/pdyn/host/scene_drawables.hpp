@@ -6,16 +6,23 @@
 
 #include <vector>
 
-#include "pdyn/types.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/types.hpp"
 
 namespace pdyn {
 
 struct Drawables {
   std::vector<IndexPair> links;
-  struct Plane { Vec3 point, normal; };      ///< m; unit normal
-  struct Sphere { Vec3 center; double radius; };  ///< m
-  struct Box { Vec3 min, max; };             ///< m, axis-aligned
+  struct Plane {
+    Vec3 point, normal;
+  };  ///< m; unit normal
+  struct Sphere {
+    Vec3 center;
+    double radius;
+  };  ///< m
+  struct Box {
+    Vec3 min, max;
+  };  ///< m, axis-aligned
   std::vector<Plane> planes;
   std::vector<Sphere> spheres;
   std::vector<Box> boxes;

@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "pdyn/types.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/types.hpp"
 
 namespace pdyn::side_files {
 

@@ -1,0 +1,141 @@
+// One step: solver, collision response, non-finite check, rollback (see
+// pdyn/stepper.hpp).
+#include "pdyn/stepper.hpp"
+
+#include "pdyn/error.hpp"
+#include "pdyn/plugin_call.hpp"
+#include "pdyn/solver.hpp"
+#include "pdyn/system.hpp"
+
+namespace pdyn {
+
+namespace {
+
+// Index of the first particle whose position or velocity is not finite, or -1.
+Index first_non_finite(const System& sys) {
+  if (sys.state().allFinite()) return -1;
+  const auto x = sys.positions();
+  const auto v = sys.velocities();
+  for (Index i = 0; i < sys.size(); ++i) {
+    if (!x.col(i).allFinite() || !v.col(i).allFinite()) return i;
+  }
+  return -1;
+}
+
+}  // namespace
+
+Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
+    : sys_(sys), solver_(solver), label_(&solver_label) {}
+
+// The solver's time after step() is overwritten with `t_end` itself: a run's
+// step k ends at k dt exactly, with no round-off carried from step to step,
+// and a resumed run computes the same times.
+std::optional<double> Stepper::step_to(double t_end) {
+  return guarded([&] {
+    const double h = t_end - sys_.time();
+    const crash::CallScope call(*label_, "step");
+    solver_.step(sys_, h);
+    sys_.set_time(t_end);
+    return h;
+  });
+}
+
+std::optional<double> Stepper::advance(double t_stop, double h_hint) {
+  return guarded([&] {
+    const crash::CallScope call(*label_, "advance");
+    return solver_.advance(sys_, t_stop, h_hint);
+  });
+}
+
+std::optional<double> Stepper::step(double dt) {
+  const double t = sys_.time();
+  return solver_.adaptive() ? advance(t + dt, dt) : step_to(t + dt);
+}
+
+// `take` is a template parameter, not a std::function: converting the step
+// lambda to one would allocate on every step.
+template <class Take>
+std::optional<double> Stepper::guarded(const Take& take) {
+  previous_ = sys_.state();  // allocates on the first step only
+  t_previous_ = sys_.time();
+  fault_ = StepFault{};
+  fault_.start_time = t_previous_;
+  double h = 0.0;
+  try {
+    h = take();
+    sys_.respond_to_collisions(h);
+  } catch (const PluginRuntimeError& e) {
+    fault_.kind = StepFault::Kind::PluginThrew;
+    fault_.label = e.label();
+    fault_.what = e.what();
+    return fail();
+  } catch (const std::exception& e) {
+    // The solver failed on its own account, or so it seems: it may have
+    // called a force directly (finite-difference Jacobians) that threw, or
+    // given up on a NaN a force fed it. Replay the step to find out.
+    fault_.solver_message = e.what();
+    if (replay(take, false)) {
+      fault_.kind = StepFault::Kind::PluginThrew;
+      fault_.found_by_replay = true;
+    } else if (replay(take, true)) {
+      fault_.kind = StepFault::Kind::NonFiniteForce;
+    } else {
+      fault_.kind = StepFault::Kind::SolverThrew;
+      fault_.label = *label_;
+      fault_.what = e.what();
+      fault_.solver_message.clear();
+      return fail();
+    }
+    fault_.label = replayed_.label;
+    fault_.what = replayed_.what;
+    return fail();
+  } catch (...) {
+    fault_.kind = StepFault::Kind::SolverThrew;
+    fault_.label = *label_;
+    fault_.non_standard = true;
+    return fail();
+  }
+  if (const Index bad = first_non_finite(sys_); bad >= 0) {
+    fault_.kind = StepFault::Kind::NonFiniteState;
+    fault_.particle = bad;
+    fault_.position = sys_.positions().col(bad);
+    fault_.end_time = sys_.time();
+    if (replay(take, true)) {
+      fault_.label = replayed_.label;
+      fault_.what = replayed_.what;
+    }
+    return fail();
+  }
+  return h;
+}
+
+// Replays the failed step from the last good state, with finite checks on or
+// off; true if a plugin object threw (PluginRuntimeError, which names it),
+// recorded in replayed_. With finite checks on, that names the force object
+// that first produced a NaN or infinity. The state is left as the replay
+// leaves it: fail() restores the last good one.
+template <class Take>
+bool Stepper::replay(const Take& take, bool finite_checks) {
+  sys_.state() = previous_;
+  sys_.set_time(t_previous_);
+  sys_.set_finite_checks(finite_checks);
+  bool found = false;
+  try {
+    take();
+  } catch (const PluginRuntimeError& e) {
+    replayed_.label = e.label();
+    replayed_.what = e.what();
+    found = true;
+  } catch (...) {
+  }
+  sys_.set_finite_checks(false);
+  return found;
+}
+
+std::nullopt_t Stepper::fail() {
+  sys_.state() = previous_;
+  sys_.set_time(t_previous_);
+  return std::nullopt;
+}
+
+}  // namespace pdyn
