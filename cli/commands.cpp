@@ -15,6 +15,7 @@
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/resolve.hpp"
 #include "pdyn/text.hpp"
 #include "render.hpp"
 #include "sdk_commands.hpp"
@@ -238,13 +239,16 @@ nlohmann::json to_json(const PluginRecord& r) {
     j["dissipative"] = d.force_traits.dissipative;
   }
   auto params = nlohmann::json::array();
+  const Params defaults = resolve(d.params, Params{}).params;
   for (const auto& p : d.params) {
     nlohmann::json pj{{"name", p.name},
                       {"type", type_name(p.type)},
                       {"unit", p.unit},
                       {"doc", p.doc},
                       {"required", p.required}};
-    if (p.fallback) pj["default"] = format_value(*p.fallback);
+    if (const auto value = defaults.values().find(p.name); value != defaults.values().end()) {
+      pj["default"] = format_value(value->second);
+    }
     if (p.min) pj[p.min_exclusive ? "exclusive_minimum" : "minimum"] = *p.min;
     if (p.max) pj["maximum"] = *p.max;
     if (p.nonzero) pj["nonzero"] = true;
@@ -336,11 +340,15 @@ int cmd_describe(const Common& c, const std::string& name, std::ostream& out, st
   // default must not push the rest of its row out of line.
   std::vector<std::array<std::string, 6>> rows{
       {"KEY", "TYPE", "DEFAULT", "UNIT", "RANGE", "MEANING"}};
+  // The defaults as a scene gets them: from the one resolver, as the loader does.
+  const Params defaults = resolve(d.params, Params{}).params;
   for (const auto& p : d.params) {
-    rows.push_back(
-        {p.name, type_name(p.type),
-         p.fallback ? format_value(*p.fallback) : (p.required ? "(required)" : "(optional)"),
-         p.unit.empty() ? "-" : p.unit, range_text(p), p.doc});
+    const auto value = defaults.values().find(p.name);
+    rows.push_back({p.name, type_name(p.type),
+                    value != defaults.values().end() ? format_value(value->second)
+                    : p.required                     ? "(required)"
+                                                     : "(optional)",
+                    p.unit.empty() ? "-" : p.unit, range_text(p), p.doc});
   }
   std::array<std::size_t, 5> width{};
   for (const auto& row : rows) {

@@ -22,6 +22,7 @@
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/scene_specs.hpp"
 #include "pdyn/host/side_files.hpp"
+#include "pdyn/resolve.hpp"
 #include "pdyn/text.hpp"
 #include "scene_builders.hpp"
 #include "written_paths.hpp"
@@ -141,8 +142,6 @@ std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs) {
   return names;
 }
 
-std::string fmt_num(double x) { return fmt::format("{}", x); }
-
 // A value as the user wrote it, for a message: the scalar itself, or a list
 // or mapping in YAML's flow style ("[0, 0]"), shortened if long. Quoting a
 // description ("'a list or mapping'") instead reads as if it were the value.
@@ -157,21 +156,6 @@ std::string shown(const YAML::Node& n) {
   constexpr std::size_t kMax = 60;
   if (text.size() > kMax) text = text.substr(0, kMax - 3) + "...";
   return text;
-}
-
-// "a number > 0 in s"
-std::string expectation(const ParamSpec& s) {
-  std::string e = describe(s.type);
-  if (s.min && s.max) {
-    e += fmt::format(" in [{}, {}]", fmt_num(*s.min), fmt_num(*s.max));
-  } else if (s.min) {
-    e += fmt::format(" {} {}", s.min_exclusive ? ">" : ">=", fmt_num(*s.min));
-  } else if (s.max) {
-    e += fmt::format(" <= {}", fmt_num(*s.max));
-  }
-  if (s.nonzero) e += ", not zero";
-  if (!s.unit.empty()) e += " in " + s.unit;
-  return e;
 }
 
 // What yaml-cpp's terse parser messages usually mean, as the expectation.
@@ -293,6 +277,8 @@ class Loader final : public BuilderHost {
   /// Reads the keys of `map` described by `specs`; `extra` keys are allowed
   /// and left to the caller. Index-typed values are checked against
   /// n_particles when it is >= 0.
+  void locate(const YAML::Node& map, const std::string& path, const ParamSpec& spec,
+              const ParamProblem& problem);
   std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
                                     const std::vector<ParamSpec>& specs,
                                     const std::vector<std::string>& extra, Index n_particles);
@@ -459,24 +445,15 @@ void Loader::check_keys(const YAML::Node& map, const std::string& path,
   }
 }
 
+// Readers convert YAML to values of the spec's type and report what is not
+// of it; finiteness, bounds and defaults are resolve()'s (pdyn/resolve.hpp),
+// whose problems read_params() locates.
 std::optional<double> Loader::read_number(const YAML::Node& n, const std::string& path,
                                           const ParamSpec& spec) {
   double x = 0;
   if (!n.IsScalar() || !YAML::convert<double>::decode(n, x)) {
     error(n, path,
           fmt::format("{}: '{}' is not a number (expected {})", path, shown(n), expectation(spec)));
-    return std::nullopt;
-  }
-  if (!std::isfinite(x)) {
-    error(n, path,
-          fmt::format("{}: {} is not finite (expected {})", path, n.Scalar(), expectation(spec)));
-    return std::nullopt;
-  }
-  const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
-  const bool above = spec.max && x > *spec.max;
-  if (below || above) {
-    error(n, path,
-          fmt::format("{}: {} is out of range (expected {})", path, n.Scalar(), expectation(spec)));
     return std::nullopt;
   }
   return x;
@@ -489,11 +466,6 @@ std::optional<std::int64_t> Loader::read_integer(const YAML::Node& n, const std:
     error(n, path,
           fmt::format("{}: '{}' is not a whole number (expected {})", path, shown(n),
                       expectation(spec)));
-    return std::nullopt;
-  }
-  const bool below = spec.min && (spec.min_exclusive ? x <= *spec.min : x < *spec.min);
-  if (below || (spec.max && x > *spec.max)) {
-    error(n, path, fmt::format("{}: {} is out of range (expected {})", path, x, expectation(spec)));
     return std::nullopt;
   }
   return static_cast<std::int64_t>(x);
@@ -536,10 +508,6 @@ std::optional<Vec3> Loader::read_vec3(const YAML::Node& n, const std::string& pa
     auto c = read_number(n[k], fmt::format("{}[{}]", path, k), element);
     if (!c) return std::nullopt;
     v[k] = *c;
-  }
-  if (spec.nonzero && v.norm() == 0.0) {
-    error(n, path, fmt::format("{}: is the zero vector (expected {})", path, expectation(spec)));
-    return std::nullopt;
   }
   return v;
 }
@@ -721,24 +689,74 @@ std::optional<Params> Loader::read_params(const YAML::Node& map, const std::stri
   allowed.insert(allowed.end(), extra.begin(), extra.end());
   const std::size_t before = diags_.size();
   check_keys(map, path, allowed);
-  Params params;
+  Params given;  // a key set to null (`key:` or `key: ~`) is not given: its default applies
+  std::set<std::string> unreadable;
   for (const auto& spec : specs) {
     const YAML::Node n = map[spec.name];
-    const std::string p = path + "." + spec.name;
-    if (!n.IsDefined() || n.IsNull()) {
-      if (spec.fallback) {
-        params.set(spec.name, *spec.fallback);
-      } else if (spec.required) {
-        error(n.IsDefined() ? n : map, p,
-              fmt::format("{}: missing required key '{}' (expected {}{})", path, spec.name,
-                          expectation(spec), spec.doc.empty() ? "" : ": " + spec.doc));
-      }
-      continue;
+    if (!n.IsDefined() || n.IsNull()) continue;
+    if (auto value = read_value(n, path + "." + spec.name, spec, n_particles)) {
+      given.set(spec.name, std::move(*value));
+    } else {
+      unreadable.insert(spec.name);  // reported; not "missing" as well
     }
-    if (auto value = read_value(n, p, spec, n_particles)) params.set(spec.name, std::move(*value));
+  }
+  Resolved resolved = resolve(specs, given);
+  for (const auto& problem : resolved.problems) {
+    if (unreadable.count(problem.param)) continue;
+    const auto spec = std::find_if(specs.begin(), specs.end(),
+                                   [&](const ParamSpec& s) { return s.name == problem.param; });
+    if (spec != specs.end()) locate(map, path, *spec, problem);
   }
   if (diags_.size() != before) return std::nullopt;
-  return params;
+  return std::move(resolved.params);
+}
+
+// One problem resolve() found, reported where the value was written, with
+// the value as the user spelled it.
+void Loader::locate(const YAML::Node& map, const std::string& path, const ParamSpec& spec,
+                    const ParamProblem& problem) {
+  using Kind = ParamProblem::Kind;
+  YAML::Node node = map[spec.name];
+  std::string p = path + "." + spec.name;
+  if (problem.kind == Kind::Missing) {
+    error(node.IsDefined() ? node : map, p,
+          fmt::format("{}: missing required key '{}' (expected {}{})", path, spec.name,
+                      expectation(spec), spec.doc.empty() ? "" : ": " + spec.doc));
+    return;
+  }
+  if (!problem.key.empty()) {
+    node = node[problem.key];
+    p += "." + problem.key;
+  }
+  for (const std::size_t e : problem.element) {
+    if (!node.IsSequence()) break;  // `rest: 0.1`, the one-element list written as a number
+    node = node[e];
+    p += fmt::format("[{}]", e);
+  }
+  ParamSpec element = spec;  // bounds apply to each number of a vector or list
+  if (spec.type != ParamType::Integer) element.type = ParamType::Real;
+  switch (problem.kind) {
+    case Kind::NotFinite:
+      error(node, p,
+            fmt::format("{}: {} is not finite (expected {})", p, node.Scalar(),
+                        expectation(element)));
+      return;
+    case Kind::OutOfRange:
+      error(node, p,
+            fmt::format("{}: {} is out of range (expected {})", p,
+                        spec.type == ParamType::Integer
+                            ? fmt::format("{}", static_cast<long long>(problem.value))
+                            : node.Scalar(),
+                        expectation(element)));
+      return;
+    case Kind::ZeroVector:
+      element.type = ParamType::Vector;
+      error(node, p, fmt::format("{}: is the zero vector (expected {})", p, expectation(element)));
+      return;
+    default:  // Missing is above; types and names were checked while reading
+      error(node, p, fmt::format("{}: {}", p, problem.message));
+      return;
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -1395,10 +1413,14 @@ Scene Loader::load(const std::string& text) {
   } else {
     registry_.require_healthy("rk4");
     if (const PluginRecord* rec = registry_.find(PluginKind::Solver, "rk4")) {
-      solvers.push_back({rec, Params{}, sim, "simulation"});
-      for (const auto& spec : rec->descriptor->params) {
-        if (spec.fallback) solvers.back().params.set(spec.name, *spec.fallback);
+      // The defaults: a solver that requires a parameter is refused like a
+      // `solver: { type: rk4 }` without it.
+      const Resolved defaults = resolve(rec->descriptor->params, Params{});
+      for (const auto& problem : defaults.problems) {
+        error(sim.IsDefined() ? sim : root, "simulation",
+              fmt::format("simulation: the default solver 'rk4': {}", problem.message));
       }
+      solvers.push_back({rec, defaults.params, sim, "simulation"});
     } else {
       error(sim.IsDefined() ? sim : root, "simulation",
             "simulation: no solver is given and the default 'rk4' was not found (expected "

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "pdyn/host/scene_drawables.hpp"
+#include "pdyn/resolve.hpp"
 #include "pdyn/stepper.hpp"
 #include "pdyn/targets.hpp"
 
@@ -193,18 +194,16 @@ void Session::check_particle(const Command& c, const char* field, Index i) const
 }
 
 Params Session::defaults_of(const PluginRecord& r, const Params& given) const {
-  Params p = given;
-  for (const auto& spec : r.descriptor->params) {
-    if (given.has(spec.name)) continue;
-    if (spec.fallback) {
-      p.set(spec.name, *spec.fallback);
-    } else if (spec.required) {
+  Resolved resolved = resolve(r.descriptor->params, given);
+  for (const auto& problem : resolved.problems) {
+    if (problem.kind == ParamProblem::Kind::Missing) {
       throw CommandError(fmt::format(
           "{} needs the parameter '{}' (expected it chosen in the scene file, not in the viewer)",
-          r.descriptor->name, spec.name));
+          r.descriptor->name, problem.param));
     }
+    throw CommandError(fmt::format("{}: {}", r.descriptor->name, problem.message));
   }
-  return p;
+  return std::move(resolved.params);
 }
 
 std::shared_ptr<Force> Session::make_force(const char* type, Params params,
