@@ -20,6 +20,11 @@
 
 namespace pdyn {
 
+// The most particles a scene may hold: about 3.5 GB of kernel state, far
+// beyond any interactive scene, and a clear refusal instead of an
+// out-of-memory failure for a mistyped grid size.
+inline constexpr std::int64_t kMaxParticles = std::int64_t{1} << 24;
+
 class BuilderHost {
  public:
   virtual ~BuilderHost() = default;
@@ -39,6 +44,9 @@ class BuilderHost {
   /// scene's limit.
   virtual bool can_add(std::int64_t count, const YAML::Node& at, const std::string& path) = 0;
   virtual void add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed) = 0;
+  /// Room for `count` more particles: a builder of a million particles
+  /// reserves once instead of growing the lists by doubling.
+  virtual void reserve(std::int64_t count) = 0;
   virtual void set_fixed(Index id) = 0;
   /// Position of a particle declared so far, m.
   virtual Vec3 position(Index id) const = 0;
@@ -61,6 +69,13 @@ const std::vector<std::string>& builder_names();
 /// The specs of those builders, the same tables their readers check
 /// against, for `pdyn schema` (through builder_specs()).
 std::vector<BuilderSpec> more_builder_specs();
+
+/// The grid builder's keys (scene_specs.cpp), as builder_specs() lists them.
+std::vector<ParamSpec> grid_specs();
+
+/// Reads the `grid:` entry `node` at `path` (e.g. "particles[0].grid"): a
+/// rectangular sheet of particles with Provot's cloth springs.
+void read_grid(BuilderHost& host, const YAML::Node& node, const std::string& path);
 
 /// Reads the builder `name` (one of builder_names()) from `node`, a
 /// particles entry's value, at `path` (e.g. "particles[2].chain").

@@ -1,0 +1,156 @@
+// The scene loader's insides, shared by its source files (private to the
+// host library): the Loader, which reads one scene, and the helpers its
+// files share. scene_loader.cpp assembles the scene from the sections;
+// yaml_reader.cpp holds the generic YAML-to-parameters reader and the
+// diagnostics; overrides.cpp applies --set; scene_specs.cpp declares the
+// built-in sections; the builders (grid included) are in scene_builders.cpp
+// and grid_builder.cpp, behind BuilderHost.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pdyn/host/scene.hpp"
+#include "pdyn/resolve.hpp"
+#include "scene_builders.hpp"
+#include "written_paths.hpp"
+
+namespace pdyn::loading {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs);
+/// A value as the user wrote it, for a message (see yaml_reader.cpp).
+std::string shown(const YAML::Node& n);
+/// What yaml-cpp's terse parser messages usually mean, as the expectation.
+std::string yaml_hint(const std::string& text, const YAML::ParserException& e);
+
+/// An unclosed '{' or '[' (0-based line and column, like YAML::Mark).
+struct OpenBracket {
+  char bracket;
+  int line, column;
+};
+/// The innermost '{' or '[' still open where the parser stopped at `stop`,
+/// if it was opened on an earlier line.
+std::optional<OpenBracket> unclosed_flow(const std::string& text, const YAML::Mark& stop);
+
+// A queued force or collider: created once all particles exist.
+struct PendingPlugin {
+  const PluginRecord* record;
+  Params params;
+  YAML::Node node;
+  std::string path;
+};
+
+class Loader final : public BuilderHost {
+ public:
+  Loader(std::string file, const PluginRegistry& registry, std::vector<Override> overrides)
+      : file_(std::move(file)), registry_(registry), overrides_(std::move(overrides)) {}
+
+  Scene load(const std::string& text);
+
+ private:
+  // ---- diagnostics ----
+  std::string where(const YAML::Node& at, const std::string& path) const;
+  void error(const YAML::Node& at, const std::string& path, std::string message) override;
+  [[noreturn]] void fail();
+
+  // ---- generic readers ----
+  bool check_map(const YAML::Node& n, const std::string& path, const char* what) override;
+  bool check_plugin_map(const YAML::Node& n, const std::string& path, PluginKind kind);
+  void check_keys(const YAML::Node& map, const std::string& path,
+                  const std::vector<std::string>& allowed);
+  std::optional<ParamValue> read_value(const YAML::Node& n, const std::string& path,
+                                       const ParamSpec& spec, Index n_particles);
+  std::optional<double> read_number(const YAML::Node& n, const std::string& path,
+                                    const ParamSpec& spec);
+  std::optional<ParamValue> read_named_reals(const YAML::Node& n, const std::string& path,
+                                             const ParamSpec& spec);
+  std::optional<std::int64_t> read_integer(const YAML::Node& n, const std::string& path,
+                                           const ParamSpec& spec);
+  std::optional<Index> read_index(const YAML::Node& n, const std::string& path, Index n_particles);
+  std::optional<Vec3> read_vec3(const YAML::Node& n, const std::string& path,
+                                const ParamSpec& spec);
+  template <std::size_t K>
+  std::optional<std::vector<std::array<Index, K>>> read_tuples(const YAML::Node& n,
+                                                               const std::string& path,
+                                                               Index n_particles);
+  /// Reads the keys of `map` described by `specs`; `extra` keys are allowed
+  /// and left to the caller. Index-typed values are checked against
+  /// n_particles when it is >= 0.
+  void locate(const YAML::Node& map, const std::string& path, const ParamSpec& spec,
+              const ParamProblem& problem);
+  std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
+                                    const std::vector<ParamSpec>& specs,
+                                    const std::vector<std::string>& extra, Index n_particles);
+
+  // ---- BuilderHost: what the builders of scene_builders.cpp may use ----
+  std::optional<Params> read_params(const YAML::Node& map, const std::string& path,
+                                    const std::vector<ParamSpec>& specs,
+                                    const std::vector<std::string>& extra) override {
+    return read_params(map, path, specs, extra, -1);
+  }
+  Index particle_count() const override { return static_cast<Index>(x_.size()); }
+  bool can_add(std::int64_t count, const YAML::Node& at, const std::string& path) override;
+  void add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed) override {
+    x_.push_back(x);
+    v_.push_back(v);
+    m_.push_back(mass);
+    fixed_.push_back(fixed ? 1 : 0);
+  }
+  void reserve(std::int64_t count) override {
+    const auto n = x_.size() + static_cast<std::size_t>(count);
+    x_.reserve(n);
+    v_.reserve(n);
+    m_.reserve(n);
+    fixed_.reserve(n);
+  }
+  void set_fixed(Index id) override { fixed_[static_cast<std::size_t>(id)] = 1; }
+  Vec3 position(Index id) const override { return x_[static_cast<std::size_t>(id)]; }
+  void add_group(const std::string& name, std::vector<Index> members, const YAML::Node& at,
+                 const std::string& path) override;
+  void add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
+                 const Params& generated, const Params& defaults, bool create) override;
+
+  // ---- sections ----
+  void apply_overrides(YAML::Node& root);
+  void read_simulation(const YAML::Node& n, Scene& scene);
+  void read_particles(const YAML::Node& n);
+  // ---- side files (side_files.hpp) ----
+  std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
+                                    const char* expected);
+  void read_particle_file(const YAML::Node& item, const std::string& path);
+  const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path, PluginKind kind);
+  void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
+                        std::vector<PendingPlugin>& out);
+  std::optional<Params> read_plugin_params(const YAML::Node& item, const std::string& path,
+                                           const PluginRecord& rec,
+                                           const std::vector<std::string>& generated);
+  void read_output(const YAML::Node& n, Scene& scene);
+  void check_written_files(const YAML::Node& n, const Scene& scene);
+  template <class Create>
+  auto create(const PendingPlugin& p, Create&& create_fn) -> decltype(create_fn());
+
+  std::string file_;
+  const PluginRegistry& registry_;
+  std::vector<Override> overrides_;
+  std::vector<Diagnostic> diags_;
+  YAML::Node root_;  // the whole scene: where a missing section is reported
+
+  // particles as read
+  std::vector<Vec3> x_, v_;
+  std::vector<double> m_;
+  std::vector<std::uint8_t> fixed_;
+  std::map<std::string, std::vector<Index>> groups_;
+  std::vector<PendingPlugin> builder_forces_;  // springs made by builders
+  bool particles_ok_ = true;
+  std::vector<NamedPath> read_files_;  // side files: no output may overwrite them
+};
+
+}  // namespace pdyn::loading

@@ -1,0 +1,88 @@
+// The built-in sections of a scene (simulation, particles, grid, output,
+// checkpoint) and the builders' keys, as ParamSpec tables: the loader reads
+// them with the same reader as plugin parameters, and `pdyn schema` lists them.
+#include "pdyn/host/scene_specs.hpp"
+
+#include "scene_builders.hpp"
+
+namespace pdyn {
+
+// ---------------------------------------------------------------------------
+// Specifications of the built-in sections (scene_specs.hpp: `pdyn schema`
+// reads them too).
+
+std::vector<ParamSpec> simulation_specs() {
+  return {
+      param::required_real("dt", "s", "time step").greater_than(0),
+      param::optional("steps", ParamType::Integer, "", "number of steps (or give duration)")
+          .at_least(0),
+      param::optional("duration", ParamType::Real, "s", "simulated time (or give steps)")
+          .at_least(0),
+      param::optional("threads", ParamType::Integer, "",
+                      "threads for forces and solvers (default: all cores; pdyn run --threads "
+                      "overrides it); results do not depend on it")
+          .at_least(1)
+          .at_most(1024),
+  };
+}
+
+std::vector<ParamSpec> particle_specs() {
+  return {
+      param::required_vec3("position", "m", "initial position"),
+      param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity"),
+      param::required_real("mass", "kg", "mass").greater_than(0),
+      param::boolean("fixed", false, "nailed in place"),
+  };
+}
+
+std::vector<ParamSpec> grid_specs() {
+  ParamSpec nx = param::required("nx", ParamType::Integer, "", "particles along u");
+  ParamSpec ny = param::required("ny", ParamType::Integer, "", "particles along v");
+  nx.at_least(1);
+  ny.at_least(1);
+  return {
+      param::required_vec3("origin", "m", "position of particle (0, 0)"),
+      param::required_vec3("u", "m", "spacing vector along the first grid direction").not_zero(),
+      param::required_vec3("v", "m", "spacing vector along the second grid direction").not_zero(),
+      nx,
+      ny,
+      param::required_real("mass", "kg", "mass of each particle").greater_than(0),
+      param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity of every particle"),
+      param::optional("name", ParamType::String, "", "group name"),
+      param::optional("pin", ParamType::IndexPairs, "",
+                      "grid coordinates [i, j] of nailed particles; negative counts from the end"),
+  };
+}
+
+std::vector<ParamSpec> output_specs() {
+  ParamSpec every = param::integer("every", 1, "a frame every N steps; 0: first and final only");
+  every.at_least(0);
+  return {
+      param::optional("path", ParamType::String, "", "frames CSV: t,id,x,y,z,vx,vy,vz"),
+      every,
+      param::optional("energy", ParamType::String, "", "energy CSV: t,kinetic,potential,total"),
+  };
+}
+
+std::vector<ParamSpec> checkpoint_specs() {
+  ParamSpec every = param::integer("every", 0, "a checkpoint every N steps; 0: at the end only");
+  every.at_least(0);
+  return {param::required("path", ParamType::String, "", "checkpoint file"), every};
+}
+
+std::vector<BuilderSpec> builder_specs() {
+  std::vector<BuilderSpec> all = {
+      {"grid",
+       "a rectangular sheet of nx x ny particles, optionally joined by springs",
+       grid_specs(),
+       {{"springs",
+         "Provot's spring families of the `spring` plugin",
+         "spring",
+         "pairs",
+         {"structural", "shear", "bend"},
+         {}}}}};
+  for (auto& b : more_builder_specs()) all.push_back(std::move(b));
+  return all;
+}
+
+}  // namespace pdyn
