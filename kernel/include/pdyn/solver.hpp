@@ -23,8 +23,10 @@ struct StepCounts {
 class Solver : public PluginObject {
  public:
   /// Advances `sys` by one step of `h` seconds: on return its state is the
-  /// solution at time() + h and its time has been advanced by exactly h.
-  /// Collider responses are applied by the kernel after this returns. Scratch
+  /// solution at time() + h and its time has been advanced by h. Hosts step
+  /// through pdyn::Stepper (pdyn/stepper.hpp), which owns time: it then sets
+  /// the time to the step's exact end, applies the collider responses and
+  /// checks the state, so a solver does none of that. Scratch
   /// vectors should be members sized on the first call, so that later steps
   /// do not allocate.
   virtual void step(System& sys, double h) = 0;
