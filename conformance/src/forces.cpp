@@ -1,0 +1,228 @@
+// The force checks: what every Force plugin must do (deterministic, read-only
+// on the state, adding only, finite on degenerate configurations) and what
+// its descriptor and methods claim (internal: zero net force and torque,
+// translation invariance; f = -grad U; analytic Jacobians; dissipative).
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <random>
+
+#include "checks.hpp"
+#include "sample.hpp"
+
+namespace pdyn::conformance::detail {
+
+namespace {
+
+Matrix3X forces_of(Force& force, const State& s) {
+  Matrix3X f = Matrix3X::Zero(3, s.size());
+  force.add_forces(s.view(), f);
+  return f;
+}
+
+class DenseSink final : public JacobianSink {
+ public:
+  explicit DenseSink(Index n) : dfdx(Eigen::MatrixXd::Zero(3 * n, 3 * n)), dfdv(dfdx) {}
+  void add_dfdx(Index i, Index j, const Eigen::Matrix3d& b) override {
+    dfdx.block<3, 3>(3 * i, 3 * j) += b;
+  }
+  void add_dfdv(Index i, Index j, const Eigen::Matrix3d& b) override {
+    dfdv.block<3, 3>(3 * i, 3 * j) += b;
+  }
+  Eigen::MatrixXd dfdx, dfdv;
+};
+
+}  // namespace
+
+void force_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
+  std::mt19937_64 rng(o.seed);
+  const State home = random_state(rng);
+  const Params params = sample_params(d, kParticles);
+  auto make = [&] { return std::shared_ptr<Force>(d.create_force(params, context_of(home))); };
+
+  std::shared_ptr<Force> force;
+  guarded(out, "construct.defaults", [&] {
+    force = make();
+    return result("construct.defaults", force != nullptr, force ? 1 : 0, 1,
+                  force ? "created with defaults and sample values of required parameters"
+                        : "factory returned null");
+  });
+  if (!force) return;
+
+  guarded(out, "deterministic", [&] {
+    const Matrix3X a = forces_of(*force, home), b = forces_of(*force, home);
+    const Matrix3X c = forces_of(*make(), home);
+    const bool same = bit_equal(a, b) && bit_equal(a, c);
+    return result("deterministic", same, std::max(max_abs(a - b), max_abs(a - c)), 0,
+                  "same state twice, and a second object: bit-identical forces");
+  });
+
+  guarded(out, "read_only_state", [&] {
+    State s = home;
+    const State before = s;
+    Matrix3X f = Matrix3X::Zero(3, s.size());
+    force->add_forces(s.view(), f);
+    (void)force->potential_energy(s.view());
+    DenseSink sink(s.size());
+    (void)force->add_jacobians(s.view(), sink);
+    const bool same = bit_equal(s.x, before.x) && bit_equal(s.v, before.v) &&
+                      std::memcmp(s.mass.data(), before.mass.data(),
+                                  sizeof(double) * static_cast<std::size_t>(s.size())) == 0;
+    return result("read_only_state", same, same ? 0 : 1, 0,
+                  "x, v, m unchanged by add_forces, potential_energy, add_jacobians");
+  });
+
+  guarded(out, "adds_only", [&] {
+    // Another force's contribution is already in f: it must stay there.
+    Matrix3X base = Matrix3X::Zero(3, home.size());
+    for (Index i = 0; i < base.cols(); ++i) base.col(i) = Vec3(1.0 + i, -2.0, 3.0 - i);
+    Matrix3X f = base;
+    force->add_forces(home.view(), f);
+    const Matrix3X alone = forces_of(*force, home);
+    const double err = max_abs(f - base - alone);
+    const double bound = 1e-12 * (max_abs(alone) + max_abs(base));
+    return result("adds_only", err <= bound, err, bound,
+                  "|f(prefilled) - prefill - f(zero)|_max, N");
+  });
+
+  guarded(out, "finite_on_degenerate", [&] {
+    std::size_t bad = 0;
+    std::string where;
+    for (const auto& [label, s] : degenerate_states(rng)) {
+      const Matrix3X f = forces_of(*force, s);
+      std::size_t n = non_finite(f);
+      if (const auto u = force->potential_energy(s.view()); u && !std::isfinite(*u)) ++n;
+      if (n > 0 && where.empty()) where = label;
+      bad += n;
+    }
+    return result("finite_on_degenerate", bad == 0, static_cast<double>(bad), 0,
+                  bad == 0 ? "coincident, at rest, far: no NaN/inf in f or U"
+                           : fmt::format("non-finite values, first on: {}", where));
+  });
+
+  if (d.force_traits.internal) {
+    guarded(out, "force.net_force_zero", [&] {
+      double worst = 0, bound = 0;
+      for (int trial = 0; trial < 5; ++trial) {
+        const State s = trial == 0 ? home : random_state(rng);
+        const Matrix3X f = forces_of(*force, s);
+        worst = std::max(worst, f.rowwise().sum().norm());
+        bound = std::max(bound, 1e-10 * (f.colwise().norm().sum() + 1e-300));
+      }
+      return result("force.net_force_zero", worst <= bound, worst, bound,
+                    "declared internal: |sum f_i|, N, on 5 random states");
+    });
+    guarded(out, "force.net_torque_zero", [&] {
+      double worst = 0, bound = 0;
+      for (int trial = 0; trial < 5; ++trial) {
+        const State s = trial == 0 ? home : random_state(rng);
+        const Matrix3X f = forces_of(*force, s);
+        Vec3 torque = Vec3::Zero();
+        double scale = 0;
+        for (Index i = 0; i < s.size(); ++i) {
+          torque += Vec3(s.x.col(i)).cross(Vec3(f.col(i)));
+          scale += s.x.col(i).norm() * f.col(i).norm();
+        }
+        worst = std::max(worst, torque.norm());
+        bound = std::max(bound, 1e-10 * (scale + 1e-300));
+      }
+      return result("force.net_torque_zero", worst <= bound, worst, bound,
+                    "declared internal: |sum x_i x f_i|, N m, on 5 random states");
+    });
+    guarded(out, "force.translation_invariant", [&] {
+      State moved = home;
+      moved.x.colwise() += Vec3(10.0, -20.0, 30.0);
+      const Matrix3X a = forces_of(*force, home), b = forces_of(*force, moved);
+      const double err = max_abs(a - b), bound = 1e-9 * (max_abs(a) + 1.0);
+      return result("force.translation_invariant", err <= bound, err, bound,
+                    "declared internal: |f(x + (10,-20,30) m) - f(x)|_max, N");
+    });
+  } else {
+    out.push_back(skip("force.net_force_zero", "not declared internal"));
+  }
+
+  guarded(out, "force.gradient_of_potential", [&] {
+    State s = home;
+    s.v.setZero();  // damping has no potential: compare the conservative part
+    if (!force->potential_energy(s.view())) {
+      return skip("force.gradient_of_potential", "reports no potential energy");
+    }
+    const Matrix3X f = forces_of(*force, s);
+    double err = 0;
+    for (Index i = 0; i < s.size(); ++i) {
+      for (int k = 0; k < 3; ++k) {
+        const double x0 = s.x(k, i), h = 1e-5 * std::max(1.0, std::abs(x0));
+        s.x(k, i) = x0 + h;
+        const double up = *force->potential_energy(s.view());
+        s.x(k, i) = x0 - h;
+        const double down = *force->potential_energy(s.view());
+        s.x(k, i) = x0;
+        err = std::max(err, std::abs(f(k, i) + (up - down) / (2 * h)));
+      }
+    }
+    const double bound = 1e-5 * (max_abs(f) + 1.0);
+    return result("force.gradient_of_potential", err <= bound, err, bound,
+                  "|f + dU/dx (central differences, h = 1e-5 m)|_max, N, at rest");
+  });
+
+  guarded(out, "force.jacobians", [&] {
+    // At the construction state with v = 0 for df/dx, random v for df/dv:
+    // where the approximations implicit solvers allow (e.g. Baraff & Witkin's
+    // dropped damping term) vanish, analytic Jacobians must be exact.
+    State s = home;
+    s.v.setZero();
+    DenseSink sink(s.size());
+    if (!force->add_jacobians(s.view(), sink)) {
+      return skip("force.jacobians", "no analytic Jacobians");
+    }
+    State sv = home;
+    DenseSink sink_v(sv.size());
+    force->add_jacobians(sv.view(), sink_v);
+    const Index n3 = 3 * s.size();
+    Eigen::MatrixXd fdx(n3, n3), fdv(n3, n3);
+    for (Index c = 0; c < n3; ++c) {
+      const Index i = c / 3;
+      const int k = static_cast<int>(c % 3);
+      const double h = 1e-6;
+      auto column = [&](State& st, Matrix3X& field) {
+        const double x0 = field(k, i);
+        field(k, i) = x0 + h;
+        const Matrix3X up = forces_of(*force, st);
+        field(k, i) = x0 - h;
+        const Matrix3X down = forces_of(*force, st);
+        field(k, i) = x0;
+        const Matrix3X diff = (up - down) / (2 * h);
+        return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(diff.data(), n3));
+      };
+      fdx.col(c) = column(s, s.x);
+      fdv.col(c) = column(sv, sv.v);
+    }
+    const double err = std::max((fdx - sink.dfdx).cwiseAbs().maxCoeff(),
+                                (fdv - sink_v.dfdv).cwiseAbs().maxCoeff());
+    const double bound =
+        1e-5 * (1.0 + std::max(fdx.cwiseAbs().maxCoeff(), fdv.cwiseAbs().maxCoeff()));
+    return result("force.jacobians", err <= bound, err, bound,
+                  "|df/dx, df/dv - central differences (h = 1e-6)|_max");
+  });
+
+  if (d.force_traits.dissipative) {
+    guarded(out, "force.dissipative", [&] {
+      double worst = -1e300;
+      for (int trial = 0; trial < 20; ++trial) {
+        const State s = random_state(rng);
+        const Matrix3X f = forces_of(*force, s);
+        worst = std::max(worst, (f.cwiseProduct(s.v)).sum());
+      }
+      return result("force.dissipative", worst <= 1e-12, worst, 1e-12,
+                    "declared dissipative: max sum f_i . v_i, W, on 20 random states");
+    });
+  } else {
+    out.push_back(skip("force.dissipative", "not declared dissipative"));
+  }
+}
+
+}  // namespace pdyn::conformance::detail

@@ -1,0 +1,163 @@
+// What the checks are run on (see sample.hpp): the seeded random particle
+// configurations every check builds its own small system from, so that a
+// report is reproducible from (plugin, seed); the kit's own forces; the
+// helpers that compare results; and sample_params, the parameters every
+// check constructs the plugin with.
+#include "sample.hpp"
+
+#include <cmath>
+#include <cstring>
+
+namespace pdyn::conformance {
+
+namespace detail {
+
+// ---- particle configurations ----
+
+State make_state(Index n) {
+  State s;
+  s.x = Matrix3X::Zero(3, n);
+  s.v = Matrix3X::Zero(3, n);
+  s.f = Matrix3X::Zero(3, n);
+  s.mass = Eigen::VectorXd::Ones(n);
+  s.fixed.assign(static_cast<std::size_t>(n), 0);
+  return s;
+}
+
+State random_state(std::mt19937_64& rng, Index n) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  State s = make_state(n);
+  for (Index i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      s.x(k, i) = u(rng);
+      s.v(k, i) = u(rng);
+    }
+    s.mass(i) = 1.25 + 0.75 * u(rng);
+  }
+  s.t = 0.5 + 0.5 * u(rng);
+  return s;
+}
+
+std::vector<std::pair<std::string, State>> degenerate_states(std::mt19937_64& rng) {
+  std::vector<std::pair<std::string, State>> out;
+  State base = random_state(rng);
+  State coincident = base;
+  for (Index i = 0; i < coincident.size(); ++i) coincident.x.col(i) = base.x.col(0);
+  out.emplace_back("coincident", coincident);
+  State coincident_rest = coincident;
+  coincident_rest.v.setZero();
+  out.emplace_back("coincident at rest", coincident_rest);
+  State rest = base;
+  rest.v.setZero();
+  out.emplace_back("at rest", rest);
+  State far = base;
+  far.x.colwise() += Vec3(1e6, -1e6, 1e6);
+  out.emplace_back("far from the origin (1e6 m)", far);
+  return out;
+}
+
+// ---- the kit's own forces ----
+
+void Anchor::add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) { f -= p.x; }
+
+bool Anchor::add_jacobians(const ParticleView& p, JacobianSink& sink) {
+  for (Index i = 0; i < p.size(); ++i) sink.add_dfdx(i, i, -Eigen::Matrix3d::Identity());
+  return true;
+}
+
+std::optional<double> Anchor::potential_energy(const ParticleView& p) const {
+  return 0.5 * p.x.squaredNorm();
+}
+
+void Constant::add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) {
+  f.noalias() += g_ * p.mass.transpose();
+}
+
+bool Constant::add_jacobians(const ParticleView&, JacobianSink&) { return true; }
+
+// ---- comparing results ----
+
+bool bit_equal(const Matrix3X& a, const Matrix3X& b) {
+  return a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+bool bit_equal(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return a.size() == b.size() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+double max_abs(const Matrix3X& m) { return m.size() == 0 ? 0.0 : m.cwiseAbs().maxCoeff(); }
+
+std::size_t non_finite(const Matrix3X& m) {
+  std::size_t count = 0;
+  for (Index k = 0; k < m.size(); ++k) count += std::isfinite(m.data()[k]) ? 0 : 1;
+  return count;
+}
+
+}  // namespace detail
+
+// ---- the parameters the checks construct a plugin with ----
+//
+// Documented in pdyn/conformance.hpp. Every check of every kind, and
+// params.bad_rejected's baseline scene, constructs the plugin with these.
+
+Params sample_params(const PluginDescriptor& d, Index n) {
+  Params p;
+  for (const auto& s : d.params) {
+    if (s.sample) {
+      p.set(s.name, *s.sample);
+      continue;
+    }
+    if (s.fallback) {
+      p.set(s.name, *s.fallback);
+      continue;
+    }
+    if (!s.required) continue;
+    // A number inside the declared range, preferring 1.
+    double x = 1.0;
+    if (s.min && x <= *s.min) x = *s.min + 1.0;
+    if (s.max && x > *s.max) x = s.min ? 0.5 * (*s.min + *s.max) : *s.max - 1.0;
+    switch (s.type) {
+      case ParamType::Real:
+        p.set(s.name, x);
+        break;
+      case ParamType::Integer:
+        p.set(s.name, static_cast<std::int64_t>(std::ceil(x)));
+        break;
+      case ParamType::Boolean:
+        p.set(s.name, false);
+        break;
+      case ParamType::String:
+        p.set(s.name, std::string{});
+        break;
+      case ParamType::Vector:
+        p.set(s.name, Vec3(0.3, -0.2, 0.9));
+        break;
+      case ParamType::RealList:
+        p.set(s.name, std::vector<double>{x});
+        break;
+      case ParamType::VectorList:
+        p.set(s.name, std::vector<Vec3>{Vec3(0.3, -0.2, 0.9)});
+        break;
+      case ParamType::IndexList:
+        p.set(s.name, std::vector<Index>{0, 1, n - 1});
+        break;
+      case ParamType::IndexPairs:
+        p.set(s.name, std::vector<IndexPair>{{0, 1}, {1, 2}, {2, 3}, {0, n - 1}});
+        break;
+      case ParamType::IndexTriples:
+        p.set(s.name, std::vector<IndexTriple>{{0, 1, 2}, {1, 2, 3}});
+        break;
+      case ParamType::StringList:
+        p.set(s.name, std::vector<std::string>{"1"});
+        break;
+      case ParamType::NamedReals:
+        p.set(s.name, NamedReals{{"a", x}});
+        break;
+    }
+  }
+  return p;
+}
+
+}  // namespace pdyn::conformance

@@ -1,0 +1,168 @@
+// The solver checks: a Solver plugin is run on small systems of the kit's
+// own forces (sample.hpp), where the exact solution is known: deterministic,
+// finite on a degenerate system, the declared order of convergence on a
+// harmonic oscillator, exact under constant acceleration (order >= 2),
+// fixed particles kept, time advanced by exactly h. These are checks of
+// Solver::step's contract, so they call it directly, not through a Stepper.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <random>
+
+#include "checks.hpp"
+#include "pdyn/system.hpp"
+#include "sample.hpp"
+
+namespace pdyn::conformance::detail {
+
+namespace {
+
+const Vec3 kX0(1.0, 0.5, -0.25), kV0(0.0, 0.75, 0.5);
+
+std::unique_ptr<System> oscillator() {
+  auto sys = std::make_unique<System>();
+  sys->add_particle(kX0, kV0, 1.0);
+  sys->add_force(std::make_shared<Anchor>(), "conformance anchor");
+  return sys;
+}
+
+// Phase-space error of `steps` steps of T/steps on the harmonic oscillator, at T = 1 s.
+double oscillator_error(const PluginDescriptor& d, const Params& params, int steps) {
+  auto sys = oscillator();
+  auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+  const double h = 1.0 / steps;
+  for (int s = 0; s < steps; ++s) solver->step(*sys, h);
+  const double t = sys->time();
+  const Vec3 x = kX0 * std::cos(t) + kV0 * std::sin(t);
+  const Vec3 v = -kX0 * std::sin(t) + kV0 * std::cos(t);
+  return std::sqrt((sys->positions().col(0) - x).squaredNorm() +
+                   (sys->velocities().col(0) - v).squaredNorm());
+}
+
+}  // namespace
+
+void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
+  std::mt19937_64 rng(o.seed);
+  const Params params = sample_params(d, kParticles);
+  std::unique_ptr<Solver> probe;
+  guarded(out, "construct.defaults", [&] {
+    auto sys = oscillator();
+    probe = d.create_solver(params, SceneContext{sys->view(), nullptr});
+    return result("construct.defaults", probe != nullptr, probe ? 1 : 0, 1,
+                  probe ? "created with defaults" : "factory returned null");
+  });
+  if (!probe) return;
+
+  auto random_system = [&](std::uint64_t seed) {
+    std::mt19937_64 r(seed);
+    const State s = random_state(r);
+    auto sys = std::make_unique<System>();
+    sys->set_particles(s.x, s.v, s.mass, s.fixed);
+    sys->add_force(std::make_shared<Anchor>(), "conformance anchor");
+    sys->add_force(std::make_shared<Constant>(Vec3(0, 0, -9.81)), "conformance gravity");
+    return sys;
+  };
+
+  guarded(out, "deterministic", [&] {
+    const std::uint64_t seed = rng();
+    Eigen::VectorXd a, b;
+    for (Eigen::VectorXd* y : {&a, &b}) {
+      auto sys = random_system(seed);
+      auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+      for (int s = 0; s < 20; ++s) solver->step(*sys, 0.01);
+      *y = sys->state();
+    }
+    const bool same = std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+    return result("deterministic", same, (a - b).cwiseAbs().maxCoeff(), 0,
+                  "20 steps from the same state with two solver objects: bit-identical");
+  });
+
+  guarded(out, "finite_on_degenerate", [&] {
+    // Coincident particles at rest with no force: nothing may move, nothing may be NaN.
+    auto sys = std::make_unique<System>();
+    Matrix3X x = Matrix3X::Zero(3, 4);
+    x.colwise() = Vec3(1e6, -1e6, 1e6);
+    sys->set_particles(x, Matrix3X::Zero(3, 4), Eigen::VectorXd::Ones(4),
+                       std::vector<std::uint8_t>(4, 0));
+    auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+    for (int s = 0; s < 10; ++s) solver->step(*sys, 0.01);
+    const Eigen::VectorXd y = sys->state();
+    const Index bad = (y.array().isFinite() == false).count();
+    const double drift = (sys->positions() - x).cwiseAbs().maxCoeff();
+    return result("finite_on_degenerate", bad == 0 && drift == 0, static_cast<double>(bad) + drift,
+                  0,
+                  "coincident particles at rest, far from the origin, no force: state finite "
+                  "and unchanged");
+  });
+
+  const int order = d.solver_traits.order;
+  guarded(out, "solver.convergence_order", [&] {
+    // Halving h multiplies the global error by 2^-p. The coarse step count is
+    // chosen so that both errors are far above round-off (1e-10 and more).
+    const int n = order >= 3 ? 8 : 64;
+    const double e1 = oscillator_error(d, params, n), e2 = oscillator_error(d, params, 2 * n);
+    const double measured = std::log2(e1 / e2);
+    if (order <= 0) {
+      return skip("solver.convergence_order",
+                  fmt::format("no declared order; measured {:.2f}", measured));
+    }
+    return result("solver.convergence_order", std::abs(measured - order) <= 0.3, measured, 0.3,
+                  fmt::format("harmonic oscillator to t = 1 s, h = 1/{} and 1/{}: declared order "
+                              "{}, |measured - declared| <= bound",
+                              n, 2 * n, order));
+  });
+
+  if (order >= 2) {
+    guarded(out, "solver.exact_constant_acceleration", [&] {
+      const Vec3 g(0.3, -0.2, -9.81);
+      auto sys = std::make_unique<System>();
+      sys->add_particle(kX0, kV0, 2.0);
+      sys->add_force(std::make_shared<Constant>(g), "conformance constant");
+      auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+      for (int s = 0; s < 10; ++s) solver->step(*sys, 0.1);
+      const double t = sys->time();
+      const Vec3 x = kX0 + kV0 * t + 0.5 * g * t * t, v = kV0 + g * t;
+      const double err =
+          std::max((sys->positions().col(0) - x).norm(), (sys->velocities().col(0) - v).norm());
+      const double bound = 1e-12 * (1.0 + x.norm() + v.norm());
+      return result("solver.exact_constant_acceleration", err <= bound, err, bound,
+                    "declared order >= 2: 10 steps of 0.1 s under constant g, m and m/s");
+    });
+  } else {
+    out.push_back(skip("solver.exact_constant_acceleration", "declared order < 2"));
+  }
+
+  guarded(out, "solver.fixed_particles_stay", [&] {
+    auto sys = random_system(rng());
+    sys->set_fixed(1, true);
+    sys->set_fixed(4, true);
+    const Matrix3X x0 = sys->positions();
+    auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+    for (int s = 0; s < 20; ++s) solver->step(*sys, 0.01);
+    double moved = 0;
+    for (Index i : {Index{1}, Index{4}}) {
+      moved = std::max(moved, (sys->positions().col(i) - x0.col(i)).cwiseAbs().maxCoeff());
+      moved = std::max(moved, sys->velocities().col(i).cwiseAbs().maxCoeff());
+    }
+    return result("solver.fixed_particles_stay", moved == 0, moved, 0,
+                  "2 fixed of 6 particles, 20 steps: max change of x (m) and v (m/s)");
+  });
+
+  guarded(out, "solver.time_advances_by_h", [&] {
+    auto sys = random_system(rng());
+    sys->set_time(0.3);
+    auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+    double worst = 0;
+    for (int s = 0; s < 20; ++s) {
+      const double before = sys->time();
+      solver->step(*sys, 0.01);
+      worst = std::max(worst, std::abs(sys->time() - (before + 0.01)));
+    }
+    return result("solver.time_advances_by_h", worst == 0, worst, 0,
+                  "20 steps of 0.01 s from t = 0.3 s: |t_after - (t_before + h)|, s");
+  });
+}
+
+}  // namespace pdyn::conformance::detail
