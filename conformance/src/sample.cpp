@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "pdyn/resolve.hpp"
+
 namespace pdyn::conformance {
 
 namespace detail {
@@ -102,6 +104,11 @@ std::size_t non_finite(const Matrix3X& m) {
 // Documented in pdyn/conformance.hpp. Every check of every kind, and
 // params.bad_rejected's baseline scene, constructs the plugin with these.
 
+// The given values are each parameter's `sample`, and for a required one
+// without a sample a typical value of its type; resolve() (the loader's own
+// resolver) adds every default. Its problems are ignored: a sample is not
+// checked against the bounds (ParamSpec::sample says so), and a default that
+// breaks them is params.bad_rejected's finding, not this function's.
 Params sample_params(const PluginDescriptor& d, Index n) {
   Params p;
   for (const auto& s : d.params) {
@@ -109,11 +116,7 @@ Params sample_params(const PluginDescriptor& d, Index n) {
       p.set(s.name, *s.sample);
       continue;
     }
-    if (s.fallback) {
-      p.set(s.name, *s.fallback);
-      continue;
-    }
-    if (!s.required) continue;
+    if (s.fallback || !s.required) continue;
     // A number inside the declared range, preferring 1.
     double x = 1.0;
     if (s.min && x <= *s.min) x = *s.min + 1.0;
@@ -157,7 +160,7 @@ Params sample_params(const PluginDescriptor& d, Index n) {
         break;
     }
   }
-  return p;
+  return resolve(d.params, p).params;
 }
 
 }  // namespace pdyn::conformance
