@@ -1,5 +1,6 @@
-// Helpers shared by the physics tests: exact number formatting for inline
-// YAML scenes and Witkin's simulation loop (step, set time, collide).
+// Helpers shared by the tests that integrate physics (plugins/, gallery/):
+// exact number formatting for inline YAML scenes and Witkin's simulation
+// loop (step, set time, collide).
 #pragma once
 
 #include <algorithm>

@@ -1,5 +1,6 @@
 // A particle on Witkin's damped spring tied to a fixed particle, moving along
-// the spring's axis, against the closed-form underdamped oscillator.
+// the spring's axis, against the closed-form underdamped oscillator of
+// support/oscillator.hpp.
 //
 // With the free particle at a + e (r + u) (anchor a, unit axis e, rest
 // length r) and its velocity along e, the spring force is -(ks u + kd u') e,
@@ -16,71 +17,48 @@
 #include <cmath>
 #include <iostream>
 
-#include "support/physics_support.hpp"
+#include "support/oscillator.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {
 
-constexpr double kMass = 0.5;        // kg
-constexpr double kKs = 20.0;         // N/m
-constexpr double kKd = 0.4;          // N s/m
-constexpr double kRest = 1.0;        // m
-constexpr double kU0 = 0.3;          // initial stretch, m
-constexpr double kUDot0 = 0.5;       // initial stretch rate, m/s
 constexpr double kDt = 1e-3;         // s
 constexpr int kSteps = 5000;         // 5 s, about five periods
 constexpr double kTolerance = 1e-9;  // m and m/s; rk4 achieves ~1.5e-10 here
 
-struct Oscillator {
-  double gamma = kKd / (2.0 * kMass);
-  double wd = std::sqrt(kKs / kMass - gamma * gamma);
-  double a = kU0;
-  double b = (kUDot0 + gamma * kU0) / wd;
+// m = 0.5 kg, ks = 20 N/m, kd = 0.4 N s/m, r = 1 m; initial stretch 0.3 m
+// and stretch rate 0.5 m/s along `axis`, anchored at `anchor`.
+test::Oscillator Damped(const Vec3& anchor, const Vec3& axis) {
+  test::Oscillator o = test::Oscillator::Along(axis, 0.3, 0.5);
+  o.mass = 0.5;
+  o.ks = 20.0;
+  o.kd = 0.4;
+  o.rest = 1.0;
+  o.anchor = anchor;
+  return o;
+}
 
-  double u(double t) const {
-    return std::exp(-gamma * t) * (a * std::cos(wd * t) + b * std::sin(wd * t));
-  }
-  double u_dot(double t) const {
-    return std::exp(-gamma * t) *
-           ((b * wd - gamma * a) * std::cos(wd * t) - (a * wd + gamma * b) * std::sin(wd * t));
-  }
-};
+std::string Timing() { return "dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps); }
 
 // Runs the oscillator along `axis` (anchored at `anchor`) and returns the
 // largest deviation from the closed form, max over steps of the position
 // and velocity errors.
 double MaxDeviation(const Vec3& anchor, const Vec3& axis) {
-  const Vec3 e = axis.normalized();
-  Scene scene = test::load_text(
-      "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
-      ", solver: { type: rk4 } }\n"
-      "particles:\n"
-      "  - { position: " +
-      test::Vec(anchor) +
-      ", mass: 1, fixed: true }\n"
-      "  - { position: " +
-      test::Vec(anchor + (kRest + kU0) * e) + ", velocity: " + test::Vec(kUDot0 * e) +
-      ", mass: " + test::Num(kMass) +
-      " }\n"
-      "forces:\n"
-      "  - { type: spring, pairs: [[1, 0]], ks: " +
-      test::Num(kKs) + ", kd: " + test::Num(kKd) + ", rest: [" + test::Num(kRest) + "] }\n");
+  const test::Oscillator exact = Damped(anchor, axis);
+  Scene scene = test::load_text(exact.scene("{ type: rk4 }", Timing()));
   System& sys = *scene.system;
-  const Oscillator exact;
-  double worst = 0.0, min_length = kRest;
+  double worst = 0.0, min_length = exact.rest;
   for (int k = 1; k <= kSteps; ++k) {
     test::TakeStep(scene, k, kDt);
     const double t = k * kDt;
-    const Vec3 x = anchor + (kRest + exact.u(t)) * e;
-    const Vec3 v = exact.u_dot(t) * e;
-    worst = std::max({worst, (sys.positions().col(1) - x).lpNorm<Eigen::Infinity>(),
-                      (sys.velocities().col(1) - v).lpNorm<Eigen::Infinity>()});
+    worst = std::max({worst, (sys.positions().col(1) - exact.x(t)).lpNorm<Eigen::Infinity>(),
+                      (sys.velocities().col(1) - exact.v(t)).lpNorm<Eigen::Infinity>()});
     min_length = std::min(min_length, (sys.positions().col(1) - anchor).norm());
     // The anchor is nailed: it must not move at all.
     EXPECT_EQ(sys.positions().col(0), anchor) << "step " << k;
   }
-  EXPECT_GT(min_length, 0.5 * kRest);  // the premise of the 1-D closed form
+  EXPECT_GT(min_length, 0.5 * exact.rest);  // the premise of the 1-D closed form
   return worst;
 }
 
@@ -103,29 +81,15 @@ TEST(DampedOscillator, Rk4MatchesTheUnderdampedClosedFormAlongAnObliqueAxis) {
 // closed form's E(t) = m u'(t)^2 / 2 + ks u(t)^2 / 2 at every step. Damping
 // only removes energy, dE/dt = -kd u'^2 <= 0, so E must never increase.
 TEST(DampedOscillator, ReportedEnergyMatchesTheClosedForm) {
-  Scene scene = test::load_text(
-      "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
-      ", solver: { type: rk4 } }\n"
-      "particles:\n"
-      "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
-      "  - { position: [" +
-      test::Num(kRest + kU0) + ", 0, 0], velocity: [" + test::Num(kUDot0) +
-      ", 0, 0], mass: " + test::Num(kMass) +
-      " }\n"
-      "forces:\n"
-      "  - { type: spring, pairs: [[0, 1]], ks: " +
-      test::Num(kKs) + ", kd: " + test::Num(kKd) + ", rest: [" + test::Num(kRest) + "] }\n");
+  const test::Oscillator exact = Damped(Vec3::Zero(), Vec3::UnitX());
+  Scene scene = test::load_text(exact.scene("{ type: rk4 }", Timing()));
   System& sys = *scene.system;
-  const Oscillator exact;
-  auto energy = [&](double t) {
-    return 0.5 * kMass * exact.u_dot(t) * exact.u_dot(t) + 0.5 * kKs * exact.u(t) * exact.u(t);
-  };
-  EXPECT_NEAR(sys.kinetic_energy() + sys.potential_energy(), energy(0.0), 1e-14);
-  double previous = energy(0.0);
+  EXPECT_NEAR(sys.kinetic_energy() + sys.potential_energy(), exact.energy(0.0), 1e-14);
+  double previous = exact.energy(0.0);
   for (int k = 1; k <= kSteps; ++k) {
     test::TakeStep(scene, k, kDt);
     const double e = sys.kinetic_energy() + sys.potential_energy();
-    EXPECT_NEAR(e, energy(k * kDt), 1e-9) << "step " << k;
+    EXPECT_NEAR(e, exact.energy(k * kDt), 1e-9) << "step " << k;
     EXPECT_LE(e, previous + 1e-12) << "damping must not add energy, step " << k;
     previous = e;
   }

@@ -11,7 +11,7 @@
 #include <iostream>
 #include <random>
 
-#include "plugins/solvers/solver_support.hpp"
+#include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {

@@ -1,6 +1,6 @@
 // rk45 (Dormand-Prince 5(4)): error control, dense output at frame times,
 // rejections, FSAL, dt_min, checkpoint state and parameter checks, on the
-// damped harmonic oscillator of solver_support.hpp.
+// damped harmonic oscillator of support/oscillator.hpp.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -147,15 +147,14 @@ TEST(Rk45, ReusesTheLastStageAsTheNextFirst) {
 }
 
 TEST(Rk45, StepBelowDtMinIsAClearError) {
-  // A spring of w = 1e4 rad/s at rtol 1e-10 needs steps far below 1 ms.
+  // A spring of w = 1e4 rad/s at rtol 1e-10 needs steps far below 1 ms:
+  // 10 g on ks = 1e6 N/m, rest 1 m, stretched by 0.1 m, from rest.
+  test::Oscillator stiff = test::Oscillator::Along(Vec3::UnitX(), 0.1, 0.0);
+  stiff.mass = 1.0e-2;
+  stiff.ks = 1.0e6;
+  stiff.rest = 1.0;
   Scene scene = test::load_text(
-      "simulation: { dt: 0.01, duration: 1, solver: { type: rk45, rtol: 1.0e-10, dt_min: 1.0e-3 } "
-      "}\n"
-      "particles:\n"
-      "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
-      "  - { position: [1.1, 0, 0], mass: 1.0e-2 }\n"
-      "forces:\n"
-      "  - { type: spring, pairs: [[0, 1]], ks: 1.0e6, rest: [1] }\n");
+      stiff.scene("{ type: rk45, rtol: 1.0e-10, dt_min: 1.0e-3 }", "dt: 0.01, duration: 1"));
   // The solver throws pdyn::Error; the runner stops with exit code 3.
   const RunResult r = run_scene(scene);
   std::cout << "rk45 dt_min: exit " << r.exit_code << ": " << r.message << "\n";

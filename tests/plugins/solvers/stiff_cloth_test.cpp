@@ -24,7 +24,7 @@ const double kDiagonal = std::sqrt(2.0);  // m, the 1 m x 1 m cloth's diagonal
 
 Scene StiffCloth(const std::string& solver, double dt, double duration) {
   return load_scene(
-      test::source_path("tests/scenes/shared/stiff_cloth.yaml"), test::shipped_plugins(),
+      test::shared_scene("stiff_cloth.yaml"), test::shipped_plugins(),
       {Override{"simulation.solver", solver}, Override{"simulation.dt", test::Num(dt)},
        Override{"simulation.duration", test::Num(duration)}});
 }
