@@ -1,5 +1,5 @@
 // Hanging-cloth throughput (issue 4): ns per particle-step of
-//   pdyn_run     pdyn as a user assembles it: bench/hanging_cloth.yaml loaded
+//   pdyn_run     pdyn as a user assembles it: tests/scenes/shared/cloth.yaml loaded
 //                with its plugins, stepped by the runner (run_scene, with its
 //                per-step fault checks), 1 and 2 threads;
 //   pdyn_step    the same scene stepped by calling the solver directly (the
@@ -44,7 +44,7 @@ namespace {
 using pdyn::bench::ClothSpec;
 using pdyn::bench::FusedCloth;
 
-constexpr double kDt = 0.0002;  // s, bench/hanging_cloth.yaml's
+constexpr double kDt = 0.0002;  // s, tests/scenes/shared/cloth.yaml's
 const int kSizes[] = {100, 316, 1000};
 
 const pdyn::PluginRegistry& registry() {

@@ -1,5 +1,5 @@
 // The hand-fused reference for bench/cloth.cpp: the hanging cloth of
-// bench/hanging_cloth.yaml (a grid with structural and shear springs,
+// tests/scenes/shared/cloth.yaml (a grid with structural and shear springs,
 // gravity, drag, two pinned top corners) stepped with classic rk4, written
 // as the fastest straightforward single-threaded code: one struct, structure
 // of arrays (positions, velocities, forces, masses each one flat array,
@@ -22,7 +22,7 @@
 
 namespace pdyn::bench {
 
-/// Parameters of the cloth; the defaults are bench/hanging_cloth.yaml's.
+/// Parameters of the cloth; the defaults are tests/scenes/shared/cloth.yaml's.
 struct ClothSpec {
   int nx = 100, ny = 100;
   double spacing = 0.01;                              // m

@@ -1,4 +1,4 @@
-// Stiff-cloth time to solution (issue 5): simulate 1 s of bench/stiff_cloth.yaml
+// Stiff-cloth time to solution (issue 5): simulate 1 s of tests/scenes/shared/stiff_cloth.yaml
 //   (a) with rk4 at its largest stable dt, found by bisection, and
 //   (b) with implicit_euler at dt = 0.01 s,
 // and print wall time, steps and CG iterations per step as a Markdown table

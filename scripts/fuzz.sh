@@ -3,7 +3,7 @@
 # UBSan), seeded with configs/, the malformed test scenes and the regression
 # corpus. Fails on any crash, hang, leak or sanitizer report; the input that
 # caused it is saved under build-fuzz/findings/ — add it to
-# tests/fuzz_regressions/ once fixed.
+# tests/robustness/fuzz_regressions/ once fixed.
 #
 #   bash scripts/fuzz.sh [SECONDS]     (default 120)
 set -euo pipefail
@@ -19,7 +19,7 @@ cmake --preset fuzz "${launcher[@]}" >/dev/null
 cmake --build --preset fuzz --target scene_fuzzer pdyn_plugins
 work=build-fuzz/corpus
 rm -rf "$work" build-fuzz/findings && mkdir -p "$work" build-fuzz/findings
-seeds=(configs tests/scenes/bad tests/fuzz_regressions)
+seeds=(configs tests/scenes/bad tests/robustness/fuzz_regressions)
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 log=build-fuzz/fuzz.log

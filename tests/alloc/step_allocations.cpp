@@ -129,22 +129,16 @@ const PluginRegistry& plugins() {
   return r;
 }
 
-// A 64 x 64 cloth: large enough that the spring plugin and the solvers take
-// their multi-threaded paths when more than one thread is set.
-std::string cloth(const std::string& solver, int steps) {
-  return "simulation: { dt: 0.0002, steps: " + std::to_string(steps) +
-         ", solver: { type: " + solver +
-         " } }\n"
-         "particles:\n"
-         "  - grid: { origin: [0, 0, 1], u: [0.01, 0, 0], v: [0, 0, 0.01], nx: 64, ny: 64,\n"
-         "            mass: 0.0001, velocity: [0, 1, 0], pin: [[0, -1], [-1, -1]],\n"
-         "            springs: { structural: { ks: 1000, kd: 0.02 }, shear: { ks: 500, kd: 0.01 } "
-         "} }\n"
-         "forces:\n"
-         "  - { type: gravity, g: [0, 0, -9.81] }\n"
-         "  - { type: drag, k: 0.00001 }\n"
-         "colliders:\n"
-         "  - { type: plane, point: [0, 0, 0.99], normal: [0, 0, 1] }\n";
+// The shared hanging cloth (tests/scenes/shared/cloth.yaml) at 64 x 64,
+// over a floor plane: large enough that the spring plugin and the solvers
+// take their multi-threaded paths when more than one thread is set.
+Scene cloth(const std::string& solver, int steps) {
+  return load_scene(std::string(PDYN_SOURCE_DIR) + "/tests/scenes/shared/cloth.yaml", plugins(),
+                    {{"simulation.steps", std::to_string(steps)},
+                     {"simulation.solver", "{ type: " + solver + " }"},
+                     {"particles[0].grid.nx", "64"},
+                     {"particles[0].grid.ny", "64"},
+                     {"colliders", "[{ type: plane, point: [0, 0, 0.99], normal: [0, 0, 1] }]"}});
 }
 
 struct Case {
@@ -157,7 +151,7 @@ class StepAllocations : public ::testing::TestWithParam<Case> {};
 // The solver's own step, as a host program drives it.
 TEST_P(StepAllocations, NoneAfterTheFirstStep) {
   const Case c = GetParam();
-  Scene scene = load_scene_text(cloth(c.solver, 100), "alloc.yaml", plugins());
+  Scene scene = cloth(c.solver, 100);
   set_threads(c.threads);
   System& sys = *scene.system;
   scene.solver->step(sys, scene.dt);  // may size its scratch vectors
@@ -189,7 +183,7 @@ INSTANTIATE_TEST_SUITE_P(ExplicitSolvers, StepAllocations,
 // a run of 12 steps allocates exactly as much as a run of 2.
 TEST(RunnerAllocations, SameForTwoAndTwelveSteps) {
   auto allocations = [](int steps) {
-    Scene scene = load_scene_text(cloth("rk4", steps), "alloc.yaml", plugins());
+    Scene scene = cloth("rk4", steps);
     RunOptions options;
     options.threads = 2;
     run_scene(scene, options);  // warms the thread pool and lazy statics

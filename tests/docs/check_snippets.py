@@ -35,12 +35,24 @@ HTML comments right before a fence (invisible on GitHub) steer the checker:
 Prints one line per problem, `FILE:LINE: what is wrong` (LINE: the fence's
 opening line, or the snippet's own line when the tool says where), then a
 summary line; exits 1 if any block failed.
+
+With --param-tables it checks, instead of the snippets, the `## Parameters`
+table of each plugin README (plugins/*/*/README.md, or the FILE.md given,
+whose folder names the plugin) against `pdyn plugins describe NAME`, both
+ways: every parameter the plugin declares has a row, every row is a declared
+parameter, and each row's type, default, unit and range (>=X, >X, <=X, <X,
+[A, B], nonzero; other words in the range cell, such as "0..N-1, each once",
+are prose) are the declared ones. A README whose plugin has no parameters
+has a `## Parameters` section without a table. Each problem is reported at
+the README's line: the row, or the table's header for a parameter missing
+from it.
 """
 
 import argparse
 import copy
 import glob
 import json
+import math
 import os
 import re
 import shlex
@@ -548,6 +560,222 @@ class Checker:
         return len(self.failed_blocks) == 0 and len(self.not_checked) <= MAX_NOT_CHECKED
 
 
+# ---- plugin parameter tables (--param-tables) ------------------------------------------------
+
+# The columns of a README's parameter table, as `pdyn plugins describe` prints them.
+TABLE_COLUMNS = ["key", "type", "default", "unit", "range", "meaning"]
+COMPARED_COLUMNS = ["type", "default", "unit", "range"]
+KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider"}
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|pi"
+
+
+class ParamTables(Checker):
+    """Each plugin README's `## Parameters` table against `pdyn plugins describe NAME`."""
+
+    def __init__(self, args):
+        super().__init__(args)
+        self.plugins_checked = 0
+        self.params_checked = 0
+        self.problems = 0
+
+    def fail_at(self, path, line, message):
+        print(f"{path}:{line}: {message}", flush=True)
+        self.failed_blocks.add((path, line))
+        self.problems += 1
+
+    def describe(self, name):
+        """(kind, {key: {column: text}}) from `pdyn plugins describe NAME`, or (None, error)."""
+        r = self.pdyn("plugins", "describe", name)
+        if r.returncode != 0:
+            return None, first_line(r.stderr)
+        lines = r.stdout.splitlines()
+        kind = lines[0].split()[0] if lines and lines[0].split() else ""
+        header = next((i for i, l in enumerate(lines) if l.split()[:2] == ["KEY", "TYPE"]), None)
+        if header is None:
+            if not any(l.strip() == "no parameters" for l in lines):
+                return None, "neither a parameter table nor 'no parameters' in its output"
+            return kind, {}
+        # The columns are padded to their widest entry: each starts where its title does.
+        starts = [lines[header].index(c.upper()) for c in TABLE_COLUMNS]
+        params = {}
+        for l in lines[header + 1:]:
+            if not l.strip():
+                continue
+            cells = [l[a:b].strip() for a, b in zip(starts, starts[1:] + [None])]
+            params[cells[0]] = dict(zip(TABLE_COLUMNS, cells))
+        return kind, params
+
+    def readme_table(self, doc, path):
+        """(line of `## Parameters`, line of the table's header, {key: (line, {column: text})}),
+        reporting malformed tables; None without a Parameters section."""
+        lines = open(doc).read().split("\n")
+        section = next((i for i, l in enumerate(lines) if re.match(r"^##\s+Parameters\s*$", l)),
+                       None)
+        if section is None:
+            return None
+        end = next((i for i in range(section + 1, len(lines)) if re.match(r"^#{1,2}\s", lines[i])),
+                   len(lines))
+        header, columns, rows = None, None, {}
+        for i in range(section + 1, end):
+            if not lines[i].strip().startswith("|"):
+                if header is not None and rows:
+                    break                                # the first table only
+                continue
+            cells = [c.strip() for c in re.split(r"(?<!\\)\|", lines[i].strip().strip("|"))]
+            if header is None:
+                header, columns = i + 1, [c.lower() for c in cells]
+                missing = [c for c in TABLE_COLUMNS if c not in columns]
+                if missing:
+                    self.fail_at(path, header, f"parameter table: no column {', '.join(missing)} "
+                                               f"(expected | {' | '.join(TABLE_COLUMNS)} |)")
+                continue
+            if all(re.fullmatch(r":?-+:?", c) for c in cells):
+                continue
+            row = dict(zip(columns, cells))
+            key = row.get("key", "").strip("`")
+            if key in rows:
+                self.fail_at(path, i + 1, f"parameter '{key}' has a second row (the first at "
+                                          f"line {rows[key][0]})")
+                continue
+            rows[key] = (i + 1, row)
+        return section + 1, header, rows
+
+    def check_readme(self, doc, name, kind_folder=None):
+        path = os.path.relpath(os.path.abspath(doc), self.src)
+        kind, declared = self.describe(name)
+        if kind is None:
+            self.fail_at(path, 1, f"`pdyn plugins describe {name}` failed: {declared}")
+            return
+        self.plugins_checked += 1
+        if kind_folder and KIND_FOLDERS.get(kind_folder) != kind:
+            self.fail_at(path, 1, f"'{name}' is a {kind} plugin, but its README is under "
+                                  f"plugins/{kind_folder}/")
+        table = self.readme_table(doc, path)
+        if table is None:
+            self.fail_at(path, 1, "no `## Parameters` section (a table of the parameters, or "
+                                  "'None.' for a plugin without any)")
+            return
+        section, header, rows = table
+        where = header or section
+        for key in declared:
+            if key not in rows:
+                self.fail_at(path, where, f"parameter '{key}' ({declared[key]['type']}) is declared "
+                                          f"by `pdyn plugins describe {name}` but has no row in "
+                                          "the README's table")
+        for key, (line, row) in rows.items():
+            if key not in declared:
+                self.fail_at(path, line, f"parameter '{key}' is documented but `pdyn plugins "
+                                         f"describe {name}` does not declare it (it declares "
+                                         f"{', '.join(declared) or 'no parameters'})")
+                continue
+            self.params_checked += 1
+            want = declared[key]
+            for column in COMPARED_COLUMNS:
+                same = {"type": same_words, "default": same_default, "unit": same_unit,
+                        "range": same_range}[column]
+                problem = same(row.get(column, ""), want[column])
+                if problem:
+                    self.fail_at(path, line, f"parameter '{key}': {column} '{row.get(column, '')}'"
+                                             f" in the README, '{want[column]}' from `pdyn "
+                                             f"plugins describe {name}`{problem}")
+
+    def run(self, docs):
+        shipped = not docs
+        if shipped:
+            docs = sorted(glob.glob(os.path.join(self.src, "plugins", "*", "*", "README.md")))
+            # Both ways: every shipped plugin has a README where this finds it.
+            for name, kind in sorted(self.plugin_kinds().items()):
+                readme = os.path.join(self.src, "plugins", kind + "s", name, "README.md")
+                if not os.path.isfile(readme):
+                    print(f"plugins/{kind}s/{name}/README.md: missing: the {kind} plugin '{name}' "
+                          "has no README with its parameter table", flush=True)
+                    self.failed_blocks.add((f"plugins/{kind}s/{name}/README.md", 0))
+                    self.problems += 1
+        for doc in docs:
+            parts = os.path.abspath(doc).split(os.sep)
+            folder = parts[-3] if shipped else None
+            self.check_readme(doc, parts[-2], folder)
+        print(f"docs.param_tables: {self.plugins_checked} plugins, {self.params_checked} "
+              f"parameters checked, {self.problems} problems on {len(self.failed_blocks)} lines")
+        return not self.failed_blocks
+
+
+def same_words(doc, declared):
+    """'' if the cells say the same, ignoring case, backticks and spacing."""
+    def norm(t):
+        return re.sub(r"\s+", " ", t.replace("`", "").strip().lower())
+    return "" if norm(doc) == norm(declared) else " (different)"
+
+
+def same_unit(doc, declared):
+    def norm(t):
+        t = re.sub(r"\s+", " ", t.replace("`", "").strip())
+        return "" if t in {"", "-"} else t
+    return "" if norm(doc) == norm(declared) else " (different)"
+
+
+def default_value(text):
+    """A default as a comparable value: a number, a tuple of numbers, or normalised text."""
+    t = text.replace("`", "").strip()
+    try:
+        return float(t)
+    except ValueError:
+        pass
+    m = re.fullmatch(r"\[(.*)\]", t)
+    if m:
+        items = [x.strip() for x in m.group(1).split(",")] if m.group(1).strip() else []
+        try:
+            return tuple(float(x) for x in items)
+        except ValueError:
+            pass
+    return re.sub(r"\s+", "", t.lower())
+
+
+def same_default(doc, declared):
+    return "" if default_value(doc) == default_value(declared) else " (a different value)"
+
+
+def bounds(text):
+    """The bounds a range cell states, as {(op, value)}, and its other words (prose)."""
+    t = text.replace("`", "").strip()
+    if t in {"", "-"}:
+        return set(), []
+    found = set()
+
+    def num(s):
+        return math.pi if s == "pi" else float(s)
+
+    def interval(m):
+        found.update({(">=", num(m.group(1))), ("<=", num(m.group(2)))})
+        return ""
+    t = re.sub(rf"\[\s*({NUMBER})\s*,\s*({NUMBER})\s*\]", interval, t)
+    prose = []
+    for part in (p.strip() for p in t.split(",")):
+        m = re.fullmatch(rf"(>=|>|<=|<)\s*({NUMBER})", part)
+        if m:
+            found.add((m.group(1), num(m.group(2))))
+        elif part == "nonzero":
+            found.add(("nonzero", None))
+        elif part:
+            prose.append(part)
+    return found, prose
+
+
+def same_range(doc, declared):
+    doc_bounds, _ = bounds(doc)
+    declared_bounds, declared_prose = bounds(declared)
+    if declared_prose:
+        return f" (cannot read {', '.join(declared_prose)})"
+    show = lambda b: ", ".join(f"{op}{'' if v is None else f'{v:g}'}" for op, v in sorted(
+        b, key=lambda x: (x[0], x[1] or 0)))
+    problems = []
+    if declared_bounds - doc_bounds:
+        problems.append(f"declared but not documented: {show(declared_bounds - doc_bounds)}")
+    if doc_bounds - declared_bounds:
+        problems.append(f"documented but not declared: {show(doc_bounds - declared_bounds)}")
+    return f" ({'; '.join(problems)})" if problems else ""
+
+
 # ---- helpers -------------------------------------------------------------------------------
 
 def first_line(text):
@@ -654,21 +882,29 @@ def main():
     p.add_argument("--verbose", action="store_true", help="also say what passed, and how")
     p.add_argument("--expect-failed-lines", help="self-test: succeed if exactly the blocks "
                    "opening at these comma-separated lines failed, and nothing else")
+    p.add_argument("--param-tables", action="store_true", help="check the plugin READMEs' "
+                   "parameter tables against `pdyn plugins describe` instead of the snippets")
     p.add_argument("docs", nargs="*")
     args = p.parse_args()
-    checker = Checker(args)
+    if args.param_tables:
+        checker, name, what = ParamTables(args), "docs.param_tables", "lines"
+    else:
+        checker, name, what = Checker(args), "docs.snippets", "blocks"
     try:
-        ok = checker.run(args.docs or shipped_docs(os.path.abspath(args.source_dir)))
+        if args.param_tables:
+            ok = checker.run(args.docs)
+        else:
+            ok = checker.run(args.docs or shipped_docs(os.path.abspath(args.source_dir)))
     finally:
         shutil.rmtree(checker.tmp, ignore_errors=True)
     if args.expect_failed_lines is not None:
         expected = {int(n) for n in args.expect_failed_lines.split(",")}
         got = {line for _, line in checker.failed_blocks}
         if got != expected:
-            print(f"docs.snippets_catch_drift: failed blocks at lines {sorted(got)}, "
+            print(f"{name}_catch_drift: failed {what} at lines {sorted(got)}, "
                   f"expected {sorted(expected)}")
             return 1
-        print(f"docs.snippets_catch_drift: the {len(expected)} drifted blocks were caught")
+        print(f"{name}_catch_drift: the {len(expected)} drifted {what} were caught")
         return 0
     return 0 if ok else 1
 

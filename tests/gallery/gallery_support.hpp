@@ -4,7 +4,7 @@
 
 #include <functional>
 
-#include "physics/physics_support.hpp"
+#include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn::test {

@@ -6,7 +6,7 @@
 
 #include <iostream>
 
-#include "physics/physics_support.hpp"
+#include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {

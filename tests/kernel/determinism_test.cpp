@@ -1,7 +1,8 @@
 // Determinism across thread counts: a cloth stepped with 1, 2, 3 and 4
 // threads ends in bit-identical states, for every shipped explicit solver
 // that splits its updates over threads (pdyn/parallel.hpp, the spring
-// plugin's blocks and boundary gather). The cloth is large enough (96 x 96
+// plugin's blocks and boundary gather). The cloth, the shared hanging cloth
+// of tests/scenes/shared/cloth.yaml, is made large enough (96 x 96
 // particles: three spring blocks of 4096 particles, 54 000 springs) that
 // every parallel path is taken, not its serial fallback.
 #include <gtest/gtest.h>
@@ -14,33 +15,22 @@
 namespace pdyn::test {
 namespace {
 
-std::string cloth(const std::string& solver, int steps) {
-  return "simulation: { dt: 0.0002, steps: " + std::to_string(steps) +
-         ", solver: { type: " + solver +
-         " } }\n"
-         "particles:\n"
-         "  - grid:\n"
-         "      origin: [-0.475, 0, 1]\n"
-         "      u: [0.01, 0, 0]\n"
-         "      v: [0, 0, 0.01]\n"
-         "      nx: 96\n"
-         "      ny: 96\n"
-         "      mass: 0.0001\n"
-         "      velocity: [0, 1, 0]\n"
-         "      pin: [[0, -1], [-1, -1]]\n"
-         "      springs:\n"
-         "        structural: { ks: 1000, kd: 0.02 }\n"
-         "        shear: { ks: 500, kd: 0.01 }\n"
-         "        bend: { ks: 100, kd: 0.002 }\n"
-         "forces:\n"
-         "  - { type: gravity, g: [0, 0, -9.81] }\n"
-         "  - { type: drag, k: 0.00001 }\n"
-         "colliders:\n"
-         "  - { type: plane, point: [0, 0, 0.99], normal: [0, 0, 1], restitution: 0.5 }\n";
+// The shared hanging cloth (tests/scenes/shared/cloth.yaml) at 96 x 96,
+// with bend springs as well and a floor plane just below it.
+Scene cloth(const std::string& solver, int steps, std::vector<Override> overrides = {}) {
+  std::vector<Override> all = {
+      {"simulation.steps", std::to_string(steps)},
+      {"simulation.solver", "{ type: " + solver + " }"},
+      {"particles[0].grid.nx", "96"},
+      {"particles[0].grid.ny", "96"},
+      {"particles[0].grid.springs.bend", "{ ks: 100, kd: 0.002 }"},
+      {"colliders", "[{ type: plane, point: [0, 0, 0.99], normal: [0, 0, 1], restitution: 0.5 }]"}};
+  all.insert(all.end(), overrides.begin(), overrides.end());
+  return load_shared("cloth.yaml", all);
 }
 
 Eigen::VectorXd run_with(const std::string& solver, int threads, int steps = 8) {
-  Scene scene = load_text(cloth(solver, steps));
+  Scene scene = cloth(solver, steps);
   RunOptions options;
   options.threads = threads;
   const RunResult r = run_scene(scene, options);
@@ -58,7 +48,7 @@ class Determinism : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(Determinism, SameBitsForOneToFourThreads) {
   const Eigen::VectorXd one = run_with(GetParam(), 1);
-  const Scene initial = load_text(cloth(GetParam(), 1));
+  const Scene initial = cloth(GetParam(), 1);
   ASSERT_FALSE(bit_identical(one, initial.system->state())) << "the cloth did not move";
   for (int threads : {2, 3, 4}) {
     const Eigen::VectorXd many = run_with(GetParam(), threads);
@@ -108,9 +98,9 @@ TEST(Threads, ZeroIsRefusedWhereItIsWritten) {
 
 TEST(Threads, ThreadCountIsNotPartOfTheSceneACheckpointMatches) {
   // Results do not depend on it, so a run may resume with another count.
-  const Scene a = load_text(cloth("rk4", 20), {{"simulation.threads", "4"}});
-  const Scene b = load_text(cloth("rk4", 20), {{"simulation.threads", "1"}});
-  const Scene c = load_text(cloth("rk4", 20));
+  const Scene a = cloth("rk4", 20, {{"simulation.threads", "4"}});
+  const Scene b = cloth("rk4", 20, {{"simulation.threads", "1"}});
+  const Scene c = cloth("rk4", 20);
   EXPECT_EQ(a.canonical_text, b.canonical_text);
   EXPECT_EQ(a.canonical_text, c.canonical_text);
 }

@@ -1,6 +1,6 @@
 # `pdyn schema` against real scenes: the generated schema must be a valid
-# draft 2020-12 schema, accept every configs/*.yaml and refuse the bad scenes
-# of tests/scenes/bad/ that a schema can express.
+# draft 2020-12 schema, accept every configs/*.yaml and tests/scenes/shared/*.yaml
+# and refuse the bad scenes of tests/scenes/bad/ that a schema can express.
 #   cmake -DPDYN=... -DSOURCE_DIR=... -DWORK=... -P check_schema.cmake
 cmake_minimum_required(VERSION 3.25)
 file(REMOVE_RECURSE "${WORK}")
@@ -24,7 +24,7 @@ set(beyond_a_schema
   output_same_file set_bad_value set_into_missing_list set_missing_element
   set_steps_with_duration set_unknown_section set_without_value spring_index_out_of_range
   spring_rest_count spring_self velocity_nan)
-file(GLOB good "${SOURCE_DIR}/configs/*.yaml")
+file(GLOB good "${SOURCE_DIR}/configs/*.yaml" "${SOURCE_DIR}/tests/scenes/shared/*.yaml")
 file(GLOB all_bad "${SOURCE_DIR}/tests/scenes/bad/*.yaml")
 set(bad "")
 foreach(scene IN LISTS all_bad)

@@ -56,4 +56,12 @@ fs::path write_file(const fs::path& path, const std::string& text) {
 
 fs::path source_path(const std::string& relative) { return fs::path(PDYN_SOURCE_DIR) / relative; }
 
+fs::path shared_scene(const std::string& name) {
+  return source_path("tests/scenes/shared/" + name);
+}
+
+Scene load_shared(const std::string& name, const std::vector<Override>& overrides) {
+  return load_scene(shared_scene(name), shipped_plugins(), overrides);
+}
+
 }  // namespace pdyn::test

@@ -34,4 +34,12 @@ std::filesystem::path write_file(const std::filesystem::path& path, const std::s
 /// Path of a file in the source tree, e.g. source_path("configs/demo.yaml").
 std::filesystem::path source_path(const std::string& relative);
 
+/// Path of a shared test scene, tests/scenes/shared/NAME (e.g. "cloth.yaml"):
+/// the one definition of a set-up that several tests (and the benchmarks)
+/// vary with overrides instead of copying it.
+std::filesystem::path shared_scene(const std::string& name);
+
+/// Loads shared_scene(NAME) with the shipped plugins and `overrides`.
+Scene load_shared(const std::string& name, const std::vector<Override>& overrides = {});
+
 }  // namespace pdyn::test

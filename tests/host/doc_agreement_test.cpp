@@ -1,0 +1,106 @@
+// Where docs/scenes.md and the plugins' descriptions promise something the
+// loader used to refuse: each promise, kept.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "pdyn/host/scene.hpp"
+#include "plugins/forces/force_support.hpp"
+
+namespace pdyn {
+namespace {
+
+std::string message(const std::string& yaml) {
+  try {
+    test::load_text(yaml);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// The spring plugin describes `rest` as "one for all pairs or one per pair":
+// a plain number is the one for all, the same as a one-element list.
+TEST(DocAgreement, ASpringTakesOneRestLengthAsANumber) {
+  const std::string head =
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - { position: [0, 0, 0], mass: 1 }\n"
+      "  - { position: [0.3, 0, 0], mass: 1 }\n"
+      "  - { position: [0, 0.5, 0], mass: 1 }\n"
+      "forces:\n";
+  Scene scalar = test::load_text(head +
+                                 "  - { type: spring, pairs: [[0, 1], [0, 2]], ks: 10, "
+                                 "rest: 0.1 }\n");
+  Scene list = test::load_text(head +
+                               "  - { type: spring, pairs: [[0, 1], [0, 2]], ks: 10, "
+                               "rest: [0.1] }\n");
+  const Matrix3X f = test::ForcesOf(*scalar.system, 0);
+  EXPECT_EQ(f, test::ForcesOf(*list.system, 0));
+  EXPECT_NEAR(f(0, 1), -10 * (0.3 - 0.1), 1e-12);  // stretched by 0.2 m
+  EXPECT_NEAR(f(1, 2), -10 * (0.5 - 0.1), 1e-12);
+  // Not a number is still refused, with what was given.
+  EXPECT_NE(message(head + "  - { type: spring, pairs: [[0, 1]], rest: abc }\n")
+                .find("forces[0].rest: 'abc' is not a number (expected a number >= 0 in m)"),
+            std::string::npos)
+      << message(head + "  - { type: spring, pairs: [[0, 1]], rest: abc }\n");
+}
+
+// `fixed` takes 0 and 1 in a CSV side file; the YAML particle takes them too.
+TEST(DocAgreement, FixedTakesZeroAndOneAsInCsvFiles) {
+  Scene scene = test::load_text(
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - { position: [0, 0, 0], mass: 1, fixed: 1 }\n"
+      "  - { position: [1, 0, 0], mass: 1, fixed: 0 }\n"
+      "  - { position: [2, 0, 0], mass: 1, fixed: true }\n");
+  const auto& fixed = scene.system->fixed();
+  ASSERT_EQ(fixed.size(), 3u);
+  EXPECT_EQ(fixed[0], 1);
+  EXPECT_EQ(fixed[1], 0);
+  EXPECT_EQ(fixed[2], 1);
+  EXPECT_NE(message("simulation: { dt: 0.01, steps: 1 }\n"
+                    "particles:\n"
+                    "  - { position: [0, 0, 0], mass: 1, fixed: 2 }\n")
+                .find("particles[0].fixed: '2' is not true or false (expected true, false, 1 or "
+                      "0)"),
+            std::string::npos);
+}
+
+// docs/scenes.md lists the sources of potential energy and says which
+// plugins read groups: checked against what the plugins do.
+TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups) {
+  std::ifstream in(test::source_path("docs/scenes.md"));
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string doc = text.str();
+  EXPECT_EQ(doc.find("No shipped plugin reads groups yet"), std::string::npos);
+  // One particle, one of each force with its potential: each reports one.
+  Scene scene = test::load_text(
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - chain: { from: [0, 0, 1], to: [1, 0, 1], n: 3, mass: 1, bend: { k: 1 } }\n"
+      "  - ring: { center: [0, 0, 3], radius: 0.5, n: 4, mass: 1, area: { k: 1 } }\n"
+      "forces:\n"
+      "  - { type: gravity }\n"
+      "  - { type: drag, k: 0.1 }\n"
+      "  - { type: field, force: ['-x', '0', '0'], potential: 'x^2/2' }\n"
+      "  - { type: anchor, ids: [0], points: [[0, 0, 0]] }\n"
+      "  - { type: attractor, center: [5, 5, 5] }\n");
+  const auto start = doc.find("`potential` is the sum of the potential");
+  ASSERT_NE(start, std::string::npos);
+  const std::string sentence = doc.substr(start, doc.find("\n\n", start) - start);
+  for (const auto& f : scene.system->force_objects()) {
+    const std::string type = f.label.substr(0, f.label.find(' '));
+    const bool reports = f.force->potential_energy(scene.system->view()).has_value();
+    const bool named = sentence.find(type) != std::string::npos;
+    EXPECT_TRUE(named) << type << " is not named in: " << sentence;
+    if (reports) {
+      EXPECT_EQ(sentence.find(type + " does not"), std::string::npos) << type;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pdyn

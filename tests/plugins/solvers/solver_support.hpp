@@ -1,0 +1,28 @@
+// Helpers shared by the solver tests: the harmonic oscillator they integrate
+// (support/oscillator.hpp, shared with the force tests) and a least-squares
+// convergence order.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "support/oscillator.hpp"
+#include "support/test_support.hpp"
+
+namespace pdyn::test {
+
+/// Slope of log(error) against log(h), least squares.
+inline double FittedOrder(const std::vector<double>& h, const std::vector<double>& error) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const double n = static_cast<double>(h.size());
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    const double lx = std::log(h[i]), ly = std::log(error[i]);
+    sx += lx;
+    sy += ly;
+    sxx += lx * lx;
+    sxy += lx * ly;
+  }
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+}  // namespace pdyn::test

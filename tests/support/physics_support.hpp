@@ -1,0 +1,50 @@
+// Helpers shared by the tests that integrate physics (plugins/, gallery/):
+// exact number formatting for inline YAML scenes and Witkin's simulation
+// loop (step, set time, collide).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "pdyn/host/scene.hpp"
+#include "pdyn/solver.hpp"
+#include "pdyn/system.hpp"
+
+namespace pdyn::test {
+
+/// `x` with 17 significant digits, so the scene loader reads back exactly
+/// the double the test compares against.
+inline std::string Num(double x) {
+  std::ostringstream s;
+  s << std::setprecision(17) << x;
+  return s.str();
+}
+
+/// "[x, y, z]" with 17 significant digits.
+inline std::string Vec(const Vec3& v) {
+  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
+}
+
+/// Step k (1-based) of length h, as the kernel's runner takes it: the solver
+/// step, the time set to k h (computed, not accumulated), then the
+/// colliders' response. Also checks the Solver contract that a step advances
+/// the system's time by h; a breach throws, which fails the test once
+/// instead of once per step.
+inline void TakeStep(Scene& scene, std::int64_t k, double h) {
+  const double t0 = scene.system->time();
+  scene.solver->step(*scene.system, h);
+  if (std::abs(scene.system->time() - (t0 + h)) > 1e-12 * std::max(1.0, std::abs(t0))) {
+    throw std::logic_error(scene.solver_name + " step " + std::to_string(k) +
+                           " from t = " + Num(t0) + " with h = " + Num(h) +
+                           " ended at t = " + Num(scene.system->time()) + " (expected t + h)");
+  }
+  scene.system->set_time(static_cast<double>(k) * h);
+  scene.system->respond_to_collisions(h);
+}
+
+}  // namespace pdyn::test
