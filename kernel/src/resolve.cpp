@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pdyn/text.hpp"
+
 namespace pdyn {
 
 namespace {
@@ -143,15 +145,13 @@ Resolved resolve(const std::vector<ParamSpec>& specs, const Params& given) {
       r.params.set(name, value);
       std::vector<std::string> names;
       for (const auto& s : specs) names.push_back(s.name);
-      std::string list;
-      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
       r.problems.push_back(
           {ParamProblem::Kind::Unknown,
            name,
            {},
            {},
            0.0,
-           fmt::format("unknown parameter '{}' (expected one of: {})", name, list)});
+           fmt::format("unknown parameter '{}' (expected one of: {})", name, join(names))});
     }
   }
   return r;
