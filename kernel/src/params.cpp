@@ -204,8 +204,7 @@ std::string format_value(const ParamValue& value) {
     }
     std::string operator()(const NamedReals& x) const {
       std::string s = "{";
-      for (const auto& [name, value] : x)
-        s += (s.size() > 1 ? ", " : " ") + name + ": " + num(value);
+      for (const auto& [key, real] : x) s += (s.size() > 1 ? ", " : " ") + key + ": " + num(real);
       return s + (x.empty() ? "}" : " }");
     }
   };

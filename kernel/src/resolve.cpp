@@ -138,7 +138,10 @@ Resolved resolve(const std::vector<ParamSpec>& specs, const Params& given) {
     }
     check_value(spec, *value, r.problems);
   }
-  for (const auto& [name, value] : given.values()) {
+  for (const auto& entry : given.values()) {
+    // Named members, not a structured binding: clang 14 cannot capture a binding in a lambda.
+    const std::string& name = entry.first;
+    const ParamValue& value = entry.second;
     const bool declared =
         std::any_of(specs.begin(), specs.end(), [&](const ParamSpec& s) { return s.name == name; });
     if (!declared) {
