@@ -129,7 +129,7 @@ void line(cairo_t* cr, const Camera& cam, const Vec3& a, const Vec3& b) {
 
 // A plane is unbounded: it is drawn as a square patch around the centre of
 // every frame's particles, projected onto it, as wide as their bounding box.
-std::array<Vec3, 4> plane_patch(const Drawables::Plane& pl, const Vec3& lo, const Vec3& hi) {
+std::array<Vec3, 4> plane_patch(const shape::Plane& pl, const Vec3& lo, const Vec3& hi) {
   const Vec3& n = pl.normal;
   Vec3 a = Vec3::UnitX();
   if (std::abs(n.x()) > std::abs(n.y()) && std::abs(n.x()) > std::abs(n.z())) a = Vec3::UnitY();
@@ -153,7 +153,7 @@ void draw_plane(cairo_t* cr, const Camera& cam, const std::array<Vec3, 4>& corne
   cairo_stroke(cr);
 }
 
-void draw_box(cairo_t* cr, const Camera& cam, const Drawables::Box& b) {
+void draw_box(cairo_t* cr, const Camera& cam, const shape::Box& b) {
   auto corner = [&](int k) {
     return Vec3(k & 1 ? b.max.x() : b.min.x(), k & 2 ? b.max.y() : b.min.y(),
                 k & 4 ? b.max.z() : b.min.z());
@@ -168,7 +168,7 @@ void draw_box(cairo_t* cr, const Camera& cam, const Drawables::Box& b) {
   cairo_stroke(cr);
 }
 
-void draw_sphere(cairo_t* cr, const Camera& cam, const Drawables::Sphere& s) {
+void draw_sphere(cairo_t* cr, const Camera& cam, const shape::Sphere& s) {
   const auto c = cam.pixel(s.center);
   cairo_new_sub_path(cr);
   cairo_arc(cr, c.x(), c.y(), s.radius * cam.scale, 0, 2 * kPi);
@@ -177,6 +177,32 @@ void draw_sphere(cairo_t* cr, const Camera& cam, const Drawables::Sphere& s) {
   cairo_set_source_rgb(cr, 0.40, 0.45, 0.52);
   cairo_set_line_width(cr, 1.5);
   cairo_stroke(cr);
+}
+
+// A mesh's triangles, far ones first, each filled lightly and outlined.
+void draw_mesh(cairo_t* cr, const Camera& cam, const shape::Mesh& m) {
+  std::vector<std::size_t> order(m.triangles.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  auto depth = [&](std::size_t t) {
+    const auto& tri = m.triangles[t];
+    return cam.depth(m.vertices[static_cast<std::size_t>(tri[0])] +
+                     m.vertices[static_cast<std::size_t>(tri[1])] +
+                     m.vertices[static_cast<std::size_t>(tri[2])]);
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return depth(a) < depth(b); });
+  cairo_set_line_width(cr, 1.0);
+  for (std::size_t t : order) {
+    for (int k = 0; k < 3; ++k) {
+      const auto p = cam.pixel(m.vertices[static_cast<std::size_t>(m.triangles[t][k])]);
+      k == 0 ? cairo_move_to(cr, p.x(), p.y()) : cairo_line_to(cr, p.x(), p.y());
+    }
+    cairo_close_path(cr);
+    cairo_set_source_rgba(cr, 0.82, 0.86, 0.92, 0.8);
+    cairo_fill_preserve(cr);
+    cairo_set_source_rgb(cr, 0.40, 0.45, 0.52);
+    cairo_stroke(cr);
+  }
 }
 
 }  // namespace
@@ -192,6 +218,7 @@ void draw(cairo_t* cr, const Camera& cam, const Frame& f, const Drawables& d,
   for (const auto& patch : patches) draw_plane(cr, cam, patch);
   for (const auto& s : d.spheres) draw_sphere(cr, cam, s);
   for (const auto& b : d.boxes) draw_box(cr, cam, b);
+  for (const auto& m : d.meshes) draw_mesh(cr, cam, m);
 
   cairo_set_line_width(cr, 1.0);
   for (const auto& l : d.links) line(cr, cam, f.x.col(l[0]), f.x.col(l[1]));

@@ -13,6 +13,7 @@
 #include <random>
 
 #include "checks.hpp"
+#include "pdyn/shape.hpp"
 #include "sample.hpp"
 
 namespace pdyn::conformance::detail {
@@ -35,6 +36,45 @@ bool inside(Collider& c, const Vec3& x) {
   MutableParticleView view = s.mutable_view();
   c.respond(view, 1e-3);
   return (s.x.col(0) - x).norm() > kInsideTolerance;
+}
+
+// Points on a drawn shape with the shape's normal there: where the picture
+// says the obstacle's surface is.
+std::vector<std::pair<Vec3, Vec3>> surface_samples(const Shape& shape) {
+  std::vector<std::pair<Vec3, Vec3>> out;
+  if (const auto* p = std::get_if<shape::Plane>(&shape)) {
+    const Vec3 n = p->normal.normalized();
+    const Vec3 foot = p->point - p->point.dot(n) * n;  // the plane's point nearest the origin
+    const Vec3 t = n.unitOrthogonal(), u = n.cross(t);
+    for (const Vec3& off : {Vec3::Zero().eval(), Vec3(0.5 * t), Vec3(-0.5 * u)})
+      out.emplace_back(foot + off, n);
+  } else if (const auto* s = std::get_if<shape::Sphere>(&shape)) {
+    for (int k = 0; k < 3; ++k) {
+      for (double sign : {1.0, -1.0}) {
+        const Vec3 u = sign * Vec3::Unit(k);
+        out.emplace_back(s->center + s->radius * u, u);
+      }
+    }
+  } else if (const auto* b = std::get_if<shape::Box>(&shape)) {
+    const Vec3 c = 0.5 * (b->min + b->max);
+    for (int k = 0; k < 3; ++k) {
+      Vec3 lo = c, hi = c;
+      lo[k] = b->min[k];
+      hi[k] = b->max[k];
+      out.emplace_back(lo, -Vec3::Unit(k));
+      out.emplace_back(hi, Vec3::Unit(k));
+    }
+  } else {
+    const auto& m = std::get<shape::Mesh>(shape);
+    for (const auto& t : m.triangles) {
+      const auto corner = [&](int k) -> const Vec3& {
+        return m.vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+      };
+      const Vec3 n = (corner(1) - corner(0)).cross(corner(2) - corner(0));
+      if (n.norm() > 0) out.emplace_back((corner(0) + corner(1) + corner(2)) / 3, n.normalized());
+    }
+  }
+  return out;
 }
 
 struct Drop {
@@ -140,6 +180,33 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
     }
     return result("finite_on_degenerate", bad == 0, static_cast<double>(bad), 0,
                   "coincident, at rest, far: no NaN/inf from respond or contact forces");
+  });
+
+  // The optional drawing hook: valid shapes, drawn where respond() finds the
+  // obstacle (1 mm to one side of the drawn surface is inside, to the other
+  // side not).
+  guarded(out, "collider.shape", [&] {
+    const auto* source = dynamic_cast<const ShapeSource*>(c.get());
+    if (!source) return skip("collider.shape", "no shape hook (pdyn/shape.hpp): not drawn");
+    const std::vector<Shape> shapes = source->shapes();
+    if (shapes.empty()) return result("collider.shape", false, 0, 1, "shapes() returned nothing");
+    int probes = 0, wrong = 0;
+    for (std::size_t k = 0; k < shapes.size(); ++k) {
+      if (const std::string problem = shape_problem(shapes[k]); !problem.empty()) {
+        return result("collider.shape", false, 1, 0,
+                      fmt::format("shapes()[{}] cannot be drawn: {}", k, problem));
+      }
+      for (const auto& [point, normal] : surface_samples(shapes[k])) {
+        if (point.cwiseAbs().maxCoeff() > 2.0) continue;
+        ++probes;
+        const Vec3 step = 1e-3 * normal;
+        wrong += inside(*c, point + step) == inside(*c, point - step) ? 1 : 0;
+      }
+    }
+    return result("collider.shape", probes > 0 && wrong == 0, wrong, 0,
+                  fmt::format("{} points of the drawn surface in [-2,2]^3 m: {} without the "
+                              "obstacle on exactly one side (1 mm off the surface)",
+                              probes, wrong));
   });
 
   // Find the obstacle.

@@ -1,34 +1,85 @@
-// Links and obstacles of a scene, for pictures and the viewer.
+// Links and obstacles of a scene, for pictures and the viewer. The host
+// knows no collider by name: each one that derives from ShapeSource says
+// what it looks like.
 #include "pdyn/host/scene_drawables.hpp"
+
+#include <fmt/format.h>
+
+#include "pdyn/error.hpp"
+#include "pdyn/plugin_call.hpp"
 
 namespace pdyn {
 
+namespace {
+
+void add_links(const Params& params, std::vector<IndexPair>& links) {
+  for (const auto& entry : params.values()) {
+    if (const auto* pairs = std::get_if<std::vector<IndexPair>>(&entry.second)) {
+      links.insert(links.end(), pairs->begin(), pairs->end());
+    } else if (const auto* triples = std::get_if<std::vector<IndexTriple>>(&entry.second)) {
+      for (const auto& t : *triples) {
+        links.push_back({t[0], t[1]});
+        links.push_back({t[1], t[2]});
+        links.push_back({t[2], t[0]});
+      }
+    }
+  }
+}
+
+// The collider's shapes, checked; a fault names the collider and its library.
+std::vector<Shape> shapes_of(const Scene& scene, const System::ColliderEntry& entry,
+                             const ShapeSource& source) {
+  const auto library = scene.libraries.find(entry.label);
+  const std::string where = library == scene.libraries.end()
+                                ? ""
+                                : fmt::format(" (library {})", library->second.string());
+  std::vector<Shape> shapes;
+  try {
+    const crash::CallScope scope(entry.label, "shapes");
+    shapes = source.shapes();
+  } catch (const std::exception& e) {
+    throw PluginRuntimeError(entry.label, fmt::format("shapes() threw: {}{}", e.what(), where));
+  } catch (...) {
+    throw PluginRuntimeError(entry.label, "shapes() threw a non-standard exception" + where);
+  }
+  for (std::size_t k = 0; k < shapes.size(); ++k) {
+    if (const std::string problem = shape_problem(shapes[k]); !problem.empty()) {
+      throw PluginRuntimeError(
+          entry.label, fmt::format("shapes()[{}] cannot be drawn: {}{}", k, problem, where));
+    }
+  }
+  return shapes;
+}
+
+}  // namespace
+
+std::vector<IndexPair> scene_links(const Scene& scene) {
+  std::vector<IndexPair> links;
+  for (const auto& use : scene.uses) {
+    if (use.kind == PluginKind::Force) add_links(use.params, links);
+  }
+  return links;
+}
+
 Drawables drawables(const Scene& scene) {
   Drawables d;
-  for (const auto& use : scene.uses) {
-    if (use.kind == PluginKind::Force) {
-      for (const auto& [name, value] : use.params.values()) {
-        if (const auto* pairs = std::get_if<std::vector<IndexPair>>(&value)) {
-          d.links.insert(d.links.end(), pairs->begin(), pairs->end());
-        } else if (const auto* triples = std::get_if<std::vector<IndexTriple>>(&value)) {
-          for (const auto& t : *triples) {
-            d.links.push_back({t[0], t[1]});
-            d.links.push_back({t[1], t[2]});
-            d.links.push_back({t[2], t[0]});
-          }
-        }
+  d.links = scene_links(scene);
+  if (!scene.system) return d;
+  for (const auto& entry : scene.system->collider_objects()) {
+    // A collider without the hook collides but is not drawn.
+    const auto* source = dynamic_cast<const ShapeSource*>(entry.collider.get());
+    if (!source) continue;
+    for (auto& s : shapes_of(scene, entry, *source)) {
+      if (auto* plane = std::get_if<shape::Plane>(&s)) {
+        plane->normal.normalize();
+        d.planes.push_back(*plane);
+      } else if (const auto* sphere = std::get_if<shape::Sphere>(&s)) {
+        d.spheres.push_back(*sphere);
+      } else if (const auto* box = std::get_if<shape::Box>(&s)) {
+        d.boxes.push_back(*box);
+      } else {
+        d.meshes.push_back(std::move(std::get<shape::Mesh>(s)));
       }
-      continue;
-    }
-    // The shipped colliders' shapes, by their parameter names; a third-party
-    // collider is not drawn (its shape is its own business).
-    const Params& p = use.params;
-    if (use.type == "plane" && p.has("point") && p.has("normal")) {
-      d.planes.push_back({p.vec3("point"), p.vec3("normal").normalized()});
-    } else if (use.type == "sphere" && p.has("center") && p.has("radius")) {
-      d.spheres.push_back({p.vec3("center"), p.real("radius")});
-    } else if (use.type == "box" && p.has("min") && p.has("max")) {
-      d.boxes.push_back({p.vec3("min"), p.vec3("max")});
     }
   }
   return d;
@@ -48,6 +99,7 @@ std::vector<Vec3> obstacle_points(const Drawables& d) {
                        k & 4 ? b.max.z() : b.min.z());
     }
   }
+  for (const auto& m : d.meshes) pts.insert(pts.end(), m.vertices.begin(), m.vertices.end());
   return pts;
 }
 

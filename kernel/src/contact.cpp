@@ -9,8 +9,27 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace pdyn {
+
+std::vector<ParamSpec> with_contact_params(std::vector<ParamSpec> specs) {
+  const ContactModel fallback;
+  const ParamSpec contact[] = {
+      param::real("restitution", fallback.restitution, "", "coefficient of restitution kr")
+          .at_least(0)
+          .at_most(1),
+      param::real("friction", fallback.friction, "", "Coulomb friction coefficient mu").at_least(0),
+      param::real("epsilon", fallback.epsilon, "m, m/s", "contact tolerance on distance and speeds")
+          .greater_than(0),
+  };
+  specs.insert(specs.end(), std::begin(contact), std::end(contact));
+  return specs;
+}
+
+ContactModel ContactModel::from_params(const Params& p) {
+  return {p.real("restitution"), p.real("friction"), p.real("epsilon")};
+}
 
 ContactLoad apply_contact_force(const ContactModel& model, const SurfacePoint& s, const Vec3& v,
                                 Vec3& f) {

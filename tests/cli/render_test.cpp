@@ -161,5 +161,49 @@ TEST(Render, BadOptionsAreRefusedWithTheirReason) {
   EXPECT_NE(r.err.find("bad.yaml:1:19: simulation.dt:"), std::string::npos) << r.err;
 }
 
+// A third party's collider is drawn from its own shape hook: the
+// tetra_shape fixture's tetrahedron covers the origin seen along z, with a
+// particle far off; a broken hook stops the picture with exit 3, naming the
+// collider and its library, and writes nothing.
+TEST(Render, AThirdPartyColliderIsDrawnFromItsShapeHook) {
+  const fs::path dir = test::temp_dir("render-shape");
+  const std::string shapes = (fs::path(PDYN_FIXTURE_DIR) / "shapes").string();
+  auto scene = [&](const std::string& mode) {
+    return test::write_file(dir / (mode + ".yaml"),
+                            "simulation: { dt: 0.001, steps: 1 }\n"
+                            "particles: [{ position: [1.5, 1.5, 0], mass: 1 }]\n"
+                            "colliders: [{ type: tetra_shape, size: 1, mode: " +
+                                mode + " }]\n")
+        .string();
+  };
+  const fs::path png = dir / "tetra.png";
+  const auto r = render({scene("mesh"), "--plugin-path", shapes, "--at", "0", "--png", png.string(),
+                         "--view", "xy", "--size", "400x400"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Picture pic(png);
+  ASSERT_TRUE(pic.ok());
+  const double a = 1 / (2 * std::sqrt(2.0));  // the fixture's vertices are (+-a, +-a, +-a)
+  const std::vector<Vec3> points{{a, a, a}, {a, -a, -a}, {-a, a, -a}, {-a, -a, a}, {1.5, 1.5, 0}};
+  const Camera cam = cli::render::fit_camera(cli::render::View::XY, points, 400, 400);
+  auto px = [&](const Vec3& p) {
+    const auto q = cam.pixel(p);
+    return pic.at(static_cast<int>(q.x()), static_cast<int>(q.y()));
+  };
+  const Rgb inside = px(Vec3(0.05, 0.02, 0));
+  EXPECT_FALSE(white(inside));
+  EXPECT_FALSE(near(inside, cli::render::kFree));
+  EXPECT_TRUE(near(px(Vec3(1.5, 1.5, 0)), cli::render::kFree));
+  EXPECT_TRUE(white(px(Vec3(1.2, -0.2, 0))));  // beside the tetrahedron, inside the frame
+
+  const fs::path broken = dir / "broken.png";
+  const auto b =
+      render({scene("throw"), "--plugin-path", shapes, "--at", "0", "--png", broken.string()});
+  EXPECT_EQ(b.status, 3);
+  EXPECT_EQ(b.err, "tetra_shape (" + scene("throw") +
+                       ":3:13): shapes() threw: fixture shape failure (library " + shapes +
+                       "/pdyn_collider_tetra_shape.so)\n");
+  EXPECT_FALSE(fs::exists(broken));
+}
+
 }  // namespace
 }  // namespace pdyn

@@ -88,9 +88,11 @@ void Session::load(bool from_disk) {
         // from the text that last loaded, if it still does, and report.
         try {
           scene_ = load_scene_text(text_, options_.scene.string(), *registry, options_.overrides);
+          obstacles_ = drawables(scene_);
         } catch (...) {
           scene_ = Scene{};  // nothing loads: an empty system, no solver, until a reload works
           scene_.system = std::make_unique<System>();
+          obstacles_ = {};
         }
         registry_ = std::move(registry);
         ++topology_;
@@ -99,8 +101,12 @@ void Session::load(bool from_disk) {
       }
     }
   }
+  // The colliders' shapes, asked once per load: a collider whose hook
+  // fails refuses the load like a bad scene, and the running one is kept.
+  Drawables obstacles = drawables(fresh);
   drags_.clear();
   scene_ = std::move(fresh);
+  obstacles_ = std::move(obstacles);
   if (registry) registry_ = std::move(registry);
   text_ = std::move(text);
   library_times_.clear();
@@ -461,9 +467,9 @@ std::string Session::scene_json() const {
   json fixed = json::array();
   for (auto f : sys.fixed()) fixed.push_back(f ? 1 : 0);
   j["fixed"] = std::move(fixed);
-  const Drawables d = drawables(scene_);
+  const Drawables& d = obstacles_;
   json links = json::array();
-  for (const auto& l : d.links) links.push_back(json::array({l[0], l[1]}));
+  for (const auto& l : scene_links(scene_)) links.push_back(json::array({l[0], l[1]}));
   j["links"] = std::move(links);
   j["planes"] = json::array();
   for (const auto& p : d.planes)
@@ -473,6 +479,13 @@ std::string Session::scene_json() const {
     j["spheres"].push_back({{"center", vec(s.center)}, {"radius", s.radius}});
   j["boxes"] = json::array();
   for (const auto& b : d.boxes) j["boxes"].push_back({{"min", vec(b.min)}, {"max", vec(b.max)}});
+  j["meshes"] = json::array();
+  for (const auto& m : d.meshes) {
+    json vertices = json::array(), triangles = json::array();
+    for (const auto& v : m.vertices) vertices.push_back(vec(v));
+    for (const auto& t : m.triangles) triangles.push_back(json::array({t[0], t[1], t[2]}));
+    j["meshes"].push_back({{"vertices", std::move(vertices)}, {"triangles", std::move(triangles)}});
+  }
   j["solvers"] = registry_->names(PluginKind::Solver);
   // A flat scene: every particle and its velocity lie in one coordinate
   // plane (the page then starts in its 2-D view along that axis).

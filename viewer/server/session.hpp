@@ -23,6 +23,7 @@
 #include "pdyn/error.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/host/scene_drawables.hpp"
 #include "protocol.hpp"
 
 namespace pdyn::viewer {
@@ -103,7 +104,8 @@ class Session {
   SessionOptions options_;
   std::unique_ptr<PluginRegistry> registry_;
   Scene scene_;
-  std::string text_;  // the scene file as last loaded: what reset starts from
+  Drawables obstacles_;  // the colliders' shapes, from the last load (links: scene_links)
+  std::string text_;     // the scene file as last loaded: what reset starts from
   std::map<std::filesystem::path, std::filesystem::file_time_type> library_times_;
   std::map<int, Drag> drags_;
   bool playing_ = false;

@@ -140,9 +140,18 @@ export class View {
       const box = new THREE.Box3(lo, hi);
       this.obstacles.add(new THREE.Box3Helper(box, 0x607060));
     }
+    for (const m of msg.meshes ?? []) {  // any other collider's surface, as triangles
+      const geometry = new THREE.BufferGeometry();
+      geometry.setAttribute('position', new THREE.Float32BufferAttribute(m.vertices.flat(), 3));
+      geometry.setIndex(m.triangles.flat());
+      geometry.computeVertexNormals();
+      this.obstacles.add(new THREE.Mesh(geometry, material));
+      this.obstacles.add(new THREE.LineSegments(new THREE.WireframeGeometry(geometry),
+                                                new THREE.LineBasicMaterial({ color: 0x607060 })));
+    }
   }
 
-  /** Frames the particles (and the spheres and boxes) in both cameras. */
+  /** Frames the particles (and the spheres, boxes and meshes) in both cameras. */
   fit() {
     const box = new THREE.Box3();
     const pos = this.points.geometry.attributes.position.array;
@@ -152,6 +161,7 @@ export class View {
       box.expandByPoint(new THREE.Vector3(...s.center).addScalar(-s.radius));
     }
     for (const b of this.msg?.boxes ?? []) { box.expandByPoint(new THREE.Vector3(...b.min)); box.expandByPoint(new THREE.Vector3(...b.max)); }
+    for (const m of this.msg?.meshes ?? []) for (const v of m.vertices) box.expandByPoint(new THREE.Vector3(...v));
     if (box.isEmpty()) box.set(new THREE.Vector3(-0.5, -0.5, -0.5), new THREE.Vector3(0.5, 0.5, 0.5));
     const sphere = box.getBoundingSphere(new THREE.Sphere());
     this.radius = Math.max(sphere.radius, 0.05);

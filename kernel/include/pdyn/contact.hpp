@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "pdyn/collider.hpp"
+#include "pdyn/params.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -51,7 +52,17 @@ struct ContactModel {
   double restitution = 0.5;  ///< coefficient of restitution kr, in [0, 1]; 1 elastic, 0 inelastic
   double friction = 0.0;     ///< Coulomb friction coefficient mu, >= 0 (0.3 ~ wood on wood)
   double epsilon = 1e-4;     ///< contact tolerance, m on the distance and m/s on speeds
+
+  /// The model named by the parameters that contact_params() declares.
+  static ContactModel from_params(const Params& p);
 };
+
+/// The parameters of a ContactModel, declared once for every collider:
+/// restitution in [0, 1], friction >= 0 and epsilon > 0, with the defaults
+/// above, after the collider's own `specs`:
+///   d.params = pdyn::with_contact_params({pdyn::param::vec3("point", ...), ...});
+/// and ContactModel::from_params(p) in create_collider.
+std::vector<ParamSpec> with_contact_params(std::vector<ParamSpec> specs);
 
 /// The obstacle's surface as seen from one point X.
 struct SurfacePoint {

@@ -14,16 +14,20 @@
 // d = max_a - X_a with N = -e_a. Treating them separately makes a particle
 // that leaves through an edge or corner bounce off every wall it crossed
 // and be put back onto all of them, and lets a particle rest in a corner.
+//
+// It draws itself as a box through the shape hook (pdyn/shape.hpp), and
+// takes its contact parameters from pdyn::with_contact_params.
 #include <fmt/format.h>
 
 #include <pdyn/contact.hpp>
 #include <pdyn/plugin.hpp>
+#include <pdyn/shape.hpp>
 
 namespace {
 
 using pdyn::Vec3;
 
-class Box final : public pdyn::SurfaceCollider {
+class Box final : public pdyn::SurfaceCollider, public pdyn::ShapeSource {
  public:
   Box(const Vec3& lo, const Vec3& hi, bool inside, const pdyn::ContactModel& model)
       : SurfaceCollider(model), lo_(lo), hi_(hi), inside_(inside) {}
@@ -48,6 +52,8 @@ class Box final : public pdyn::SurfaceCollider {
     return {d_in, sign[a] * Vec3::Unit(a)};
   }
 
+  std::vector<pdyn::Shape> shapes() const override { return {pdyn::shape::Box{lo_, hi_}}; }
+
  private:
   Vec3 lo_, hi_;
   bool inside_;
@@ -61,17 +67,11 @@ pdyn::PluginDescriptor describe() {
   d.description =
       "axis-aligned box [min, max] keeping particles outside or inside: Witkin's collision, "
       "contact and Coulomb friction";
-  d.params = {
+  d.params = pdyn::with_contact_params({
       pdyn::param::vec3("min", {-0.5, -0.5, -0.5}, "m", "corner with the smallest coordinates"),
       pdyn::param::vec3("max", {0.5, 0.5, 0.5}, "m", "corner with the largest coordinates"),
       pdyn::param::boolean("inside", false, "keep particles inside the box instead of outside"),
-      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr")
-          .at_least(0)
-          .at_most(1),
-      pdyn::param::real("friction", 0.0, "", "Coulomb friction coefficient mu").at_least(0),
-      pdyn::param::real("epsilon", 1e-4, "m, m/s", "contact tolerance on distance and speeds")
-          .greater_than(0),
-  };
+  });
   d.create_collider = [](const pdyn::Params& p, const pdyn::SceneContext&) {
     const Vec3 lo = p.vec3("min"), hi = p.vec3("max");
     for (int a = 0; a < 3; ++a) {
@@ -82,9 +82,7 @@ pdyn::PluginDescriptor describe() {
                                hi.x(), hi.y(), hi.z(), lo.x(), lo.y(), lo.z(), "xyz"[a]));
       }
     }
-    return std::make_unique<Box>(
-        lo, hi, p.boolean("inside"),
-        pdyn::ContactModel{p.real("restitution"), p.real("friction"), p.real("epsilon")});
+    return std::make_unique<Box>(lo, hi, p.boolean("inside"), pdyn::ContactModel::from_params(p));
   };
   return d;
 }

@@ -8,12 +8,16 @@
 // Both are exact signed distances, so putting a particle back by -d N lands
 // it on the sphere. At the centre (r = 0) u is undefined; any unit vector
 // will do there (+z), since the point is R away from the surface.
+//
+// It draws itself as a sphere through the shape hook (pdyn/shape.hpp), and
+// takes its contact parameters from pdyn::with_contact_params.
 #include <pdyn/contact.hpp>
 #include <pdyn/plugin.hpp>
+#include <pdyn/shape.hpp>
 
 namespace {
 
-class Sphere final : public pdyn::SurfaceCollider {
+class Sphere final : public pdyn::SurfaceCollider, public pdyn::ShapeSource {
  public:
   Sphere(const pdyn::Vec3& center, double radius, bool inside, const pdyn::ContactModel& model)
       : SurfaceCollider(model), c_(center), r_(radius), sign_(inside ? -1.0 : 1.0) {}
@@ -24,6 +28,8 @@ class Sphere final : public pdyn::SurfaceCollider {
     const pdyn::Vec3 u = r > 0.0 ? pdyn::Vec3(d / r) : pdyn::Vec3::UnitZ();
     return {sign_ * (r - r_), sign_ * u};
   }
+
+  std::vector<pdyn::Shape> shapes() const override { return {pdyn::shape::Sphere{c_, r_}}; }
 
  private:
   pdyn::Vec3 c_;
@@ -39,21 +45,14 @@ pdyn::PluginDescriptor describe() {
   d.description =
       "sphere |X - C| = R keeping particles outside or inside: Witkin's collision, contact and "
       "Coulomb friction";
-  d.params = {
+  d.params = pdyn::with_contact_params({
       pdyn::param::vec3("center", {0, 0, 0}, "m", "centre C"),
       pdyn::param::real("radius", 1.0, "m", "radius R").greater_than(0),
       pdyn::param::boolean("inside", false, "keep particles inside the sphere instead of outside"),
-      pdyn::param::real("restitution", 0.5, "", "coefficient of restitution kr")
-          .at_least(0)
-          .at_most(1),
-      pdyn::param::real("friction", 0.0, "", "Coulomb friction coefficient mu").at_least(0),
-      pdyn::param::real("epsilon", 1e-4, "m, m/s", "contact tolerance on distance and speeds")
-          .greater_than(0),
-  };
+  });
   d.create_collider = [](const pdyn::Params& p, const pdyn::SceneContext&) {
-    return std::make_unique<Sphere>(
-        p.vec3("center"), p.real("radius"), p.boolean("inside"),
-        pdyn::ContactModel{p.real("restitution"), p.real("friction"), p.real("epsilon")});
+    return std::make_unique<Sphere>(p.vec3("center"), p.real("radius"), p.boolean("inside"),
+                                    pdyn::ContactModel::from_params(p));
   };
   return d;
 }

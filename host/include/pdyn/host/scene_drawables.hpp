@@ -1,36 +1,37 @@
-// What a picture or a viewer draws besides the particles, read from a
-// scene's plugin parameters: links from every force's particle pairs
-// (springs) and triples (their edges), and the obstacles of the shipped
-// colliders. Used by `pdyn render` and `pdyn serve`.
+// What a picture or a viewer draws besides the particles: links from every
+// force's particle pairs (springs) and triples (their edges), and the
+// obstacles of every collider that describes its shape (pdyn/shape.hpp).
+// Used by `pdyn render` and `pdyn serve`.
 #pragma once
 
 #include <vector>
 
 #include "pdyn/host/scene.hpp"
+#include "pdyn/shape.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
 struct Drawables {
   std::vector<IndexPair> links;
-  struct Plane {
-    Vec3 point, normal;
-  };  ///< m; unit normal
-  struct Sphere {
-    Vec3 center;
-    double radius;
-  };  ///< m
-  struct Box {
-    Vec3 min, max;
-  };  ///< m, axis-aligned
-  std::vector<Plane> planes;
-  std::vector<Sphere> spheres;
-  std::vector<Box> boxes;
+  std::vector<shape::Plane> planes;  ///< normals of unit length
+  std::vector<shape::Sphere> spheres;
+  std::vector<shape::Box> boxes;
+  std::vector<shape::Mesh> meshes;
 };
+
+/// The drawables of a loaded scene, its colliders' shapes as they are now.
+/// Throws PluginRuntimeError, naming the collider and its library, when a
+/// collider's shapes() throws or gives a shape that cannot be drawn.
 Drawables drawables(const Scene& scene);
 
+/// The links alone: every force's particle pairs, and the edges of its
+/// triples. Cheap; no plugin is called.
+std::vector<IndexPair> scene_links(const Scene& scene);
+
 /// Points (m) a camera must keep in view for these obstacles: sphere and
-/// box extents (planes are unbounded and are drawn to fit the particles).
+/// box extents and mesh vertices (planes are unbounded and are drawn to fit
+/// the particles).
 std::vector<Vec3> obstacle_points(const Drawables& d);
 
 }  // namespace pdyn
