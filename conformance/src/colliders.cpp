@@ -44,7 +44,7 @@ std::vector<std::pair<Vec3, Vec3>> surface_samples(const Shape& shape) {
   std::vector<std::pair<Vec3, Vec3>> out;
   if (const auto* p = std::get_if<shape::Plane>(&shape)) {
     const Vec3 n = p->normal.normalized();
-    const Vec3 foot = p->point - p->point.dot(n) * n;  // the plane's point nearest the origin
+    const Vec3 foot = p->point.dot(n) * n;  // the plane's point nearest the origin
     const Vec3 t = n.unitOrthogonal(), u = n.cross(t);
     for (const Vec3& off : {Vec3::Zero().eval(), Vec3(0.5 * t), Vec3(-0.5 * u)})
       out.emplace_back(foot + off, n);

@@ -53,6 +53,7 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, CheckBroken,
                                          BrokenCase{"bad_potential", "force.gradient_of_potential"},
                                          BrokenCase{"fake_rk4", "solver.convergence_order"},
                                          BrokenCase{"leaky_plane", "collider.obstacle_found"},
+                                         BrokenCase{"misdrawn_plane", "collider.shape"},
                                          BrokenCase{"shared_scratch", "threads.two_systems"},
                                          BrokenCase{"bad_default", "params.bad_rejected"}),
                          [](const auto& param_info) {
