@@ -1,4 +1,5 @@
-// No heap allocation inside the step loop after the first step.
+// No heap allocation inside the step loop after the first step, nor in a
+// warm neighbor list's updates and rebuilds.
 //
 // A separate test executable, because it replaces the process's allocator:
 // global operator new/delete and malloc/calloc/realloc/free (Eigen's
@@ -12,7 +13,9 @@
 #include <atomic>
 #include <cstdlib>
 #include <new>
+#include <pdyn/neighbors.hpp>
 #include <pdyn/parallel.hpp>
+#include <random>
 
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
@@ -194,6 +197,46 @@ TEST(RunnerAllocations, SameForTwoAndTwelveSteps) {
   };
   const long two = allocations(2), twelve = allocations(12);
   EXPECT_EQ(twelve, two) << "the runner allocates " << (twelve - two) / 10.0 << " times per step";
+}
+
+// A neighbor list (pdyn/neighbors.hpp) of 6000 particles in random motion,
+// periodic and in open space (where the grid follows the spreading cloud):
+// once built twice, its updates and the rebuilds they trigger allocate
+// nothing.
+TEST(NeighborListAllocations, NoneOnceWarm) {
+  for (const int threads : {1, 2}) {
+    for (const bool periodic : {true, false}) {
+      set_threads(threads);
+      const Index n = 6000;                    // above kParallelMinElements
+      const double L = std::cbrt(n / 0.8442);  // Lennard-Jones melt density
+      Domain d;
+      if (periodic) {
+        d.max = Vec3(L, L, L);
+        d.periodic = {true, true, true};
+      }
+      std::mt19937_64 rng(1);
+      std::uniform_real_distribution<double> u(0, L), step(-0.05, 0.05);
+      Matrix3X x(3, n);
+      for (Index i = 0; i < n; ++i) x.col(i) = Vec3(u(rng), u(rng), u(rng));
+      const std::vector<std::uint8_t> members(n, 1);
+      NeighborList list(2.5, 0.3);
+      list.update(x, d, &members);
+      list.build(x, d, &members);
+      long count = 0;
+      {
+        AllocationWindow window;
+        for (int s = 0; s < 30; ++s) {
+          for (Index i = 0; i < n; ++i) {
+            x.col(i) = d.wrap(x.col(i) + Vec3(step(rng), step(rng), step(rng)));
+          }
+          list.update(x, d, &members);
+        }
+        count = window.count();
+      }
+      EXPECT_EQ(count, 0) << threads << " threads, " << (periodic ? "periodic" : "open");
+      EXPECT_GT(list.builds(), 5);  // it did rebuild
+    }
+  }
 }
 
 }  // namespace

@@ -1,0 +1,244 @@
+// pdyn/neighbors.hpp — which particles are near which: a cell list that
+// builds a Verlet neighbor list with a skin, for pair forces (Lennard-Jones,
+// DEM contact, a cut-off n-body).
+//
+// A pair force with cutoff rc only needs the pairs closer than rc; testing
+// all N^2 / 2 pairs at every derivative evaluation is what limits all-pairs
+// codes to a few thousand particles. Two classic ideas make it O(N):
+//
+//   Cell list (Allen & Tildesley, "Computer Simulation of Liquids", 1987,
+//   sec. 5.3.2): the box is cut into cells of side >= r; a particle's
+//   partners closer than r are then in its own cell or the 26 around it.
+//
+//   Verlet list with a skin (L. Verlet, Phys. Rev. 159, 98, 1967): list the
+//   pairs closer than rc + skin once, and reuse the list while no particle
+//   has moved more than skin / 2 since: two particles that are now closer
+//   than rc were then closer than rc + skin (triangle inequality), so the
+//   list still holds every pair the force needs. A rebuild every 10-20 steps
+//   instead of every step, for a force loop a little longer (the pairs in
+//   the skin shell, which the force skips with its own r < rc test).
+//
+// A force owns one NeighborList, calls update() at the start of each
+// evaluation and loops over neighbors(i):
+//
+//   list_.update(view.x, domain_);                 // rebuilds only when needed
+//   for (Index i = 0; i < list_.size(); ++i)
+//     for (Index j : list_.neighbors(i)) {
+//       const Vec3 d = domain_.minimum_image(view.x.col(j) - view.x.col(i));
+//       if (d.squaredNorm() < rc * rc) { ... }     // the list also holds the skin shell
+//     }
+//
+// Lists are bit-identical for every thread count (pdyn/parallel.hpp), and
+// neighbors(i) is sorted by index, so a force that sums over it in order gets
+// the same bits whether or not the list was rebuilt since the last call (a
+// pair in the skin shell adds an exact zero).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "pdyn/types.hpp"
+
+namespace pdyn {
+
+/// The simulation box. Along a periodic axis a particle leaving through max
+/// re-enters at min, and distances are measured to the nearest image. Along
+/// any other axis space is open and min / max are not used by the neighbor
+/// list. The default Domain (nothing periodic) is unbounded open space.
+struct Domain {
+  Vec3 min = Vec3::Zero();         ///< lower corner, m
+  Vec3 max = Vec3::Zero();         ///< upper corner, m (> min along periodic axes)
+  std::array<bool, 3> periodic{};  ///< per axis x, y, z: periodic or open
+
+  /// Edge lengths max - min, m.
+  Vec3 length() const { return max - min; }
+
+  /// The separation d (m) of two particles, reduced to its nearest periodic
+  /// image: d_k -= L_k round(d_k / L_k) along periodic axes, so |d_k| <= L_k / 2
+  /// (the minimum-image convention, Allen & Tildesley sec. 1.5.2). Unchanged
+  /// along open axes.
+  Vec3 minimum_image(Vec3 d) const {
+    for (int k = 0; k < 3; ++k) {
+      if (periodic[k]) {
+        const double L = max[k] - min[k];
+        d[k] -= L * std::round(d[k] / L);
+      }
+    }
+    return d;
+  }
+
+  /// The position x (m) brought into [min, max) along periodic axes by a whole
+  /// number of box lengths; unchanged along open axes, and unchanged where it
+  /// is inside the box already (bit for bit). A non-finite coordinate stays
+  /// non-finite.
+  Vec3 wrap(Vec3 x) const {
+    for (int k = 0; k < 3; ++k) {
+      if (!periodic[k] || (x[k] >= min[k] && x[k] < max[k])) continue;
+      const double L = max[k] - min[k];
+      double w = x[k] - L * std::floor((x[k] - min[k]) / L);
+      // Rounding can land a hair outside [min, max): one box length fixes it.
+      if (w < min[k]) w += L;
+      if (w >= max[k]) w = min[k];
+      x[k] = w;
+    }
+    return x;
+  }
+
+  /// Same box: equal corners and the same periodic axes.
+  bool operator==(const Domain& other) const {
+    return min == other.min && max == other.max && periodic == other.periodic;
+  }
+};
+
+/// A Verlet neighbor list with a skin, built with a cell list (see the top of
+/// this file). The list is stored in compressed sparse row (CSR) form:
+/// particle i's neighbors are indices()[offsets()[i] .. offsets()[i + 1]).
+///
+/// Guarantee: right after update(x, domain), every pair of particles closer
+/// than cutoff() at positions x (nearest image along periodic axes) is in the
+/// list, whether update() rebuilt or not; the list holds exactly the pairs
+/// within reach() = cutoff + skin at the last build (to rounding in the last
+/// bits of a distance). Forces must still test r < cutoff.
+/// Along a periodic axis a pair is listed once, by index: apply
+/// Domain::minimum_image to x_j - x_i to get its separation.
+///
+/// Particles with a non-finite coordinate (NaN or inf, as in a run that blows
+/// up) are never listed and have no neighbors. Not thread-safe: one list per
+/// force, updated from the thread that evaluates the force (its builds are
+/// themselves parallel).
+class NeighborList {
+ public:
+  /// How pairs are stored.
+  enum class Kind {
+    /// Each pair once, under its lower index: neighbors(i) holds only j > i.
+    /// Half the memory and work; for a force applied to both particles
+    /// (Newton's third law), gathered per particle in a fixed order rather
+    /// than added from several threads (pdyn/parallel.hpp's rule).
+    Half,
+    /// Each pair under both particles: neighbors(i) holds every j != i.
+    /// For per-particle sums that each thread computes for its own particles
+    /// without writing to the partner (densities, coordination numbers).
+    Full,
+  };
+
+  /// cutoff: the force's interaction range rc, m (> 0, finite).
+  /// skin: the extra margin listed, m (>= 0, finite). Larger means rarer
+  /// rebuilds but longer lists; 0.1-0.3 rc is usual (0.3 sigma for
+  /// Lennard-Jones liquids at rc = 2.5 sigma). skin = 0 rebuilds whenever any
+  /// particle has moved at all.
+  /// Throws std::invalid_argument when either is out of range.
+  NeighborList(double cutoff, double skin, Kind kind = Kind::Half);
+
+  /// Brings the list up to date for positions x (m, 3 x N; a Matrix3X or the
+  /// Map of ParticleView::x, read without copying) in `domain`, and returns
+  /// true if it rebuilt. It rebuilds when the list was never built, when N,
+  /// the domain or the member mask changed, or when a listed particle has
+  /// moved more than skin / 2 (nearest image along periodic axes) or became
+  /// finite or non-finite since the last build; otherwise it only checks the
+  /// displacements, O(N) and allocation-free.
+  ///
+  /// members: nullptr lists every particle; otherwise a mask of N entries,
+  /// non-zero for the particles that take part (a force restricted to a
+  /// selection): only pairs of two members are listed, and a non-member has
+  /// no neighbors. The mask is compared with the one of the last build.
+  ///
+  /// Throws std::invalid_argument (and leaves the list as it was) when a
+  /// periodic axis is not a finite length > 0, when it is shorter than
+  /// 2 reach() (a particle would then meet two images of the same neighbor
+  /// within reach), or when the mask does not have N entries.
+  bool update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+              const std::vector<std::uint8_t>* members = nullptr);
+
+  /// Rebuilds unconditionally (same arguments and errors as update()). O(N):
+  /// bins the particles into cells of side >= reach() (a counting sort), then
+  /// lists each particle's partners within reach() from its own and the
+  /// adjacent cells. Allocates only when N grows or the pair count outgrows
+  /// the room (1/8 more than the largest count so far) of earlier builds.
+  void build(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+             const std::vector<std::uint8_t>* members = nullptr);
+
+  /// Number of particles N at the last build (0 before the first).
+  Index size() const noexcept { return static_cast<Index>(offsets_.size()) - 1; }
+
+  /// The neighbors of particle i (0 <= i < size()), ascending: the j that were
+  /// within reach() of i at the last build (only j > i for Kind::Half).
+  std::span<const Index> neighbors(Index i) const noexcept {
+    const auto begin = static_cast<std::size_t>(offsets_[static_cast<std::size_t>(i)]);
+    const auto end = static_cast<std::size_t>(offsets_[static_cast<std::size_t>(i) + 1]);
+    return std::span<const Index>(indices_).subspan(begin, end - begin);
+  }
+
+  /// CSR row offsets, size() + 1 entries: offsets()[0] = 0, and the last is
+  /// indices().size().
+  std::span<const Index> offsets() const noexcept { return offsets_; }
+  /// CSR column indices: every particle's neighbors, particle after particle.
+  std::span<const Index> indices() const noexcept { return indices_; }
+
+  double cutoff() const noexcept { return cutoff_; }         ///< interaction range rc, m
+  double skin() const noexcept { return skin_; }             ///< listed margin beyond rc, m
+  double reach() const noexcept { return cutoff_ + skin_; }  ///< listing distance, m
+  Kind kind() const noexcept { return kind_; }
+
+  /// Number of builds so far (update()'s rebuilds and build()'s).
+  std::int64_t builds() const noexcept { return builds_; }
+
+  /// Number of distinct pairs listed (each counted once, also for Kind::Full,
+  /// which stores 2 pair_count() indices).
+  Index pair_count() const noexcept {
+    const auto n = static_cast<Index>(indices_.size());
+    return kind_ == Kind::Full ? n / 2 : n;
+  }
+
+ private:
+  // One particle's copy in the cell-sorted arrays: its position (wrapped into
+  // the box along periodic axes), m.
+  using Point = std::array<double, 3>;
+
+  // The cell grid of one build.
+  struct Grid {
+    std::array<Index, 3> n{1, 1, 1};   // cells per axis
+    std::array<double, 3> lo{};        // lower edge of cell 0, m
+    std::array<double, 3> inv_side{};  // 1 / cell side, 1/m
+    std::array<double, 3> length{};    // box length along periodic axes, m
+    std::array<double, 3> half{};      // length / 2 (periodic), +inf (open), m
+    std::array<bool, 3> periodic{};
+  };
+
+  void check(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+             const std::vector<std::uint8_t>* members) const;
+  bool stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+             const std::vector<std::uint8_t>* members) const;
+  void make_grid(const Domain& domain, const std::array<double, 3>& lo,
+                 const std::array<double, 3>& hi, Index listed);
+  void bin(const Eigen::Ref<const Matrix3X>& x, const Domain& domain);
+  template <class Visit>
+  void for_each_partner(Index i, Visit&& visit) const;
+
+  double cutoff_, skin_;
+  Kind kind_;
+  std::int64_t builds_ = 0;
+
+  // The last build's inputs, to tell when the list is stale.
+  Domain domain_;
+  std::vector<double> x0_;          // positions at the last build, 3N, m
+  std::vector<std::uint8_t> mask_;  // its member mask (empty: every particle)
+  bool built_ = false;
+
+  // The cell list: a counting sort of the listed particles by cell.
+  Grid grid_;
+  std::vector<Index> cell_of_;       // per particle: its cell, or -1 if not listed
+  std::vector<Index> slot_of_;       // per particle: its slot in sorted_*, or -1
+  std::vector<Index> cell_start_;    // per cell c: its slots are [start[c], start[c + 1])
+  std::vector<Index> cell_fill_;     // per cell: next free slot while sorting
+  std::vector<Index> sorted_index_;  // per slot: the particle, ascending within a cell
+  std::vector<Point> sorted_pos_;    // per slot: its (wrapped) position
+
+  // The Verlet list, CSR.
+  std::vector<Index> offsets_{0};
+  std::vector<Index> indices_;
+};
+
+}  // namespace pdyn
