@@ -29,10 +29,14 @@ struct State {
 
   Index size() const { return x.cols(); }
   ParticleView view() const {
-    return ParticleView{t, Eigen::Map<const Matrix3X>(x.data(), 3, size()),
+    return ParticleView{t,
+                        Eigen::Map<const Matrix3X>(x.data(), 3, size()),
                         Eigen::Map<const Matrix3X>(v.data(), 3, size()),
                         Eigen::Map<const Eigen::VectorXd>(mass.data(), size()),
-                        std::span<const std::uint8_t>(fixed)};
+                        std::span<const std::uint8_t>(fixed),
+                        Domain{},
+                        {},
+                        {}};
   }
   MutableParticleView mutable_view() {
     return MutableParticleView{t,
@@ -40,7 +44,10 @@ struct State {
                                Eigen::Map<Matrix3X>(v.data(), 3, size()),
                                Eigen::Map<const Matrix3X>(f.data(), 3, size()),
                                Eigen::Map<const Eigen::VectorXd>(mass.data(), size()),
-                               std::span<const std::uint8_t>(fixed)};
+                               std::span<const std::uint8_t>(fixed),
+                               Domain{},
+                               {},
+                               {}};
   }
 };
 

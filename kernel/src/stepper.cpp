@@ -106,6 +106,7 @@ std::optional<double> Stepper::guarded(const Take& take) {
     }
     return fail();
   }
+  sys_.wrap_positions();  // only after a good step: a failed one leaves the images alone
   return h;
 }
 

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "pdyn/error.hpp"
 #include "pdyn/parallel.hpp"
@@ -27,6 +28,9 @@ void System::set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::Ve
   }
   force_.setZero(3, n);
   accel_.resize(3, 0);  // sized by the first compute_accelerations(): rk4 never needs it
+  radius_.clear();
+  type_.clear();
+  images_.assign(static_cast<std::size_t>(n), {0, 0, 0});
   update_inverse_mass();
 }
 
@@ -42,8 +46,84 @@ Index System::add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed
   m(n) = mass;
   std::vector<std::uint8_t> f = fixed_;
   f.push_back(fixed ? 1 : 0);
+  std::vector<double> radius = std::move(radius_);
+  std::vector<std::int32_t> type = std::move(type_);
+  auto images = std::move(images_);
   set_particles(xs, vs, m, f);
+  if (!radius.empty()) radius.push_back(0.0);
+  if (!type.empty()) type.push_back(0);
+  images.push_back({0, 0, 0});
+  radius_ = std::move(radius);
+  type_ = std::move(type);
+  images_ = std::move(images);
   return n;
+}
+
+void System::set_domain(const Domain& domain) {
+  for (int k = 0; k < 3; ++k) {
+    if (domain.periodic[k] && !(std::isfinite(domain.min[k]) && std::isfinite(domain.max[k]) &&
+                                domain.min[k] < domain.max[k])) {
+      throw Error(
+          fmt::format("System::set_domain: periodic axis {} runs from {} to {} m "
+                      "(expected finite min < max)",
+                      "xyz"[k], domain.min[k], domain.max[k]));
+    }
+  }
+  domain_ = domain;
+}
+
+void System::set_radii(std::vector<double> radius) {
+  if (!radius.empty() && static_cast<Index>(radius.size()) != size()) {
+    throw Error(fmt::format("System::set_radii: {} radii for {} particles", radius.size(), size()));
+  }
+  for (std::size_t i = 0; i < radius.size(); ++i) {
+    if (!(std::isfinite(radius[i]) && radius[i] >= 0)) {
+      throw Error(fmt::format("System::set_radii: particle {} has radius {} (expected >= 0 m)", i,
+                              radius[i]));
+    }
+  }
+  radius_ = std::move(radius);
+}
+
+void System::set_types(std::vector<std::int32_t> type) {
+  if (!type.empty() && static_cast<Index>(type.size()) != size()) {
+    throw Error(fmt::format("System::set_types: {} types for {} particles", type.size(), size()));
+  }
+  for (std::size_t i = 0; i < type.size(); ++i) {
+    if (type[i] < 0) {
+      throw Error(
+          fmt::format("System::set_types: particle {} has type {} (expected >= 0)", i, type[i]));
+    }
+  }
+  type_ = std::move(type);
+}
+
+void System::set_images(std::vector<std::array<std::int32_t, 3>> images) {
+  if (static_cast<Index>(images.size()) != size()) {
+    throw Error(
+        fmt::format("System::set_images: {} entries for {} particles", images.size(), size()));
+  }
+  images_ = std::move(images);
+}
+
+// Wrapping moves x by whole box lengths only, so forces that measure
+// separations by the minimum image see the same system before and after.
+void System::wrap_positions() {
+  if (!domain_.any_periodic()) return;
+  auto x = positions();
+  const Vec3 length = domain_.length();
+  for (Index i = 0; i < size(); ++i) {
+    const Vec3 before = x.col(i);
+    const Vec3 after = domain_.wrap(before);
+    if (after == before) continue;
+    for (int k = 0; k < 3; ++k) {
+      if (domain_.periodic[k] && std::isfinite(before[k])) {
+        images_[static_cast<std::size_t>(i)][k] +=
+            static_cast<std::int32_t>(std::lround((before[k] - after[k]) / length[k]));
+      }
+    }
+    x.col(i) = after;
+  }
 }
 
 void System::set_fixed(Index i, bool fixed) {
@@ -85,9 +165,14 @@ void System::set_state(const Eigen::Ref<const Eigen::VectorXd>& y) {
 }
 
 ParticleView System::view() const noexcept {
-  return ParticleView{time_, positions(), velocities(),
+  return ParticleView{time_,
+                      positions(),
+                      velocities(),
                       Eigen::Map<const Eigen::VectorXd>(mass_.data(), mass_.size()),
-                      std::span<const std::uint8_t>(fixed_.data(), fixed_.size())};
+                      std::span<const std::uint8_t>(fixed_.data(), fixed_.size()),
+                      domain_,
+                      std::span<const double>(radius_),
+                      std::span<const std::int32_t>(type_)};
 }
 
 namespace {
@@ -191,7 +276,10 @@ void System::respond_to_collisions(double h) {
                         velocities(),
                         Eigen::Map<const Matrix3X>(force_.data(), 3, n),
                         Eigen::Map<const Eigen::VectorXd>(mass_.data(), n),
-                        std::span<const std::uint8_t>(fixed_.data(), fixed_.size())};
+                        std::span<const std::uint8_t>(fixed_.data(), fixed_.size()),
+                        domain_,
+                        std::span<const double>(radius_),
+                        std::span<const std::int32_t>(type_)};
   for (auto& entry : colliders_) {
     guarded(entry.label, "respond", [&] { entry.collider->respond(p, h); });
   }

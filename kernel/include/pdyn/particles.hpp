@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <span>
 
+#include "pdyn/domain.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -23,6 +24,10 @@ struct ParticleView {
   Eigen::Map<const Matrix3X> v;            ///< velocities, m/s (3 x N)
   Eigen::Map<const Eigen::VectorXd> mass;  ///< masses, kg (N)
   std::span<const std::uint8_t> fixed;     ///< 1 where a particle is nailed in place
+  // Since ABI 4: what pair forces and contact laws need.
+  Domain domain{};                       ///< the simulation box (default: open space)
+  std::span<const double> radius{};      ///< radii, m (N), or empty: the scene gave none
+  std::span<const std::int32_t> type{};  ///< types >= 0 (N), or empty: all of type 0
 
   /// Number of particles N.
   Index size() const noexcept { return x.cols(); }
@@ -37,6 +42,10 @@ struct MutableParticleView {
   Eigen::Map<const Matrix3X> f;            ///< forces of the step's last derivative evaluation, N
   Eigen::Map<const Eigen::VectorXd> mass;  ///< masses, kg (N)
   std::span<const std::uint8_t> fixed;     ///< 1 where a particle is nailed in place
+  // Since ABI 4, as in ParticleView.
+  Domain domain{};
+  std::span<const double> radius{};
+  std::span<const std::int32_t> type{};
 
   Index size() const noexcept { return x.cols(); }
 };

@@ -12,6 +12,8 @@
 // its two halves for symplectic and implicit solvers.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -46,6 +48,16 @@ class System {
   bool remove_force(const Force* force);
   /// Adds a collider; `label` names it in messages.
   void add_collider(std::shared_ptr<Collider> collider, std::string label);
+  /// Sets the simulation box (default: open space). Throws Error unless
+  /// min < max, both finite, along every periodic axis.
+  void set_domain(const Domain& domain);
+  /// Sets every particle's radius, m (N values, each finite and >= 0), or
+  /// none (empty). set_particles clears them; add_particle gives the new
+  /// particle radius 0.
+  void set_radii(std::vector<double> radius);
+  /// Sets every particle's type (N values, each >= 0), or none (empty: all
+  /// of type 0). set_particles clears them; add_particle gives type 0.
+  void set_types(std::vector<std::int32_t> type);
 
   // ---- Witkin's solver interface ----
 
@@ -95,6 +107,18 @@ class System {
 
   const Eigen::VectorXd& masses() const noexcept { return mass_; }
   const std::vector<std::uint8_t>& fixed() const noexcept { return fixed_; }
+  const Domain& domain() const noexcept { return domain_; }
+  const std::vector<double>& radii() const noexcept { return radius_; }
+  const std::vector<std::int32_t>& types() const noexcept { return type_; }
+  /// Per particle, how many box lengths it has been wrapped by along each
+  /// axis: the unwrapped position is x + images * L (0 along open axes).
+  const std::vector<std::array<std::int32_t, 3>>& images() const noexcept { return images_; }
+  /// Restores the image counts (a checkpoint's), N entries.
+  void set_images(std::vector<std::array<std::int32_t, 3>> images);
+  /// Brings every particle back into the box along periodic axes (counting
+  /// the box lengths in images()); nothing without a periodic axis. The
+  /// Stepper calls it after each accepted step.
+  void wrap_positions();
   /// Read-only view of the current state, as forces see it.
   ParticleView view() const noexcept;
   /// Kinetic energy sum(m v^2 / 2), J.
@@ -136,7 +160,11 @@ class System {
   bool finite_checks_ = false;
   std::vector<ForceEntry> forces_;
   std::vector<ColliderEntry> colliders_;
-  std::uint64_t evaluations_ = 0;  // last, so that the layout before it is unchanged
+  std::uint64_t evaluations_ = 0;
+  Domain domain_;
+  std::vector<double> radius_;                       // N or empty
+  std::vector<std::int32_t> type_;                   // N or empty
+  std::vector<std::array<std::int32_t, 3>> images_;  // N
 };
 
 }  // namespace pdyn

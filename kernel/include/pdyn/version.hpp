@@ -7,7 +7,10 @@
 /// built against another version is refused before any of its code runs
 /// beyond the version query. Bump it whenever a public header changes a type
 /// layout or a virtual function.
-#define PDYN_ABI_VERSION 3u
+#define PDYN_ABI_VERSION 4u
+// 4 (pdyn 0.2): ParticleView and MutableParticleView gained domain, radius
+//   and type at their ends (the simulation box, per-particle radii and
+//   types). Rebuild plugins; no source change (docs/plugins.md, "ABI").
 
 namespace pdyn {
 inline constexpr std::uint32_t kAbiVersion = PDYN_ABI_VERSION;
