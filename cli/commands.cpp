@@ -237,6 +237,7 @@ nlohmann::json to_json(const PluginRecord& r) {
   if (d.kind == PluginKind::Force) {
     j["internal"] = d.force_traits.internal;
     j["dissipative"] = d.force_traits.dissipative;
+    j["singular"] = d.force_traits.singular;
   }
   auto params = nlohmann::json::array();
   const Params defaults = resolve(d.params, Params{}).params;
@@ -266,6 +267,7 @@ std::string traits_text(const PluginDescriptor& d) {
   } else if (d.kind == PluginKind::Force) {
     if (d.force_traits.internal) t.push_back("internal");
     if (d.force_traits.dissipative) t.push_back("dissipative");
+    if (d.force_traits.singular) t.push_back("singular");
   }
   return join(t);
 }

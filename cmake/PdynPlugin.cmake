@@ -40,6 +40,12 @@ function(pdyn_add_plugin name)
     VISIBILITY_INLINES_HIDDEN ON
     INSTALL_RPATH "$ORIGIN/../..")
   target_compile_features(${name} PRIVATE cxx_std_20)
+  # No fused multiply-add contraction: pdyn/pair.hpp's one-thread and
+  # threaded loops must round identically (bit-identical for any thread
+  # count), whatever -march the plugin is built for.
+  if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+    target_compile_options(${name} PRIVATE -ffp-contract=off)
+  endif()
   # A missing symbol (e.g. an Eigen template defined in a header the plugin
   # forgot to include) is a link error, not a load failure at run time.
   # Not with sanitizers: their runtime lives in the executable, so an

@@ -32,9 +32,9 @@ inline std::string Vec(const Vec3& v) {
 
 /// Step k (1-based) of length h, as the kernel's runner takes it: the solver
 /// step, the time set to k h (computed, not accumulated), then the
-/// colliders' response. Also checks the Solver contract that a step advances
-/// the system's time by h; a breach throws, which fails the test once
-/// instead of once per step.
+/// colliders' response and the wrap into a periodic box. Also checks the Solver contract that a
+/// step advances the system's time by h; a breach throws, which fails the test once instead of once
+/// per step.
 inline void TakeStep(Scene& scene, std::int64_t k, double h) {
   const double t0 = scene.system->time();
   scene.solver->step(*scene.system, h);
@@ -45,6 +45,7 @@ inline void TakeStep(Scene& scene, std::int64_t k, double h) {
   }
   scene.system->set_time(static_cast<double>(k) * h);
   scene.system->respond_to_collisions(h);
+  scene.system->wrap_positions();  // as the Stepper does after a good step
 }
 
 }  // namespace pdyn::test

@@ -57,6 +57,11 @@ struct ForceTraits {
   bool internal = false;
   /// Never does positive work: f . v <= 0 (drag).
   bool dissipative = false;
+  /// Since ABI 4. Infinite where two particles coincide, as a 1/r^n pair
+  /// potential is (Lennard-Jones): the conformance kit does not ask it for
+  /// finite values on coincident particles; a run that brings two together
+  /// stops with the force named, as for any non-finite force.
+  bool singular = false;
 };
 
 /// Properties a solver declares; the conformance kit checks each claim.

@@ -1,0 +1,201 @@
+// pdyn/pair.hpp — pair forces: the author writes the law, the kernel runs
+// the loop.
+//
+// A central pair potential U(r) between particles closer than a cutoff rc
+// (Lennard-Jones, soft spheres, a cut-off Coulomb or gravity) is one
+// function of the distance; everything else, the neighbor search, the loop
+// over pairs, Newton's third law, the threads and the periodic images, is
+// the same for all of them. As a LAMMPS pair style's compute() is, but
+// written once: a plugin supplies a *law*,
+//
+//   struct Law {
+//     // U (J) and -U'(r)/r (N/m) at squared distance r2 < rc^2 (m^2), for
+//     // particles of types ti and tj (0 when the scene gives no types).
+//     pdyn::PairTerm operator()(double r2, std::int32_t ti, std::int32_t tj) const;
+//   };
+//
+// and derives from, or instantiates, PairForce<Law>. The force on i from j
+// is F_ij = (-U'(r)/r) (x_i - x_j), on j it is -F_ij, and the energy is
+// sum over pairs of U(r_ij). The law's call is inlined into the loop (a
+// template, not a virtual call per pair).
+//
+// Threads and determinism (pdyn/parallel.hpp's rule: bit-identical results
+// for every thread count). On one thread the loop is LAMMPS's half-list
+// loop: for each i in order, for each listed j > i, F_ij is added to a
+// running f_i and subtracted from f_j. On several, the same sums are formed
+// in the same order without any two threads writing one particle: pass 1
+// computes every pair's F_ij into a buffer (in parallel over i); pass 2
+// gives each particle j, starting from the force it already had, first
+// -F_ij of every pair (i, j) with i < j in increasing i, then +F_jk of its
+// own pairs in list order: exactly the operations, in exactly the order,
+// of the one-thread loop. Plugins are built with -ffp-contract=off
+// (pdyn_add_plugin) so that no compiler fuses the two paths' arithmetic
+// differently.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "pdyn/error.hpp"
+#include "pdyn/force.hpp"
+#include "pdyn/neighbors.hpp"
+#include "pdyn/parallel.hpp"
+
+namespace pdyn {
+
+/// A pair law's value at one distance.
+struct PairTerm {
+  double energy = 0.0;        ///< U(r), J
+  double force_over_r = 0.0;  ///< -U'(r) / r, N/m (> 0 repulsive)
+};
+
+/// Throws ParamError on "cutoff" unless a list of reach cutoff + skin (m)
+/// fits the box along every periodic axis (L >= 2 reach: each particle then
+/// meets at most one image of another). Call it from a pair force's factory
+/// with SceneContext::particles.domain, so that the scene error points at
+/// the force's cutoff.
+void check_cutoff_fits(const Domain& domain, double cutoff, double skin);
+
+/// A force from a central pair law within a cutoff (see the top of this
+/// file). `members`: N flags (a selection) or empty for every particle; only
+/// pairs of two members interact.
+template <class Law>
+class PairForce : public Force {
+ public:
+  PairForce(Law law, double cutoff, double skin, std::vector<std::uint8_t> members = {})
+      : law_(std::move(law)),
+        cutoff2_(cutoff * cutoff),
+        list_(cutoff, skin, NeighborList::Kind::Half),
+        members_(std::move(members)) {}
+
+  void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) override {
+    update(p);
+    const Index n = p.size();
+    if (n == 0) return;
+    if (max_threads() == 1 || n < kParallelMinElements) {
+      serial_forces(p, f);
+    } else {
+      parallel_forces(p, f);
+    }
+  }
+
+  /// Sum of U over the pairs closer than the cutoff, J.
+  std::optional<double> potential_energy(const ParticleView& p) const override {
+    update(p);
+    double u = 0.0;
+    for (Index i = 0; i < p.size(); ++i) {
+      for (const Index j : list_.neighbors(i)) {
+        const Vec3 d = separation(p, i, j);
+        const double r2 = d.squaredNorm();
+        if (r2 < cutoff2_) u += law_(r2, type_of(p, i), type_of(p, j)).energy;
+      }
+    }
+    return u;
+  }
+
+  const Law& law() const noexcept { return law_; }
+  /// The neighbor list (for statistics: builds, pairs).
+  const NeighborList& neighbor_list() const noexcept { return list_; }
+
+ private:
+  void update(const ParticleView& p) const {
+    // Particles added since (an interactive host's) are not members.
+    if (!members_.empty()) members_.resize(static_cast<std::size_t>(p.size()), 0);
+    list_.update(p.x, p.domain, members_.empty() ? nullptr : &members_);
+  }
+
+  static std::int32_t type_of(const ParticleView& p, Index i) {
+    return p.type.empty() ? 0 : p.type[static_cast<std::size_t>(i)];
+  }
+
+  // x_i - x_j, to the nearest image along periodic axes.
+  static Vec3 separation(const ParticleView& p, Index i, Index j) {
+    const Vec3 d = p.x.col(i) - p.x.col(j);
+    return p.domain.any_periodic() ? p.domain.minimum_image(d) : d;
+  }
+
+  // F_ij, or zero beyond the cutoff (the list's skin shell).
+  Vec3 pair_force(const ParticleView& p, Index i, Index j) const {
+    const Vec3 d = separation(p, i, j);
+    const double r2 = d.squaredNorm();
+    if (!(r2 < cutoff2_)) return Vec3::Zero();
+    return law_(r2, type_of(p, i), type_of(p, j)).force_over_r * d;
+  }
+
+  void serial_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) const {
+    for (Index i = 0; i < p.size(); ++i) {
+      Vec3 fi = f.col(i);
+      for (const Index j : list_.neighbors(i)) {
+        const Vec3 fij = pair_force(p, i, j);
+        fi += fij;
+        f.col(j) -= fij;
+      }
+      f.col(i) = fi;
+    }
+  }
+
+  void parallel_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) {
+    const auto offsets = list_.offsets();
+    const auto indices = list_.indices();
+    const Index n = p.size();
+    if (transposed_build_ != list_.builds()) transpose(n, offsets, indices);
+    pair_f_.resize(3 * indices.size());  // grows only: no allocation once warm
+    parallel_ranges(n, [&](Index begin, Index end) {
+      for (Index i = begin; i < end; ++i) {
+        for (Index k = offsets[static_cast<std::size_t>(i)];
+             k < offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+          const Vec3 fij = pair_force(p, i, indices[static_cast<std::size_t>(k)]);
+          Eigen::Map<Vec3>(pair_f_.data() + 3 * k) = fij;
+        }
+      }
+    });
+    parallel_ranges(n, [&](Index begin, Index end) {
+      for (Index j = begin; j < end; ++j) {
+        Vec3 fj = f.col(j);
+        for (Index t = t_offsets_[static_cast<std::size_t>(j)];
+             t < t_offsets_[static_cast<std::size_t>(j) + 1]; ++t) {
+          fj -= Eigen::Map<const Vec3>(pair_f_.data() + 3 * t_pairs_[static_cast<std::size_t>(t)]);
+        }
+        for (Index k = offsets[static_cast<std::size_t>(j)];
+             k < offsets[static_cast<std::size_t>(j) + 1]; ++k) {
+          fj += Eigen::Map<const Vec3>(pair_f_.data() + 3 * k);
+        }
+        f.col(j) = fj;
+      }
+    });
+  }
+
+  // For each particle j, the pairs (i, j) with i < j, in increasing i: the
+  // order in which the one-thread loop subtracts their forces from f_j.
+  // Rebuilt with the list (every 10-20 steps), O(pairs).
+  void transpose(Index n, std::span<const Index> offsets, std::span<const Index> indices) {
+    t_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
+    for (const Index j : indices) ++t_offsets_[static_cast<std::size_t>(j) + 1];
+    for (Index j = 0; j < n; ++j) {
+      t_offsets_[static_cast<std::size_t>(j) + 1] += t_offsets_[static_cast<std::size_t>(j)];
+    }
+    t_pairs_.resize(indices.size());
+    t_fill_.assign(t_offsets_.begin(), t_offsets_.end() - 1);
+    for (Index i = 0; i < n; ++i) {
+      for (Index k = offsets[static_cast<std::size_t>(i)];
+           k < offsets[static_cast<std::size_t>(i) + 1]; ++k) {
+        const auto j = static_cast<std::size_t>(indices[static_cast<std::size_t>(k)]);
+        t_pairs_[static_cast<std::size_t>(t_fill_[j]++)] = k;
+      }
+    }
+    transposed_build_ = list_.builds();
+  }
+
+  Law law_;
+  double cutoff2_;
+  mutable NeighborList list_;  // brought up to date by const potential_energy too
+  mutable std::vector<std::uint8_t> members_;
+  // The threaded path's scratch: per-pair forces and the transposed list.
+  std::vector<double> pair_f_;
+  std::vector<Index> t_offsets_, t_pairs_, t_fill_;
+  std::int64_t transposed_build_ = -1;
+};
+
+}  // namespace pdyn
