@@ -89,7 +89,7 @@ BASE_SCENE = {
 SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders"}
 
 CPP_PRELUDE = ["<pdyn/plugin.hpp>", "<pdyn/contact.hpp>", "<pdyn/targets.hpp>",
-               "<pdyn/shape.hpp>", "<pdyn/conformance.hpp>", "<cmath>"]
+               "<pdyn/shape.hpp>", "<pdyn/pair.hpp>", "<pdyn/conformance.hpp>", "<cmath>"]
 
 # pdyn subcommands run for real when their arguments are all available: they
 # read only the source tree and write nothing outside the temporary folder.
