@@ -23,6 +23,7 @@ State make_state(Index n) {
   s.f = Matrix3X::Zero(3, n);
   s.mass = Eigen::VectorXd::Ones(n);
   s.fixed.assign(static_cast<std::size_t>(n), 0);
+  s.radius.assign(static_cast<std::size_t>(n), kRadius);
   return s;
 }
 

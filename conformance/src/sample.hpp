@@ -21,10 +21,16 @@ inline constexpr Index kParticles = 6;
 
 // ---- particle configurations ----
 
+/// Every particle's radius in the kit's states, m: large enough that
+/// contact laws (soft_contact) see overlapping pairs among kParticles
+/// particles in [-1, 1]^3 m.
+inline constexpr double kRadius = 0.5;
+
 struct State {
   Matrix3X x, v, f;
   Eigen::VectorXd mass;
   std::vector<std::uint8_t> fixed;
+  std::vector<double> radius;
   double t = 0.0;
 
   Index size() const { return x.cols(); }
@@ -35,7 +41,7 @@ struct State {
                         Eigen::Map<const Eigen::VectorXd>(mass.data(), size()),
                         std::span<const std::uint8_t>(fixed),
                         Domain{},
-                        {},
+                        std::span<const double>(radius),
                         {}};
   }
   MutableParticleView mutable_view() {
@@ -46,7 +52,7 @@ struct State {
                                Eigen::Map<const Eigen::VectorXd>(mass.data(), size()),
                                std::span<const std::uint8_t>(fixed),
                                Domain{},
-                               {},
+                               std::span<const double>(radius),
                                {}};
   }
 };

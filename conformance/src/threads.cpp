@@ -71,6 +71,7 @@ Run separate_run(const PluginDescriptor& d, const Params& params, std::uint64_t 
   if (d.kind == PluginKind::Collider) s.x *= 0.5;  // near the origin, where default obstacles are
   auto sys = std::make_unique<System>();
   sys->set_particles(s.x, s.v, s.mass, s.fixed);
+  sys->set_radii(s.radius);
   const SceneContext ctx{sys->view(), nullptr};
   std::unique_ptr<Solver> solver;
   switch (d.kind) {

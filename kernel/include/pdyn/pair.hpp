@@ -14,7 +14,13 @@
 //     pdyn::PairTerm operator()(double r2, std::int32_t ti, std::int32_t tj) const;
 //   };
 //
-// and derives from, or instantiates, PairForce<Law>. The force on i from j
+// and derives from, or instantiates, PairForce<Law>. A law that needs more
+// than the distance (a contact law: radii, relative velocity, masses) takes
+// the pair itself instead and returns the force vector:
+//
+//   pdyn::PairVector operator()(const pdyn::ParticleView& p, const pdyn::PairPoint& q) const;
+//
+// with q.d = x_i - x_j (nearest image) and q.r2 = |q.d|^2 < rc^2. The force on i from j
 // is F_ij = (-U'(r)/r) (x_i - x_j), on j it is -F_ij, and the energy is
 // sum over pairs of U(r_ij). The law's call is inlined into the loop (a
 // template, not a virtual call per pair).
@@ -38,6 +44,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "pdyn/error.hpp"
@@ -51,6 +58,19 @@ namespace pdyn {
 struct PairTerm {
   double energy = 0.0;        ///< U(r), J
   double force_over_r = 0.0;  ///< -U'(r) / r, N/m (> 0 repulsive)
+};
+
+/// One pair as a general law sees it.
+struct PairPoint {
+  Index i = 0, j = 0;     ///< the particles, i < j
+  Vec3 d = Vec3::Zero();  ///< x_i - x_j to the nearest image, m
+  double r2 = 0.0;        ///< |d|^2 < cutoff^2, m^2
+};
+
+/// A general law's value for one pair.
+struct PairVector {
+  double energy = 0.0;        ///< potential energy of the pair, J (0 if none)
+  Vec3 force = Vec3::Zero();  ///< force on i, N; on j it is -force
 };
 
 /// Throws ParamError on "cutoff" unless a list of reach cutoff + skin (m)
@@ -92,7 +112,7 @@ class PairForce : public Force {
       for (const Index j : list_.neighbors(i)) {
         const Vec3 d = separation(p, im, i, j);
         const double r2 = d.squaredNorm();
-        if (r2 < cutoff2_) u += law_(r2, type_of(p, i), type_of(p, j)).energy;
+        if (r2 < cutoff2_) u += evaluate(p, i, j, d, r2).energy;
       }
     }
     return u;
@@ -148,7 +168,20 @@ class PairForce : public Force {
     const Vec3 d = separation(p, im, i, j);
     const double r2 = d.squaredNorm();
     if (!(r2 < cutoff2_)) return Vec3::Zero();
-    return law_(r2, type_of(p, i), type_of(p, j)).force_over_r * d;
+    return evaluate(p, i, j, d, r2).force;
+  }
+
+  // The law, in whichever of its two forms it is written.
+  static constexpr bool kCentral =
+      std::is_invocable_r_v<PairTerm, const Law&, double, std::int32_t, std::int32_t>;
+  [[gnu::always_inline]] inline PairVector evaluate(const ParticleView& p, Index i, Index j,
+                                                    const Vec3& d, double r2) const {
+    if constexpr (kCentral) {
+      const PairTerm t = law_(r2, type_of(p, i), type_of(p, j));
+      return {t.energy, t.force_over_r * d};
+    } else {
+      return law_(p, PairPoint{i, j, d, r2});
+    }
   }
 
   void serial_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) const {
