@@ -69,4 +69,11 @@ Selection Selection::from_params(const Params& params, const SceneContext& ctx) 
   return s;
 }
 
+std::vector<std::uint8_t> Selection::mask(Index n) const {
+  if (all_) return {};
+  std::vector<std::uint8_t> flags(static_cast<std::size_t>(n), 0);
+  for (const Index i : ids_) flags[static_cast<std::size_t>(i)] = 1;
+  return flags;
+}
+
 }  // namespace pdyn

@@ -50,6 +50,19 @@ TEST(Selection, IdsSelectExactlyThoseParticles) {
               9.81, 1e-15);
 }
 
+// A pair force on a group: only pairs of two members interact (the
+// selection's mask, Selection::mask), others feel nothing.
+TEST(Selection, APairForceOnAGroupJoinsOnlyItsMembers) {
+  Scene scene = test::load_text(
+      kParticles + "  - { type: lennard_jones, sigma: 0.1, cutoff: 0.25, group: cloud }\n");
+  const Matrix3X f = test::ForcesOf(*scene.system, 0);
+  EXPECT_EQ(Vec3(f.col(0)), Vec3::Zero());
+  EXPECT_EQ(Vec3(f.col(7)), Vec3::Zero());
+  EXPECT_GT(f.middleCols(1, 6).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT(f.middleCols(1, 6).rowwise().sum().norm(),
+            1e-12);  // Newton's third law within the group
+}
+
 TEST(Selection, WithoutGroupOrIdsEveryParticleAsBefore) {
   Scene scene = test::load_text(kParticles + "  - { type: gravity, g: [0.1, -0.2, -9.81] }\n");
   const System& sys = *scene.system;

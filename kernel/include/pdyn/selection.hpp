@@ -14,6 +14,7 @@
 // scene loader passes them in SceneContext::groups.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "pdyn/params.hpp"
@@ -45,6 +46,9 @@ class Selection {
   /// The selected particle indices, in the order given (a group: the order
   /// its builder made them); only meaningful when !all().
   const std::vector<Index>& ids() const noexcept { return ids_; }
+  /// The selection as N membership flags (1: selected), the form
+  /// NeighborList and PairForce take; empty when all().
+  std::vector<std::uint8_t> mask(Index n) const;
 
  private:
   bool all_ = true;

@@ -39,13 +39,6 @@ struct LennardJones {
   }
 };
 
-std::vector<std::uint8_t> members_of(const pdyn::Selection& s, pdyn::Index n) {
-  if (s.all()) return {};
-  std::vector<std::uint8_t> mask(static_cast<std::size_t>(n), 0);
-  for (const pdyn::Index i : s.ids()) mask[static_cast<std::size_t>(i)] = 1;
-  return mask;
-}
-
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
@@ -72,7 +65,7 @@ pdyn::PluginDescriptor describe() {
     const pdyn::Selection selection = pdyn::Selection::from_params(p, ctx);
     return std::make_unique<pdyn::PairForce<LennardJones>>(
         LennardJones(p.real("epsilon"), p.real("sigma"), cutoff, p.boolean("shift")), cutoff, skin,
-        members_of(selection, ctx.particles.size()));
+        selection.mask(ctx.particles.size()));
   };
   return d;
 }

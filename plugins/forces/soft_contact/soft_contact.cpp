@@ -76,13 +76,6 @@ struct Contact {
   }
 };
 
-std::vector<std::uint8_t> members_of(const pdyn::Selection& s, pdyn::Index n) {
-  if (s.all()) return {};
-  std::vector<std::uint8_t> mask(static_cast<std::size_t>(n), 0);
-  for (const pdyn::Index i : s.ids()) mask[static_cast<std::size_t>(i)] = 1;
-  return mask;
-}
-
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
@@ -136,7 +129,7 @@ pdyn::PluginDescriptor describe() {
                       -2.0 * ln / std::sqrt(std::numbers::pi * std::numbers::pi + ln * ln),
                       p.real("friction"), fallback};
     return std::make_unique<pdyn::PairForce<Contact>>(
-        law, cutoff, skin, members_of(pdyn::Selection::from_params(p, ctx), ctx.particles.size()));
+        law, cutoff, skin, pdyn::Selection::from_params(p, ctx).mask(ctx.particles.size()));
   };
   return d;
 }
