@@ -112,13 +112,33 @@ Camera fit_camera(View view, const std::vector<Vec3>& points, int width, int hei
   return cam;
 }
 
+std::vector<Vec3> particle_points(const Matrix3X& x, std::span<const double> radius) {
+  std::vector<Vec3> points;
+  points.reserve(static_cast<std::size_t>(x.cols()));
+  for (Index i = 0; i < x.cols(); ++i) {
+    const double r = radius.empty() ? 0.0 : radius[static_cast<std::size_t>(i)];
+    if (r <= 0) {
+      points.push_back(x.col(i));
+      continue;
+    }
+    // A sphere's outline projects to a circle of radius r; a cube's corners
+    // reach at least r along any screen direction u (|u|_1 >= |u|_2 = 1).
+    for (int k = 0; k < 8; ++k) {
+      points.push_back(x.col(i) + r * Vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1));
+    }
+  }
+  return points;
+}
+
 namespace {
 
-// One state to draw: positions (m) and nailed flags at time t (s).
+// One state to draw: positions (m), nailed flags and radii (m; empty: none)
+// at time t (s).
 struct Frame {
   double t = 0.0;
   Matrix3X x;
   std::vector<std::uint8_t> fixed;
+  std::vector<double> radius;
 };
 
 void line(cairo_t* cr, const Camera& cam, const Vec3& a, const Vec3& b) {
@@ -166,6 +186,26 @@ void draw_box(cairo_t* cr, const Camera& cam, const shape::Box& b) {
   cairo_set_source_rgb(cr, 0.40, 0.45, 0.52);
   cairo_set_line_width(cr, 1.5);
   cairo_stroke(cr);
+}
+
+// The simulation box: a thin wire box, dashed when some axis is periodic
+// (its faces there are not walls but where the space repeats).
+void draw_domain(cairo_t* cr, const Camera& cam, const Domain& b) {
+  auto corner = [&](int k) {
+    return Vec3(k & 1 ? b.max.x() : b.min.x(), k & 2 ? b.max.y() : b.min.y(),
+                k & 4 ? b.max.z() : b.min.z());
+  };
+  for (int k = 0; k < 8; ++k) {
+    for (int bit : {1, 2, 4}) {
+      if (!(k & bit)) line(cr, cam, corner(k), corner(k | bit));
+    }
+  }
+  const double dash[] = {5.0, 3.0};
+  cairo_set_dash(cr, dash, b.any_periodic() ? 2 : 0, 0);
+  cairo_set_source_rgb(cr, 0.30, 0.55, 0.45);
+  cairo_set_line_width(cr, 1.0);
+  cairo_stroke(cr);
+  cairo_set_dash(cr, nullptr, 0, 0);
 }
 
 void draw_sphere(cairo_t* cr, const Camera& cam, const shape::Sphere& s) {
@@ -219,6 +259,7 @@ void draw(cairo_t* cr, const Camera& cam, const Frame& f, const Drawables& d,
   for (const auto& s : d.spheres) draw_sphere(cr, cam, s);
   for (const auto& b : d.boxes) draw_box(cr, cam, b);
   for (const auto& m : d.meshes) draw_mesh(cr, cam, m);
+  if (d.box) draw_domain(cr, cam, *d.box);
 
   cairo_set_line_width(cr, 1.0);
   for (const auto& l : d.links) line(cr, cam, f.x.col(l[0]), f.x.col(l[1]));
@@ -231,12 +272,26 @@ void draw(cairo_t* cr, const Camera& cam, const Frame& f, const Drawables& d,
   std::iota(order.begin(), order.end(), Index{0});
   std::stable_sort(order.begin(), order.end(),
                    [&](Index a, Index b) { return cam.depth(f.x.col(a)) < cam.depth(f.x.col(b)); });
-  // At least 1.6 px, so that the pixel under a particle's centre is wholly
-  // inside its disc (a pixel's far corner is at most sqrt(2) px away).
-  const double r =
-      std::clamp(0.12 * std::min(width, height) / std::sqrt(static_cast<double>(n)), 1.6, 5.0);
+  // A marker of at least kMinRadiusPixels, smaller the more particles there
+  // are; a particle with a radius is a disc of that radius at the camera's
+  // scale (never smaller than the marker's minimum), outlined so that
+  // touching spheres stay apart.
+  const double r = std::clamp(0.12 * std::min(width, height) / std::sqrt(static_cast<double>(n)),
+                              kMinRadiusPixels, 5.0);
   for (Index i : order) {
     const auto p = cam.pixel(f.x.col(i));
+    const double radius = f.radius.empty() ? 0.0 : f.radius[static_cast<std::size_t>(i)];
+    if (radius > 0) {
+      const double* fill = f.fixed[static_cast<std::size_t>(i)] ? kFixed : kFree;
+      cairo_new_sub_path(cr);
+      cairo_arc(cr, p.x(), p.y(), std::max(radius * cam.scale, kMinRadiusPixels), 0, 2 * kPi);
+      cairo_set_source_rgb(cr, fill[0], fill[1], fill[2]);
+      cairo_fill_preserve(cr);
+      cairo_set_source_rgb(cr, 0.6 * fill[0], 0.6 * fill[1], 0.6 * fill[2]);
+      cairo_set_line_width(cr, std::min(1.0, 0.25 * radius * cam.scale));
+      cairo_stroke(cr);
+      continue;
+    }
     if (f.fixed[static_cast<std::size_t>(i)]) {
       cairo_rectangle(cr, p.x() - 1.3 * r, p.y() - 1.3 * r, 2.6 * r, 2.6 * r);
       cairo_set_source_rgb(cr, kFixed[0], kFixed[1], kFixed[2]);
@@ -355,7 +410,8 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
       }
     }
     if (k == 0) drawn = render::drawables(scene);
-    frames.push_back({scene.system->time(), scene.system->positions(), scene.system->fixed()});
+    frames.push_back({scene.system->time(), scene.system->positions(), scene.system->fixed(),
+                      scene.system->radii()});
   }
 
   Vec3 lo = frames[0].x.rowwise().minCoeff(), hi = frames[0].x.rowwise().maxCoeff();
@@ -370,7 +426,8 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
     points.insert(points.end(), patches.back().begin(), patches.back().end());
   }
   for (const auto& f : frames) {
-    for (Index i = 0; i < f.x.cols(); ++i) points.push_back(f.x.col(i));
+    const auto p = render::particle_points(f.x, f.radius);
+    points.insert(points.end(), p.begin(), p.end());
   }
   const render::Camera cam = render::fit_camera(view, points, width, height);
   const std::string name = fs::path(a.scene).filename().string();

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,17 @@ struct Camera {
 /// `width` x `height` image with a margin, keeping the aspect ratio. A single
 /// point, or none, gets a 1 m field of view.
 Camera fit_camera(View view, const std::vector<Vec3>& points, int width, int height);
+
+/// The points a camera must keep in view for particles at `x` (m, 3 x N)
+/// with radii `radius` (m, N, or empty): each centre, and the corners of the
+/// cube around each particle of radius > 0, so that its disc is not cut off
+/// in any view.
+std::vector<Vec3> particle_points(const Matrix3X& x, std::span<const double> radius);
+
+/// The smallest radius (px) a particle is drawn with: the pixel under its
+/// centre is then wholly inside its disc (a pixel's far corner is at most
+/// sqrt(2) px away).
+inline constexpr double kMinRadiusPixels = 1.6;
 
 /// Links and obstacles: see scene_drawables.hpp.
 using pdyn::Drawables;

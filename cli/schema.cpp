@@ -198,8 +198,23 @@ Json make_schema(const PluginRegistry& registry) {
   defs["collider"] = plugin_entry(registry, PluginKind::Collider);
   defs["solver"] = plugin_entry(registry, PluginKind::Solver);
 
-  Json simulation =
-      object(simulation_specs(), false, Json{{"solver", {{"$ref", "#/$defs/solver"}}}});
+  // periodic is a list of three booleans, which no ParamType describes.
+  Json flag = Json::object();
+  flag["anyOf"] = Json::array({Json{{"type", "boolean"}}, Json{{"enum", Json::array({0, 1})}}});
+  Json periodic{{"type", "array"},
+                {"items", flag},
+                {"minItems", 3},
+                {"maxItems", 3},
+                {"default", Json::array({false, false, false})},
+                {"description",
+                 "per axis x, y, z: periodic (a particle leaving through max re-enters at min) "
+                 "or open"}};
+  Json box = object(box_specs(), false, Json{{"periodic", periodic}});
+  box["type"] = Json::array({"object", "null"});
+  box["description"] =
+      "the simulation box: periodic along some axes, open (not a wall) along the others";
+  Json simulation = object(simulation_specs(), false,
+                           Json{{"solver", {{"$ref", "#/$defs/solver"}}}, {"box", box}});
   simulation["description"] = "time step, run length and solver (default rk4)";
   simulation["oneOf"] = Json::array({{{"required", {"steps"}}}, {{"required", {"duration"}}}});
 

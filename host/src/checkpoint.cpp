@@ -1,4 +1,4 @@
-// The checkpoint file format, version 2 (native byte order, x86-64):
+// The checkpoint file format, version 3 (native byte order, x86-64):
 //
 //   "PDYNCKPT"                8 bytes magic
 //   u32 format version        Checkpoint::kFormatVersion
@@ -8,8 +8,12 @@
 //
 // Payload: string scene_file, string scene_text, i64 step, f64 time,
 // i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
-// u64 count, count x (string label, bytes state), 2 x (string path,
-// u64 bytes, u32 crc). A string or byte block is a u64 length and its bytes.
+// i32[3N] images (x, y, z per particle), u64 count, count x (string label,
+// bytes state), 2 x (string path, u64 bytes, u32 crc). A string or byte
+// block is a u64 length and its bytes.
+//
+// Version 2 is version 3 without `images`; it is still read, with every
+// image count 0 (no scene had a periodic box then).
 //
 // The length and CRC are checked before any field is parsed, and every read
 // is bounds-checked, so a truncated or corrupted file is refused whole.
@@ -123,6 +127,11 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   payload.append(reinterpret_cast<const char*>(c.state.data()), 6 * n * sizeof(double));
   payload.append(reinterpret_cast<const char*>(c.mass.data()), n * sizeof(double));
   payload.append(reinterpret_cast<const char*>(c.fixed.data()), n);
+  if (c.images.size() == n) {
+    payload.append(reinterpret_cast<const char*>(c.images.data()), 3 * n * sizeof(std::int32_t));
+  } else {  // a checkpoint built without them: none wrapped
+    payload.append(3 * n * sizeof(std::int32_t), '\0');
+  }
   Writer tail;
   tail.pod<std::uint64_t>(c.plugin_states.size());
   for (const auto& [label, bytes] : c.plugin_states) {
@@ -217,11 +226,12 @@ Checkpoint read_checkpoint(const fs::path& path) {
   std::uint64_t length = 0;
   std::memcpy(&version, data.data() + sizeof(kMagic), sizeof(version));
   std::memcpy(&length, data.data() + sizeof(kMagic) + sizeof(version), sizeof(length));
-  if (version != Checkpoint::kFormatVersion) {
+  if (version < Checkpoint::kOldestReadableVersion || version > Checkpoint::kFormatVersion) {
     throw CheckpointError(
         fmt::format("{}: checkpoint format version {} is not supported "
-                    "(expected version {})",
-                    file, version, Checkpoint::kFormatVersion));
+                    "(expected version {}, or {} to {} from an earlier pdyn)",
+                    file, version, Checkpoint::kFormatVersion, Checkpoint::kOldestReadableVersion,
+                    Checkpoint::kFormatVersion - 1));
   }
   // As unsigned sums, so that a corrupted length cannot wrap around.
   const std::uint64_t have = data.size() - kHeader;
@@ -264,6 +274,12 @@ Checkpoint read_checkpoint(const fs::path& path) {
   r.doubles(c.mass.data(), n);
   c.fixed.resize(n);
   for (auto& f : c.fixed) f = r.pod<std::uint8_t>();
+  c.images.assign(n, {0, 0, 0});
+  if (version >= 3) {
+    for (auto& image : c.images) {
+      for (auto& k : image) k = r.pod<std::int32_t>();
+    }
+  }
   const auto count = r.pod<std::uint64_t>();
   if (count > payload.size()) r.fail("plugin count larger than the file");
   for (std::uint64_t i = 0; i < count; ++i) {

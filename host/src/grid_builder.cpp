@@ -69,6 +69,7 @@ void read_grid(BuilderHost& host, const YAML::Node& g, const std::string& path) 
       members.push_back(id(i, j));
     }
   }
+  host.set_properties(base, nx * ny, particle_properties(*p));
   if (p->has("pin")) {
     const auto& pins = p->pairs("pin");
     for (std::size_t k = 0; k < pins.size(); ++k) {

@@ -9,6 +9,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -16,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/domain.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/resolve.hpp"
 #include "scene_builders.hpp"
@@ -39,6 +41,14 @@ struct OpenBracket {
 /// The innermost '{' or '[' still open where the parser stopped at `stop`,
 /// if it was opened on an earlier line.
 std::optional<OpenBracket> unclosed_flow(const std::string& text, const YAML::Mark& stop);
+
+// One entry of `particles:` and the ids it made: where a problem with one
+// of its particles is reported.
+struct ParticleEntry {
+  Index first, end;  // ids first .. end - 1
+  YAML::Node node;   // the single particle's position, the builder, the file name
+  std::string path;  // "particles[2].grid"
+};
 
 // A queued force or collider: created once all particles exist.
 struct PendingPlugin {
@@ -112,6 +122,7 @@ class Loader final : public BuilderHost {
     fixed_.reserve(n);
   }
   void set_fixed(Index id) override { fixed_[static_cast<std::size_t>(id)] = 1; }
+  void set_properties(Index first, std::int64_t count, const ParticleProperties& p) override;
   Vec3 position(Index id) const override { return x_[static_cast<std::size_t>(id)]; }
   void add_group(const std::string& name, std::vector<Index> members, const YAML::Node& at,
                  const std::string& path) override;
@@ -121,7 +132,10 @@ class Loader final : public BuilderHost {
   // ---- sections ----
   void apply_overrides(YAML::Node& root);
   void read_simulation(const YAML::Node& n, Scene& scene);
+  void read_box(const YAML::Node& n);
+  bool read_periodic(const YAML::Node& n, const std::string& path, std::array<bool, 3>& out);
   void read_particles(const YAML::Node& n);
+  void check_inside_box();
   // ---- side files (side_files.hpp) ----
   std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
                                     const char* expected);
@@ -147,6 +161,12 @@ class Loader final : public BuilderHost {
   std::vector<Vec3> x_, v_;
   std::vector<double> m_;
   std::vector<std::uint8_t> fixed_;
+  // Radii and types: empty until some particle gives one, then one per
+  // particle declared so far (0 for the others), filled up to N at assembly.
+  std::vector<double> radius_;
+  std::vector<std::int32_t> type_;
+  std::vector<ParticleEntry> entries_;
+  std::optional<Domain> box_;  // simulation.box, when given and valid
   std::map<std::string, std::vector<Index>> groups_;
   std::vector<PendingPlugin> builder_forces_;  // springs made by builders
   bool particles_ok_ = true;

@@ -68,6 +68,12 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
                     "(expected the same particles)",
                     count_of(static_cast<long long>(c.mass.size()), "particle"), sys.size()));
   }
+  if (!c.images.empty() && static_cast<Index>(c.images.size()) != sys.size()) {
+    throw CheckpointError(fmt::format(
+        "the checkpoint holds image counts of {} but the scene has {} (expected the same "
+        "particles)",
+        count_of(static_cast<long long>(c.images.size()), "particle"), sys.size()));
+  }
   const std::size_t expected = 1 + sys.force_objects().size() + sys.collider_objects().size();
   if (c.plugin_states.size() != expected) {
     throw CheckpointError(
@@ -101,7 +107,18 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
   for (const auto& col : sys.collider_objects()) restore(*col.collider, i++);
   Matrix3X x = Eigen::Map<const Matrix3X>(c.state.data(), 3, sys.size());
   Matrix3X v = Eigen::Map<const Matrix3X>(c.state.data() + 3 * sys.size(), 3, sys.size());
+  // Radii and types are the scene's (which the checkpoint matches);
+  // set_particles clears them. The box is kept; the images are the run's.
+  std::vector<double> radius = sys.radii();
+  std::vector<std::int32_t> type = sys.types();
   sys.set_particles(x, v, c.mass, c.fixed);
+  sys.set_radii(std::move(radius));
+  sys.set_types(std::move(type));
+  if (c.images.empty()) {  // a checkpoint made in memory without them: nothing wrapped
+    sys.set_images(std::vector<std::array<std::int32_t, 3>>(c.mass.size(), {0, 0, 0}));
+  } else {
+    sys.set_images(c.images);
+  }
   sys.set_time(c.time);
 }
 

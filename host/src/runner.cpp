@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -68,16 +69,29 @@ class SignalGuard {
 // Output
 
 // Frames: t,id,x,y,z,vx,vy,vz with 17 significant digits, enough to
-// round-trip a double exactly.
-void write_frame(AtomicFile& f, const System& sys) {
+// round-trip a double exactly; with `unwrapped`, also xu,yu,zu: the
+// position x + images L followed continuously across periodic faces of the
+// box (images are 0 along open axes, where xu is x).
+void write_frame(AtomicFile& f, const System& sys, bool unwrapped) {
   const auto x = sys.positions();
   const auto v = sys.velocities();
   const double t = sys.time();
+  const Domain& box = sys.domain();
+  const Vec3 length = box.length();
+  const auto& images = sys.images();
   fmt::memory_buffer buf;
   for (Index i = 0; i < sys.size(); ++i) {
     fmt::format_to(std::back_inserter(buf),
-                   "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}\n", t, i, x(0, i),
+                   "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", t, i, x(0, i),
                    x(1, i), x(2, i), v(0, i), v(1, i), v(2, i));
+    if (unwrapped) {
+      Vec3 u = x.col(i);
+      for (int k = 0; k < 3; ++k) {
+        if (box.periodic[k]) u[k] += images[static_cast<std::size_t>(i)][k] * length[k];
+      }
+      fmt::format_to(std::back_inserter(buf), ",{:.17g},{:.17g},{:.17g}", u.x(), u.y(), u.z());
+    }
+    buf.push_back('\n');
     if (buf.size() > (1 << 16)) {
       f.write(buf.data(), buf.size());
       buf.clear();
@@ -133,7 +147,10 @@ class Output {
       : scene_(scene), sys_(*scene.system), checkpoint_(checkpoint_path(scene)) {
     if (!scene.output.path.empty()) {
       frames_.emplace(scene.output.path, resume ? &resume->frames : nullptr);
-      if (!resume) frames_->write("t,id,x,y,z,vx,vy,vz\n");
+      if (!resume) {
+        frames_->write(scene.output.unwrapped ? "t,id,x,y,z,vx,vy,vz,xu,yu,zu\n"
+                                              : "t,id,x,y,z,vx,vy,vz\n");
+      }
     }
     if (!scene.output.energy.empty()) {
       energy_.emplace(scene.output.energy, resume ? &resume->energy : nullptr);
@@ -141,7 +158,7 @@ class Output {
     }
   }
   void emit() {
-    if (frames_) write_frame(*frames_, sys_);
+    if (frames_) write_frame(*frames_, sys_, scene_.output.unwrapped);
     if (energy_) write_energy(*energy_, sys_);
   }
   // A frame off the run's schedule: the end of a run that a longer run
@@ -166,6 +183,7 @@ class Output {
     c.state = sys_.state();
     c.mass = sys_.masses();
     c.fixed = sys_.fixed();
+    c.images = sys_.images();
     {
       const crash::CallScope call(scene_.solver_label, "save_state");
       c.plugin_states.emplace_back(scene_.solver_label, scene_.solver->save_state());
@@ -450,6 +468,11 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
     return frame_dt > 0 && static_cast<double>(m) * frame_dt <= t_end;
   };
   Eigen::VectorXd dense(sys.dimension()), current(sys.dimension());
+  // In a periodic box the dense output continues the step's start state,
+  // which the Stepper wrapped before the step with the image counts of
+  // then: a frame inside the step is wrapped from those.
+  const bool periodic = sys.domain().any_periodic();
+  std::vector<std::array<std::int32_t, 3>> images_before;
   // Until a step has shown that the solver interpolates, stop on frame times.
   bool& has_dense = loop.has_dense;
   // The frames strictly inside the accepted step that ended at t_new, from
@@ -466,9 +489,16 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
       current = sys.state();
       sys.state() = dense;
       sys.set_time(tf);
+      std::vector<std::array<std::int32_t, 3>> images_after;
+      if (periodic) {
+        images_after = sys.images();
+        sys.set_images(images_before);
+        sys.wrap_positions();
+      }
       loop.out.emit();
       sys.state() = current;
       sys.set_time(t_new);
+      if (periodic) sys.set_images(std::move(images_after));
       ++next_frame;
     }
   };
@@ -476,6 +506,7 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
     return loop.stepper.advance(has_dense ? t_end : frame_time(next_frame), scene.dt);
   };
   for (std::int64_t k = k0 + 1; sys.time() < t_end; ++k) {
+    if (periodic) images_before = sys.images();
     if (!loop.guarded_step(take, k)) break;
     const double t_new = sys.time();
     dense_frames(t_new);

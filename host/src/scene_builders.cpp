@@ -9,6 +9,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -47,6 +48,10 @@ ParamSpec velocity_spec() {
   return param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity of every particle");
 }
 ParamSpec name_spec() { return param::optional("name", ParamType::String, "", "group name"); }
+std::vector<ParamSpec> with_properties(std::vector<ParamSpec> specs) {
+  for (auto& s : particle_property_specs()) specs.push_back(std::move(s));
+  return specs;
+}
 
 // A key holding a mapping (a force family, a region): absent or null is
 // "not given"; anything else must be a mapping.
@@ -103,7 +108,7 @@ Params with_triples(std::vector<IndexTriple> triples) {
 // resist the chain folding at particle i (a rope's bending stiffness).
 
 std::vector<ParamSpec> chain_specs() {
-  return {
+  return with_properties({
       param::required_vec3("from", "m", "position of the first particle"),
       param::required_vec3("to", "m", "position of the last particle"),
       count("n", 2, "number of particles"),
@@ -112,7 +117,7 @@ std::vector<ParamSpec> chain_specs() {
       name_spec(),
       param::optional("pin", ParamType::IndexList, "",
                       "chain positions of nailed particles; negative counts from the end"),
-  };
+  });
 }
 
 void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path) {
@@ -134,6 +139,7 @@ void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path)
     const double s = static_cast<double>(i) / static_cast<double>(n - 1);
     host.add_particle(from + s * (to - from), p->vec3("velocity"), p->real("mass"), false);
   }
+  host.set_properties(base, n, particle_properties(*p));
   pin(host, *p, c, path, base, n, "chain");
   group(host, *p, c, path, base, n);
 
@@ -162,7 +168,7 @@ void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path)
 // face diagonals make every face rigid and with them the cube.
 
 std::vector<ParamSpec> lattice_specs() {
-  return {
+  return with_properties({
       param::required_vec3("origin", "m", "position of particle (0, 0, 0)"),
       param::required("n", ParamType::Vector, "", "[nx, ny, nz] particles along x, y, z")
           .at_least(1),
@@ -173,7 +179,7 @@ std::vector<ParamSpec> lattice_specs() {
       param::optional("pin", ParamType::IndexTriples, "",
                       "lattice coordinates [i, j, k] of nailed particles; negative counts from "
                       "the end"),
-  };
+  });
 }
 
 void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
@@ -229,6 +235,7 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
       host.set_fixed(id(c[0], c[1], c[2]));
     }
   }
+  host.set_properties(base, nx * ny * nz, particle_properties(*p));
   group(host, *p, l, path, base, nx * ny * nz);
 
   // Without `springs`, structural and shear springs with the defaults: a
@@ -299,7 +306,8 @@ double uniform01(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0
 std::vector<ParamSpec> cloud_specs() {
   ParamSpec seed = param::integer("seed", 0, "seed of the random generator (std::mt19937_64)");
   seed.at_least(0);
-  return {count("n", 1, "number of particles"), mass_spec(), velocity_spec(), seed, name_spec()};
+  return with_properties(
+      {count("n", 1, "number of particles"), mass_spec(), velocity_spec(), seed, name_spec()});
 }
 std::vector<ParamSpec> cloud_box_specs() {
   return {param::required_vec3("min", "m", "corner with the smallest coordinates"),
@@ -366,6 +374,7 @@ void read_cloud(BuilderHost& host, const YAML::Node& c, const std::string& path)
     }
     host.add_particle(x, p->vec3("velocity"), p->real("mass"), false);
   }
+  host.set_properties(base, n, particle_properties(*p));
   group(host, *p, c, path, base, n);
 }
 
@@ -403,7 +412,7 @@ std::vector<ParamSpec> loop_specs(std::vector<ParamSpec> specs) {
   specs.push_back(param::optional("pin", ParamType::IndexList, "",
                                   "loop positions of nailed particles; negative counts from the "
                                   "end"));
-  return specs;
+  return with_properties(std::move(specs));
 }
 
 std::vector<ParamSpec> ring_specs() {
@@ -437,6 +446,7 @@ void read_ring(BuilderHost& host, const YAML::Node& r, const std::string& path) 
     host.add_particle(p->vec3("center") + p->real("radius") * (std::cos(t) * a + std::sin(t) * b),
                       p->vec3("velocity"), p->real("mass"), false);
   }
+  host.set_properties(base, n, particle_properties(*p));
   pin(host, *p, r, path, base, n, "ring");
   group(host, *p, r, path, base, n);
   loop_forces(host, r, path, base, n);
@@ -467,12 +477,34 @@ void read_polygon(BuilderHost& host, const YAML::Node& g, const std::string& pat
   if (!host.can_add(n, g, path)) return;
   const Index base = host.particle_count();
   for (const Vec3& x : pts) host.add_particle(x, p->vec3("velocity"), p->real("mass"), false);
+  host.set_properties(base, n, particle_properties(*p));
   pin(host, *p, g, path, base, n, "polygon");
   group(host, *p, g, path, base, n);
   loop_forces(host, g, path, base, n);
 }
 
 }  // namespace
+
+std::vector<ParamSpec> particle_property_specs() {
+  return {
+      param::optional("particle_radius", ParamType::Real, "m",
+                      "radius of each particle (what pair forces and pictures use)")
+          .at_least(0),
+      param::optional("particle_type", ParamType::Integer, "",
+                      "type of each particle, for forces that tell types apart")
+          .at_least(0)
+          .at_most(std::numeric_limits<std::int32_t>::max()),
+  };
+}
+
+ParticleProperties particle_properties(const Params& p, const std::string& prefix) {
+  ParticleProperties out;
+  if (const std::string r = prefix + "radius"; p.has(r)) out.radius = p.real(r);
+  if (const std::string t = prefix + "type"; p.has(t)) {
+    out.type = static_cast<std::int32_t>(p.integer(t));
+  }
+  return out;
+}
 
 const std::vector<std::string>& builder_names() {
   static const std::vector<std::string> names = {"chain", "lattice", "cloud", "ring", "polygon"};

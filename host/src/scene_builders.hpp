@@ -10,6 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +25,21 @@ namespace pdyn {
 // beyond any interactive scene, and a clear refusal instead of an
 // out-of-memory failure for a mistyped grid size.
 inline constexpr std::int64_t kMaxParticles = std::int64_t{1} << 24;
+
+/// What a scene may say about each particle besides its motion: a radius
+/// (m, >= 0) and a type (>= 0), each given or not. A scene where some
+/// particles give one and others do not gives the others 0 (docs/scenes.md).
+struct ParticleProperties {
+  std::optional<double> radius;
+  std::optional<std::int32_t> type;
+};
+
+/// The keys with which every builder gives all its particles one radius and
+/// one type: `particle_radius` and `particle_type` (`radius` is a ring's own).
+std::vector<ParamSpec> particle_property_specs();
+/// The properties those keys (or a single particle's `radius` and `type`,
+/// with `prefix` "") give in `p`.
+ParticleProperties particle_properties(const Params& p, const std::string& prefix = "particle_");
 
 class BuilderHost {
  public:
@@ -48,6 +64,9 @@ class BuilderHost {
   /// reserves once instead of growing the lists by doubling.
   virtual void reserve(std::int64_t count) = 0;
   virtual void set_fixed(Index id) = 0;
+  /// Gives particles first .. first + count - 1 the properties `p` holds
+  /// (nothing for a property it does not hold).
+  virtual void set_properties(Index first, std::int64_t count, const ParticleProperties& p) = 0;
   /// Position of a particle declared so far, m.
   virtual Vec3 position(Index id) const = 0;
   /// Makes `members` the group `name` (the builder's `name:` key, at `at`);

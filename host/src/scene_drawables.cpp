@@ -61,10 +61,18 @@ std::vector<IndexPair> scene_links(const Scene& scene) {
   return links;
 }
 
+std::optional<Domain> simulation_box(const Scene& scene) {
+  if (!scene.system) return std::nullopt;
+  const Domain& d = scene.system->domain();
+  if ((d.min.array() < d.max.array()).all()) return d;
+  return std::nullopt;
+}
+
 Drawables drawables(const Scene& scene) {
   Drawables d;
   d.links = scene_links(scene);
   if (!scene.system) return d;
+  d.box = simulation_box(scene);
   for (const auto& entry : scene.system->collider_objects()) {
     // A collider without the hook collides but is not drawn.
     const auto* source = dynamic_cast<const ShapeSource*>(entry.collider.get());
@@ -100,6 +108,13 @@ std::vector<Vec3> obstacle_points(const Drawables& d) {
     }
   }
   for (const auto& m : d.meshes) pts.insert(pts.end(), m.vertices.begin(), m.vertices.end());
+  if (d.box) {
+    for (int k = 0; k < 8; ++k) {
+      pts.emplace_back(k & 1 ? d.box->max.x() : d.box->min.x(),
+                       k & 2 ? d.box->max.y() : d.box->min.y(),
+                       k & 4 ? d.box->max.z() : d.box->min.z());
+    }
+  }
   return pts;
 }
 

@@ -51,7 +51,8 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   if (!check_map(n, "simulation", "simulation: { dt: ..., steps: ..., solver: { type: ... } }")) {
     return;
   }
-  auto p = read_params(n, "simulation", simulation_specs(), {"solver"}, -1);
+  auto p = read_params(n, "simulation", simulation_specs(), {"solver", "box"}, -1);
+  if (n["box"].IsDefined() && !n["box"].IsNull()) read_box(n["box"]);
   if (p) {
     scene.dt = p->real("dt");
     if (p->has("threads")) scene.threads = static_cast<int>(p->integer("threads"));
@@ -95,6 +96,118 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   }
 }
 
+// simulation.box: the kernel's Domain. min < max along every axis, so that
+// the box can be drawn and checked against, although only its periodic
+// axes change the simulation.
+void Loader::read_box(const YAML::Node& n) {
+  const std::string path = "simulation.box";
+  if (!check_map(n, path,
+                 "box: { min: [x, y, z], max: [x, y, z], periodic: [bool, bool, bool] }")) {
+    return;
+  }
+  auto p = read_params(n, path, box_specs(), {"periodic"}, -1);
+  std::array<bool, 3> periodic{};
+  const bool periodic_ok = read_periodic(n["periodic"], path + ".periodic", periodic);
+  if (!p || !periodic_ok) return;
+  const Vec3 lo = p->vec3("min"), hi = p->vec3("max");
+  for (int k = 0; k < 3; ++k) {
+    if (lo[k] < hi[k]) continue;
+    error(n["max"], path + ".max",
+          fmt::format("{}.max: [{}, {}, {}] is not above min [{}, {}, {}] in {} (expected max > "
+                      "min in every component)",
+                      path, hi.x(), hi.y(), hi.z(), lo.x(), lo.y(), lo.z(), "xyz"[k]));
+    return;
+  }
+  Domain d;
+  d.min = lo;
+  d.max = hi;
+  d.periodic = periodic;
+  box_ = d;
+}
+
+// `periodic: [x, y, z]`, each written as a boolean is anywhere in a scene
+// (true/false, yes/no, on/off, 1/0); absent or null: open along every axis.
+bool Loader::read_periodic(const YAML::Node& n, const std::string& path, std::array<bool, 3>& out) {
+  if (!n.IsDefined() || n.IsNull()) return true;
+  constexpr const char* expected =
+      "a list of 3 booleans, one per axis x, y, z, e.g. [true, true, false]";
+  if (!n.IsSequence() || n.size() != 3) {
+    const std::string found = n.IsSequence()
+                                  ? "it has " + count_of(static_cast<long long>(n.size()), "value")
+                              : n.IsMap() ? fmt::format("it is the mapping {}", shown(n))
+                                          : fmt::format("it is '{}'", shown(n));
+    error(n, path,
+          fmt::format("{}: is not a list of 3 booleans: {} (expected {})", path, found, expected));
+    return false;
+  }
+  bool ok = true;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const YAML::Node e = n[k];
+    bool b = false;
+    if (e.IsScalar() && YAML::convert<bool>::decode(e, b)) {
+      out[k] = b;
+    } else if (e.IsScalar() && (e.Scalar() == "0" || e.Scalar() == "1")) {
+      out[k] = e.Scalar() == "1";
+    } else {
+      error(e, fmt::format("{}[{}]", path, k),
+            fmt::format("{}[{}]: '{}' is not true or false (expected {})", path, k, shown(e),
+                        expected));
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+// Along an axis that is not periodic the box is not a wall (a particle may
+// leave it during the run), but a scene that starts outside its own box is
+// a mistake: reported once per particles entry, at its first such particle.
+void Loader::check_inside_box() {
+  if (!box_ || !particles_ok_) return;
+  const Domain& d = *box_;
+  for (const auto& e : entries_) {
+    Index bad = -1;
+    int axis = 0;
+    std::int64_t more = 0;
+    for (Index i = e.first; i < e.end; ++i) {
+      const Vec3& x = x_[static_cast<std::size_t>(i)];
+      for (int k = 0; k < 3; ++k) {
+        if (d.periodic[k] || (x[k] >= d.min[k] && x[k] <= d.max[k])) continue;
+        if (bad < 0) {
+          bad = i;
+          axis = k;
+        } else {
+          ++more;
+        }
+        break;
+      }
+    }
+    if (bad < 0) continue;
+    const char name = "xyz"[axis];
+    error(e.node, e.path,
+          fmt::format("{}: particle {} is outside simulation.box along {}: {} = {} m is not in "
+                      "[{}, {}]{} (expected initial positions inside the box along every axis "
+                      "that is not periodic)",
+                      e.path, bad, name, name, x_[static_cast<std::size_t>(bad)][axis], d.min[axis],
+                      d.max[axis],
+                      more == 0 ? ""
+                      : more == 1
+                          ? ", and so is 1 more particle of this entry"
+                          : fmt::format(", and so are {} more particles of this entry", more)));
+  }
+}
+
+void Loader::set_properties(Index first, std::int64_t count, const ParticleProperties& p) {
+  const auto b = static_cast<std::ptrdiff_t>(first), e = b + static_cast<std::ptrdiff_t>(count);
+  if (p.radius) {
+    radius_.resize(x_.size(), 0.0);
+    std::fill(radius_.begin() + b, radius_.begin() + e, *p.radius);
+  }
+  if (p.type) {
+    type_.resize(x_.size(), 0);
+    std::fill(type_.begin() + b, type_.begin() + e, *p.type);
+  }
+}
+
 void Loader::read_particles(const YAML::Node& n) {
   if (!n.IsDefined()) {
     error(root_, "",
@@ -116,8 +229,15 @@ void Loader::read_particles(const YAML::Node& n) {
     if (!check_map(item, path, "{ position: [x, y, z], mass: m } or a builder such as grid")) {
       continue;
     }
+    const auto first = static_cast<Index>(x_.size());
+    // Where a problem with one of this entry's particles is reported.
+    auto made = [&](const YAML::Node& node, const std::string& at) {
+      const auto end = static_cast<Index>(x_.size());
+      if (end > first) entries_.push_back({first, end, node, at});
+    };
     if (item["file"].IsDefined()) {  // a CSV side file (side_files.hpp)
       read_particle_file(item, path);
+      made(item["file"], path + ".file");
       continue;
     }
     const auto& builders = builder_names();
@@ -132,6 +252,7 @@ void Loader::read_particles(const YAML::Node& n) {
         continue;
       }
       read_builder(*this, *builder, item[*builder], path + "." + *builder);
+      made(item[*builder], path + "." + *builder);
       continue;
     }
     if (item["grid"].IsDefined()) {
@@ -143,6 +264,7 @@ void Loader::read_particles(const YAML::Node& n) {
         continue;
       }
       read_grid(*this, item["grid"], path + ".grid");
+      made(item["grid"], path + ".grid");
       continue;
     }
     auto p = read_params(item, path, specs, {}, -1);
@@ -151,6 +273,8 @@ void Loader::read_particles(const YAML::Node& n) {
     v_.push_back(p->vec3("velocity"));
     m_.push_back(p->real("mass"));
     fixed_.push_back(p->boolean("fixed") ? 1 : 0);
+    set_properties(first, 1, particle_properties(*p, ""));
+    made(item["position"], path + ".position");
   }
   if (diags_.size() != before) particles_ok_ = false;
   if (particles_ok_ && x_.empty()) {
@@ -193,6 +317,16 @@ void Loader::read_particle_file(const YAML::Node& item, const std::string& path)
   v_.insert(v_.end(), rows->v.begin(), rows->v.end());
   m_.insert(m_.end(), rows->mass.begin(), rows->mass.end());
   fixed_.insert(fixed_.end(), rows->fixed.begin(), rows->fixed.end());
+  // The columns radius and type, if the file has them (others get 0).
+  const auto first = static_cast<std::ptrdiff_t>(x_.size() - rows->x.size());
+  if (!rows->radius.empty()) {
+    radius_.resize(x_.size(), 0.0);
+    std::copy(rows->radius.begin(), rows->radius.end(), radius_.begin() + first);
+  }
+  if (!rows->type.empty()) {
+    type_.resize(x_.size(), 0);
+    std::copy(rows->type.begin(), rows->type.end(), type_.begin() + first);
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -346,6 +480,7 @@ void Loader::read_output(const YAML::Node& n, Scene& scene) {
     scene.output.energy = p->string("energy");
   }
   scene.output.every = p->integer("every");
+  scene.output.unwrapped = p->boolean("unwrapped");
   check_written_files(n, scene);
 }
 
@@ -453,6 +588,7 @@ Scene Loader::load(const std::string& text) {
   check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
+  check_inside_box();
   std::vector<PendingPlugin> forces, colliders, solvers;
   read_plugin_list(root["forces"], "forces", PluginKind::Force, forces);
   read_plugin_list(root["colliders"], "colliders", PluginKind::Collider, colliders);
@@ -492,12 +628,25 @@ Scene Loader::load(const std::string& text) {
   Matrix3X x(3, n), v(3, n);
   Eigen::VectorXd m(n);
   for (Index i = 0; i < n; ++i) {
-    x.col(i) = x_[i];
+    // Along periodic axes a particle starts inside the box, with no
+    // images: wrap() leaves a position already inside it bit for bit.
+    x.col(i) = box_ ? box_->wrap(x_[i]) : x_[i];
     v.col(i) = v_[i];
     m(i) = m_[i];
   }
   scene.system = std::make_unique<System>();
   scene.system->set_particles(x, v, m, fixed_);
+  // Before any force or collider exists: their factories see the box, the
+  // radii and the types in SceneContext::particles.
+  if (box_) scene.system->set_domain(*box_);
+  if (!radius_.empty()) {
+    radius_.resize(static_cast<std::size_t>(n), 0.0);
+    scene.system->set_radii(std::move(radius_));
+  }
+  if (!type_.empty()) {
+    type_.resize(static_cast<std::size_t>(n), 0);
+    scene.system->set_types(std::move(type_));
+  }
   scene.groups = groups_;
   const SceneContext ctx{scene.system->view(), &scene.groups};
   auto label = [&](const PendingPlugin& p) {

@@ -3,6 +3,9 @@
 // them with the same reader as plugin parameters, and `pdyn schema` lists them.
 #include "pdyn/host/scene_specs.hpp"
 
+#include <cstdint>
+#include <limits>
+
 #include "scene_builders.hpp"
 
 namespace pdyn {
@@ -32,6 +35,20 @@ std::vector<ParamSpec> particle_specs() {
       param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity"),
       param::required_real("mass", "kg", "mass").greater_than(0),
       param::boolean("fixed", false, "nailed in place"),
+      param::optional("radius", ParamType::Real, "m",
+                      "radius (what pair forces and pictures use); 0 if not given")
+          .at_least(0),
+      param::optional("type", ParamType::Integer, "",
+                      "type, for forces that tell types apart; 0 if not given")
+          .at_least(0)
+          .at_most(std::numeric_limits<std::int32_t>::max()),
+  };
+}
+
+std::vector<ParamSpec> box_specs() {
+  return {
+      param::required_vec3("min", "m", "corner with the smallest coordinates"),
+      param::required_vec3("max", "m", "corner with the largest coordinates (> min)"),
   };
 }
 
@@ -40,7 +57,7 @@ std::vector<ParamSpec> grid_specs() {
   ParamSpec ny = param::required("ny", ParamType::Integer, "", "particles along v");
   nx.at_least(1);
   ny.at_least(1);
-  return {
+  std::vector<ParamSpec> specs = {
       param::required_vec3("origin", "m", "position of particle (0, 0)"),
       param::required_vec3("u", "m", "spacing vector along the first grid direction").not_zero(),
       param::required_vec3("v", "m", "spacing vector along the second grid direction").not_zero(),
@@ -52,6 +69,8 @@ std::vector<ParamSpec> grid_specs() {
       param::optional("pin", ParamType::IndexPairs, "",
                       "grid coordinates [i, j] of nailed particles; negative counts from the end"),
   };
+  for (auto& s : particle_property_specs()) specs.push_back(std::move(s));
+  return specs;
 }
 
 std::vector<ParamSpec> output_specs() {
@@ -61,6 +80,9 @@ std::vector<ParamSpec> output_specs() {
       param::optional("path", ParamType::String, "", "frames CSV: t,id,x,y,z,vx,vy,vz"),
       every,
       param::optional("energy", ParamType::String, "", "energy CSV: t,kinetic,potential,total"),
+      param::boolean("unwrapped", false,
+                     "append the unwrapped positions xu,yu,zu (x + images * box length) to the "
+                     "frames"),
   };
 }
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string_view>
@@ -150,8 +151,9 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
     problems.add_file("cannot read the particle file (expected a readable CSV file)");
     return std::nullopt;
   }
-  enum Col { X, Y, Z, VX, VY, VZ, MASS, FIXED, N_COLS };
-  static const char* const kNames[N_COLS] = {"x", "y", "z", "vx", "vy", "vz", "mass", "fixed"};
+  enum Col { X, Y, Z, VX, VY, VZ, MASS, RADIUS, FIXED, TYPE, N_COLS };
+  static const char* const kNames[N_COLS] = {"x",  "y",    "z",      "vx",    "vy",
+                                             "vz", "mass", "radius", "fixed", "type"};
   std::array<int, N_COLS> at{};  // field index of each column, -1 if absent
   at.fill(-1);
   std::size_t width = 0;
@@ -170,7 +172,8 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
       while (c < N_COLS && fields[k].text != kNames[c]) ++c;
       if (c == N_COLS) {
         problems.add(line, fields[k].column,
-                     fmt::format("unknown column {} (expected x, y, z, vx, vy, vz, mass, fixed)",
+                     fmt::format("unknown column {} (expected x, y, z, vx, vy, vz, mass, fixed, "
+                                 "radius, type)",
                                  quoted(fields[k].text)));
       } else if (at[c] >= 0) {
         problems.add(
@@ -184,13 +187,17 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
       if (at[c] < 0) {
         problems.add(line, 1,
                      fmt::format("the header has no column '{}' (expected x,y,z[,vx,vy,vz],mass"
-                                 "[,fixed])",
+                                 "[,fixed][,radius][,type])",
                                  kNames[c]));
       }
     }
     const int velocities = (at[VX] >= 0) + (at[VY] >= 0) + (at[VZ] >= 0);
     if (velocities != 0 && velocities != 3) {
       problems.add(line, 1, "the header has only some of vx, vy, vz (expected all three or none)");
+    }
+    if (!problems.any()) {
+      if (at[RADIUS] >= 0) rows.radius.reserve(estimate);
+      if (at[TYPE] >= 0) rows.type.reserve(estimate);
     }
     return !problems.any();
   };
@@ -201,8 +208,8 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
       return;
     }
     bool ok = true;
-    double value[N_COLS] = {0, 0, 0, 0, 0, 0, 0, 0};
-    for (int c = X; c <= MASS; ++c) {
+    double value[N_COLS] = {};
+    for (int c = X; c <= RADIUS; ++c) {
       if (at[c] < 0) continue;
       const auto x = parse_real(fields[static_cast<std::size_t>(at[c])], line, kNames[c], problems);
       ok = ok && x;
@@ -213,6 +220,30 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
                    fmt::format("mass: {} is not positive (expected a mass > 0 kg)",
                                fields[static_cast<std::size_t>(at[MASS])].text));
       ok = false;
+    }
+    if (at[RADIUS] >= 0 && ok && !(value[RADIUS] >= 0.0)) {
+      const Field& f = fields[static_cast<std::size_t>(at[RADIUS])];
+      problems.add(line, f.column,
+                   fmt::format("radius: {} is negative (expected a radius >= 0 m)", f.text));
+      ok = false;
+    }
+    std::int32_t type = 0;
+    if (at[TYPE] >= 0) {
+      const Field& f = fields[static_cast<std::size_t>(at[TYPE])];
+      long long t = 0;
+      const char* b = f.text.data();
+      const char* e = b + f.text.size();
+      if (!f.text.empty() && *b == '+') ++b;
+      const auto [end, ec] = std::from_chars(b, e, t);
+      if (ec != std::errc() || end != e || f.text.empty() || t < 0 ||
+          t > std::numeric_limits<std::int32_t>::max()) {
+        problems.add(line, f.column,
+                     fmt::format("type: {} is not a particle type (expected a whole number in "
+                                 "[0, {}])",
+                                 quoted(f.text), std::numeric_limits<std::int32_t>::max()));
+        ok = false;
+      }
+      type = static_cast<std::int32_t>(t);
     }
     std::uint8_t fixed = 0;
     if (at[FIXED] >= 0) {
@@ -232,6 +263,8 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
     rows.v.emplace_back(value[VX], value[VY], value[VZ]);
     rows.mass.push_back(value[MASS]);
     rows.fixed.push_back(fixed);
+    if (at[RADIUS] >= 0) rows.radius.push_back(value[RADIUS]);
+    if (at[TYPE] >= 0) rows.type.push_back(type);
   };
   for_each_row(*text, problems, header, row);
   if (problems.any()) {
@@ -313,12 +346,17 @@ template std::optional<std::vector<std::array<Index, 3>>> read_tuples<3>(
 
 void write_particles(const std::filesystem::path& file, const ParticleRows& rows) {
   fmt::memory_buffer buf;
-  fmt::format_to(std::back_inserter(buf), "x,y,z,vx,vy,vz,mass,fixed\n");
+  const bool radius = !rows.radius.empty(), type = !rows.type.empty();
+  fmt::format_to(std::back_inserter(buf), "x,y,z,vx,vy,vz,mass,fixed{}{}\n",
+                 radius ? ",radius" : "", type ? ",type" : "");
   for (std::size_t i = 0; i < rows.x.size(); ++i) {
     fmt::format_to(std::back_inserter(buf),
-                   "{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{}\n", rows.x[i].x(),
+                   "{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{}", rows.x[i].x(),
                    rows.x[i].y(), rows.x[i].z(), rows.v[i].x(), rows.v[i].y(), rows.v[i].z(),
                    rows.mass[i], int{rows.fixed[i]});
+    if (radius) fmt::format_to(std::back_inserter(buf), ",{:.17g}", rows.radius[i]);
+    if (type) fmt::format_to(std::back_inserter(buf), ",{}", rows.type[i]);
+    buf.push_back('\n');
   }
   std::ofstream(file, std::ios::binary).write(buf.data(), static_cast<std::streamsize>(buf.size()));
 }

@@ -207,7 +207,12 @@ void Loader::check_keys(const YAML::Node& map, const std::string& path,
       continue;
     }
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-    const std::string guess = closest_match(key, allowed);
+    std::string guess = closest_match(key, allowed);
+    // A builder's `radius`, `type` are `particle_radius`, `particle_type`.
+    if (guess.empty() &&
+        std::find(allowed.begin(), allowed.end(), "particle_" + key) != allowed.end()) {
+      guess = "particle_" + key;
+    }
     error(
         kv.first, key_path,
         fmt::format("unknown key '{}' in {} ({}expected one of: {})", key,

@@ -161,6 +161,55 @@ TEST(Render, BadOptionsAreRefusedWithTheirReason) {
   EXPECT_NE(r.err.find("bad.yaml:1:19: simulation.dt:"), std::string::npos) << r.err;
 }
 
+// A particle with a radius is a disc of that radius at the camera's scale:
+// a pixel 0.8 R from its centre, in any direction, is covered, one 1.3 R
+// away is not. A particle without one is the usual marker, and the
+// simulation box is a thin wire box around them.
+TEST(Render, ParticlesWithRadiiAreDiscsAndTheBoxIsAWireBox) {
+  const fs::path dir = test::temp_dir("render-radius");
+  const double R = 0.3;
+  const fs::path scene = test::write_file(
+      dir / "scene.yaml",
+      "simulation: { dt: 0.001, steps: 1, box: { min: [-1, -1, -1], max: [1, 1, 1] } }\n"
+      "particles:\n"
+      "  - { position: [-0.2, 0.1, 0], mass: 1, radius: 0.3 }\n"
+      "  - { position: [0.7, -0.6, 0], mass: 1 }\n");
+  const fs::path png = dir / "r.png";
+  const auto r = render(
+      {scene.string(), "--at", "0", "--png", png.string(), "--view", "xy", "--size", "400x400"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Picture pic(png);
+  ASSERT_TRUE(pic.ok());
+  const Scene s = load_scene(scene, test::shipped_plugins());
+  const Drawables d = drawables(s);
+  ASSERT_TRUE(d.box);
+  std::vector<Vec3> points = cli::render::obstacle_points(d);
+  const auto particles = cli::render::particle_points(s.system->positions(), s.system->radii());
+  points.insert(points.end(), particles.begin(), particles.end());
+  const Camera cam = cli::render::fit_camera(cli::render::View::XY, points, 400, 400);
+  ASSERT_GT(R * cam.scale, 20) << "the test needs a disc of many pixels";
+  auto px = [&](const Vec3& p) {
+    const auto q = cam.pixel(p);
+    return pic.at(static_cast<int>(q.x()), static_cast<int>(q.y()));
+  };
+  const Vec3 c(-0.2, 0.1, 0);
+  for (int k = 0; k < 8; ++k) {
+    const double a = k * 3.14159265358979 / 4;
+    const Vec3 u(std::cos(a), std::sin(a), 0);
+    EXPECT_TRUE(near(px(c + 0.8 * R * u), cli::render::kFree)) << "direction " << k;
+    EXPECT_TRUE(white(px(c + 1.3 * R * u))) << "direction " << k;
+  }
+  EXPECT_TRUE(near(px(Vec3(0.7, -0.6, 0)), cli::render::kFree));
+  EXPECT_TRUE(white(px(Vec3(0.7, -0.3, 0))));  // the marker is small
+  // The box's edges (a line along y at x = -1 and x = 1), not its inside.
+  for (const double x : {-1.0, 1.0}) {
+    const Rgb edge = px(Vec3(x, 0.5, 0));
+    EXPECT_FALSE(white(edge)) << x;
+    EXPECT_FALSE(near(edge, cli::render::kFree)) << x;
+  }
+  EXPECT_TRUE(white(px(Vec3(0.5, 0.6, 0))));
+}
+
 // A third party's collider is drawn from its own shape hook: the
 // tetra_shape fixture's tetrahedron covers the origin seen along z, with a
 // particle far off; a broken hook stops the picture with exit 3, naming the

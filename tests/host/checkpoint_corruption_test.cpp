@@ -156,12 +156,48 @@ TEST_F(CheckpointCorruption, WrongMagic) {
 
 TEST_F(CheckpointCorruption, WrongVersion) {
   const std::uint32_t current = Checkpoint::kFormatVersion;
-  for (std::uint32_t v : {current + 1, current - 1, 0u, 0xffffffffu}) {
+  const std::uint32_t oldest = Checkpoint::kOldestReadableVersion;
+  for (std::uint32_t v : {current + 1, oldest - 1, 0u, 0xffffffffu}) {
     SCOPED_TRACE("version " + std::to_string(v));
     expect_refused(patch(good_, 8, v),
                    {"bad.ckpt", "format version " + std::to_string(v) + " is not supported",
                     "expected version " + std::to_string(current)});
   }
+}
+
+// Version 2, written before the simulation box, is version 3 without the
+// image counts: it is still read, as images 0, and resumes the run to the
+// same end as the version 3 checkpoint of the same state.
+TEST_F(CheckpointCorruption, Version2IsReadWithNoImages) {
+  ASSERT_EQ(Checkpoint::kFormatVersion, 3u);
+  const Checkpoint now = read_checkpoint(dir_ / "out/run.ckpt");
+  const std::size_t n = static_cast<std::size_t>(now.mass.size());
+  // The payload's fields before the images: two strings, i64, f64, i64,
+  // u8, u64 N, then 6N + N doubles and N flags.
+  const std::string payload = good_.substr(kHeader, good_.size() - kHeader - 4);
+  const std::size_t images =
+      8 + now.scene_file.size() + 8 + now.scene_text.size() + 8 + 8 + 8 + 1 + 8 + 7 * n * 8 + n;
+  std::string old_payload = payload;
+  old_payload.erase(images, 3 * n * sizeof(std::int32_t));
+  const std::string v2 = patch(reseal(good_, old_payload), 8, std::uint32_t{2});
+  write_bytes(dir_ / "v2.ckpt", v2);
+  const Checkpoint c = read_checkpoint(dir_ / "v2.ckpt");
+  EXPECT_TRUE(same_bits(c.state, now.state));
+  EXPECT_EQ(c.plugin_states, now.plugin_states);
+  EXPECT_EQ(c.frames.crc, now.frames.crc);
+  EXPECT_EQ(c.images, (std::vector<std::array<std::int32_t, 3>>(n, {0, 0, 0})));
+
+  const fs::path copy = temp_dir("corruption-v2-copy");
+  fs::copy(dir_, copy, fs::copy_options::recursive);
+  auto a = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", "v2.ckpt"});
+  ASSERT_EQ(a.status, 0) << a.err;
+  const std::string from_v2 = read_bytes(copy / "out/frames.csv");
+  const std::string end_v2 = read_bytes(copy / "out/run.ckpt");
+  write_bytes(copy / "v3.ckpt", good_);
+  auto c3 = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", "v3.ckpt"});
+  ASSERT_EQ(c3.status, 0) << c3.err;
+  EXPECT_EQ(read_bytes(copy / "out/frames.csv"), from_v2);
+  EXPECT_EQ(read_bytes(copy / "out/run.ckpt"), end_v2);
 }
 
 TEST_F(CheckpointCorruption, TrailingGarbage) {

@@ -112,10 +112,11 @@ TEST(SideFiles, BadHeaderAndBadPairsAreLocated) {
     ASSERT_EQ(e.diagnostics().size(), 2u) << e.what();
     EXPECT_EQ(e.diagnostics()[0].text(),
               (dir / "p.csv").string() +
-                  ":1:7: unknown column 'weight' (expected x, y, z, vx, vy, vz, mass, fixed)");
-    EXPECT_EQ(e.diagnostics()[1].text(),
-              (dir / "p.csv").string() +
-                  ":1:1: the header has no column 'mass' (expected x,y,z[,vx,vy,vz],mass[,fixed])");
+                  ":1:7: unknown column 'weight' (expected x, y, z, vx, vy, vz, mass, fixed, "
+                  "radius, type)");
+    EXPECT_EQ(e.diagnostics()[1].text(), (dir / "p.csv").string() +
+                                             ":1:1: the header has no column 'mass' (expected "
+                                             "x,y,z[,vx,vy,vz],mass[,fixed][,radius][,type])");
   }
   EXPECT_EQ(only_problem([&] { load_scene(dir / "b.yaml", shipped_plugins()); }),
             (dir / "s.csv").string() +

@@ -135,6 +135,38 @@ TEST(ViewerSession, CreateAddsAParticleThatTheScenesForcesAct) {
   EXPECT_NEAR(x(*s, 2).z(), 3.0 - 0.5 * 10 * 0.2 * 0.2, 1e-12);
 }
 
+// The scene message carries the radii (null when the scene gives none) and
+// the simulation box (null in open space); a created particle gets radius 0,
+// and a periodic box wraps the viewer's steps as it does a run's.
+TEST(ViewerSession, SceneMessageHasRadiiAndTheBox) {
+  auto s = session_for("radius-box", R"(
+simulation:
+  dt: 0.01
+  steps: 10
+  solver: { type: euler }
+  box: { min: [0, 0, 0], max: [1, 2, 3], periodic: [true, false, false] }
+particles:
+  - { position: [0.95, 1, 1], velocity: [10, 0, 0], mass: 1, radius: 0.1 }
+  - { position: [0.5, 1, 1], mass: 1 }
+)");
+  json scene = json::parse(s->scene_json());
+  EXPECT_EQ(scene["radius"], json::array({0.1, 0.0}));
+  EXPECT_EQ(scene["box"]["min"], json::array({0.0, 0.0, 0.0}));
+  EXPECT_EQ(scene["box"]["max"], json::array({1.0, 2.0, 3.0}));
+  EXPECT_EQ(scene["box"]["periodic"], json::array({true, false, false}));
+  s->apply(cmd(R"({"op":"create","point":[0.5,0.5,0.5],"mass":1})"), 1);
+  scene = json::parse(s->scene_json());
+  EXPECT_EQ(scene["radius"], json::array({0.1, 0.0, 0.0}));
+  steps(*s, 1);  // 0.95 + 0.1 m: across x = 1, back in at 0.05
+  EXPECT_NEAR(x(*s, 0).x(), 0.05, 1e-12);
+  EXPECT_EQ(s->system().images()[0][0], 1);
+
+  auto open = session_for("no-radius-box", kLone);
+  scene = json::parse(open->scene_json());
+  EXPECT_TRUE(scene["radius"].is_null());
+  EXPECT_TRUE(scene["box"].is_null());
+}
+
 TEST(ViewerSession, AttachAddsASpringAtRestAtTheCurrentDistance) {
   // A nailed particle and a hanging one 0.5 m below, attached: the spring
   // starts at rest, so the hanging one settles mg/ks below it, with its

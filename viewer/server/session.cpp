@@ -486,6 +486,16 @@ std::string Session::scene_json() const {
     for (const auto& t : m.triangles) triangles.push_back(json::array({t[0], t[1], t[2]}));
     j["meshes"].push_back({{"vertices", std::move(vertices)}, {"triangles", std::move(triangles)}});
   }
+  // Radii (m) when the scene gives any, else null: the page draws a
+  // particle of radius > 0 as a sphere, any other as a point.
+  j["radius"] = sys.radii().empty() ? json(nullptr) : json(sys.radii());
+  j["box"] = nullptr;
+  if (d.box) {
+    j["box"] = {
+        {"min", vec(d.box->min)},
+        {"max", vec(d.box->max)},
+        {"periodic", json::array({d.box->periodic[0], d.box->periodic[1], d.box->periodic[2]})}};
+  }
   j["solvers"] = registry_->names(PluginKind::Solver);
   // A flat scene: every particle and its velocity lie in one coordinate
   // plane (the page then starts in its 2-D view along that axis).

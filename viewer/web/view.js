@@ -1,7 +1,9 @@
 // The 3-D (and 2-D) picture of the running scene with three.js: particles
-// as points, links as line segments sharing the points' position buffer,
-// colliders as translucent shapes, an orbit camera or an orthographic one
-// looking along an axis. Scenes are z-up, as in pdyn render's `3d` view.
+// as points (and those with a radius as spheres of it, one InstancedMesh),
+// links as line segments sharing the points' position buffer, colliders as
+// translucent shapes, the simulation box as a wire box, an orbit camera or
+// an orthographic one looking along an axis. Scenes are z-up, as in pdyn
+// render's `3d` view.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 
@@ -60,6 +62,8 @@ export class View {
     this.scene.add(this.drag);
     this.points = null;
     this.lines = null;
+    this.spheres = null; // particles with a radius: an InstancedMesh of unit spheres, scaled
+    this.radii = null;
     // Drawn only when something changed (a frame, the camera, a toggle):
     // ten thousand points and sixty thousand lines are not free without a GPU.
     this.dirty = true;
@@ -109,6 +113,22 @@ export class View {
     this.lines.frustumCulled = false;
     this.lines.visible = this.showSprings;
     this.scene.add(this.lines, this.points);
+    if (this.spheres) {
+      this.scene.remove(this.spheres);
+      this.spheres.geometry.dispose();
+      this.spheres.material.dispose();
+      this.spheres = null;
+    }
+    this.radii = msg.radius ?? null;
+    if (this.radii && this.radii.length === msg.count && this.radii.some((r) => r > 0)) {
+      const fine = msg.count <= 2000; // fewer facets when there are many
+      const geometry = new THREE.SphereGeometry(1, fine ? 20 : 8, fine ? 14 : 6);
+      this.spheres = new THREE.InstancedMesh(geometry, new THREE.MeshStandardMaterial({ roughness: 0.6 }), msg.count);
+      this.spheres.instanceMatrix.setUsage(THREE.DynamicDrawUsage);
+      this.spheres.frustumCulled = false;
+      this.scene.add(this.spheres);
+      this.placeSpheres();
+    }
     this.speeds = new Float32Array(msg.count);
     this.msg = msg;
     if (fit) this.fit();
@@ -116,9 +136,22 @@ export class View {
     this.recolour();
   }
 
+  /** Each sphere at its particle's position, scaled by its radius (0: not drawn). */
+  placeSpheres() {
+    if (!this.spheres) return;
+    const pos = this.points.geometry.attributes.position.array;
+    const m = this.spheres.instanceMatrix.array;
+    for (let i = 0; i < this.count; ++i) {
+      const r = this.radii[i];
+      m.set([r, 0, 0, 0, 0, r, 0, 0, 0, 0, r, 0, pos[3 * i], pos[3 * i + 1], pos[3 * i + 2], 1], 16 * i);
+    }
+    this.spheres.instanceMatrix.needsUpdate = true;
+  }
+
   buildObstacles() {
     this.obstacles.clear();
     const msg = this.msg;
+    if (msg.box) this.obstacles.add(this.domainLines(msg.box));
     const material = new THREE.MeshStandardMaterial({ color: 0x9aa59a, transparent: true, opacity: 0.35,
                                                       side: THREE.DoubleSide, depthWrite: false });
     const centre = this.centre || new THREE.Vector3();
@@ -151,11 +184,36 @@ export class View {
     }
   }
 
-  /** Frames the particles (and the spheres, boxes and meshes) in both cameras. */
+  /** The simulation box's twelve edges, thin; dashed when some axis is
+   * periodic (its faces there are where space repeats, not walls). */
+  domainLines(b) {
+    const corner = (k) => new THREE.Vector3(k & 1 ? b.max[0] : b.min[0], k & 2 ? b.max[1] : b.min[1],
+                                            k & 4 ? b.max[2] : b.min[2]);
+    const ends = [];
+    for (let k = 0; k < 8; ++k) for (const bit of [1, 2, 4]) if (!(k & bit)) ends.push(corner(k), corner(k | bit));
+    const geometry = new THREE.BufferGeometry().setFromPoints(ends);
+    const periodic = b.periodic.some((p) => p);
+    const size = Math.max(b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]);
+    const material = periodic
+      ? new THREE.LineDashedMaterial({ color: 0x4d8c73, dashSize: size / 60, gapSize: size / 100 })
+      : new THREE.LineBasicMaterial({ color: 0x4d8c73 });
+    const lines = new THREE.LineSegments(geometry, material);
+    if (periodic) lines.computeLineDistances();
+    return lines;
+  }
+
+  /** Frames the particles (and the spheres, boxes, meshes and the
+   * simulation box) in both cameras. */
   fit() {
     const box = new THREE.Box3();
     const pos = this.points.geometry.attributes.position.array;
-    for (let i = 0; i < this.count; ++i) box.expandByPoint(new THREE.Vector3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]));
+    for (let i = 0; i < this.count; ++i) {
+      const p = new THREE.Vector3(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+      const r = this.radii ? this.radii[i] : 0;
+      box.expandByPoint(p.clone().addScalar(r));
+      box.expandByPoint(p.addScalar(-r));
+    }
+    if (this.msg?.box) { box.expandByPoint(new THREE.Vector3(...this.msg.box.min)); box.expandByPoint(new THREE.Vector3(...this.msg.box.max)); }
     for (const s of this.msg?.spheres ?? []) {
       box.expandByPoint(new THREE.Vector3(...s.center).addScalar(s.radius));
       box.expandByPoint(new THREE.Vector3(...s.center).addScalar(-s.radius));
@@ -204,6 +262,7 @@ export class View {
     const position = this.points.geometry.attributes.position;
     position.array.set(frame.positions);
     position.needsUpdate = true;
+    this.placeSpheres();
     this.dirty = true;
     this.speeds = frame.speeds;
     if (this.bySpeed) this.recolour();
@@ -222,8 +281,10 @@ export class View {
       else if (this.bySpeed) ramp(top > 0 ? this.speeds[i] / top : 0, c);
       else c.copy(FREE);
       colour.setXYZ(i, c.r, c.g, c.b);
+      if (this.spheres) this.spheres.setColorAt(i, c);
     }
     colour.needsUpdate = true;
+    if (this.spheres?.instanceColor) this.spheres.instanceColor.needsUpdate = true;
     this.dirty = true;
   }
 

@@ -1,6 +1,7 @@
 // Checkpoints: the complete state of a run, to resume it bit-identically.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -26,7 +27,10 @@ struct OutputMark {
 };
 
 struct Checkpoint {
-  static constexpr std::uint32_t kFormatVersion = 2;
+  /// Version 3 added the image counts; version 2 files are still read (as
+  /// images 0: they were written before the simulation box existed).
+  static constexpr std::uint32_t kFormatVersion = 3;
+  static constexpr std::uint32_t kOldestReadableVersion = 2;
 
   std::string scene_file;           ///< where the scene came from (for messages)
   std::string scene_text;           ///< canonical scene after overrides, without steps/duration
@@ -37,6 +41,9 @@ struct Checkpoint {
   Eigen::VectorXd state;            ///< [x | v], 6N
   Eigen::VectorXd mass;             ///< N
   std::vector<std::uint8_t> fixed;  ///< N
+  /// N: box lengths each particle was wrapped by along x, y, z
+  /// (System::images(); the unwrapped position is x + images L).
+  std::vector<std::array<std::int32_t, 3>> images;
   /// save_state() of the solver, then each force, then each collider, in
   /// scene order, each with a label naming the plugin.
   std::vector<std::pair<std::string, std::vector<std::uint8_t>>> plugin_states;

@@ -45,6 +45,9 @@ struct OutputSpec {
   std::int64_t every = 1;             ///< a frame every `every` steps; 0: first and final only
   std::filesystem::path checkpoint;   ///< checkpoint file; empty: none unless interrupted
   std::int64_t checkpoint_every = 0;  ///< a checkpoint every N steps (and at the end); 0: end only
+  /// Frames also hold xu,yu,zu: positions unwrapped across periodic box
+  /// faces, x + images * L (m).
+  bool unwrapped = false;
 };
 
 /// One plugin object as the scene declared it, with its checked parameters:

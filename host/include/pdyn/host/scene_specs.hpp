@@ -13,6 +13,9 @@ namespace pdyn {
 
 /// `simulation:` (besides `solver:`, a plugin entry).
 std::vector<ParamSpec> simulation_specs();
+/// `simulation.box:` besides `periodic` (a list of three booleans, which no
+/// ParamType describes: the loader reads it itself).
+std::vector<ParamSpec> box_specs();
 /// One `particles:` entry that is a single particle.
 std::vector<ParamSpec> particle_specs();
 /// `output:` (besides `checkpoint:`).

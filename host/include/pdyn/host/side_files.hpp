@@ -5,7 +5,7 @@
 // parser state per node at a million nodes:
 //
 //   particles:
-//     - file: cloth.csv          # header x,y,z[,vx,vy,vz],mass[,fixed]
+//     - file: cloth.csv          # header x,y,z[,vx,vy,vz],mass[,fixed][,radius][,type]
 //   forces:
 //     - { type: spring, ks: 100, pairs: { file: springs.csv } }   # header i,j
 //
@@ -37,10 +37,13 @@ struct ParticleRows {
   std::vector<Vec3> v;              ///< m/s (zero when the file has no vx,vy,vz)
   std::vector<double> mass;         ///< kg, > 0
   std::vector<std::uint8_t> fixed;  ///< 1: nailed (0 when the file has no fixed column)
+  std::vector<double> radius;       ///< m, >= 0; empty when the file has no radius column
+  std::vector<std::int32_t> type;   ///< >= 0; empty when the file has no type column
 };
 
 /// Reads a particle file (columns x,y,z,mass required; vx,vy,vz together or
-/// not at all; fixed as 0/1/true/false). `shown` is the name used in
+/// not at all; fixed as 0/1/true/false; radius (m, >= 0) and type (a whole
+/// number >= 0) optional). `shown` is the name used in
 /// messages. Returns nothing and appends to `problems` if anything is wrong.
 std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
                                            const std::string& shown,
@@ -56,7 +59,8 @@ std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesyst
                                                              std::vector<Diagnostic>& problems);
 
 /// Writes particles in the format read_particles reads (17 significant
-/// digits: the round trip is exact).
+/// digits: the round trip is exact), with radius and type columns when
+/// `rows` holds them.
 void write_particles(const std::filesystem::path& file, const ParticleRows& rows);
 /// Writes pairs with header i,j.
 void write_pairs(const std::filesystem::path& file, const std::vector<IndexPair>& pairs);
