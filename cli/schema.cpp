@@ -263,6 +263,18 @@ Json make_schema(const PluginRegistry& registry) {
                      {"additionalProperties", false}});
   }
 
+  // A CSV side file of particles (docs/scenes.md, `file`).
+  items.push_back({{"type", "object"},
+                   {"properties",
+                    {{"file",
+                      {{"type", "string"},
+                       {"minLength", 1},
+                       {"description",
+                        "a CSV side file of particles, relative to the scene's folder: header "
+                        "x,y,z[,vx,vy,vz],mass[,fixed][,radius][,type]"}}}}},
+                   {"required", {"file"}},
+                   {"additionalProperties", false}});
+
   auto plugin_list = [](const char* def) {
     return Json{{"type", Json::array({"array", "null"})},
                 {"items", {{"$ref", std::string("#/$defs/") + def}}}};

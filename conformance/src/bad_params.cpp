@@ -17,6 +17,7 @@
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/system.hpp"
+#include "sample.hpp"
 
 namespace pdyn::conformance::detail {
 
@@ -213,7 +214,9 @@ std::string scene_text(const PluginDescriptor& d, const Params& sample, const Ma
   }
   s += "particles:\n";
   for (Index i = 0; i < x.cols(); ++i) {
-    s += fmt::format("  - {{ position: [{}, {}, {}], mass: 1 }}\n", x(0, i), x(1, i), x(2, i));
+    // Radii as in the kit's states, for contact laws (soft_contact).
+    s += fmt::format("  - {{ position: [{}, {}, {}], mass: 1, radius: {} }}\n", x(0, i), x(1, i),
+                     x(2, i), kRadius);
   }
   if (d.kind == PluginKind::Force) {
     s += "forces:\n" + indent(item, "  - ", "    ");
