@@ -42,10 +42,13 @@ TEST(Schema, BuiltInSectionsComeFromTheLoadersTables) {
   EXPECT_EQ(output["properties"]["checkpoint"]["required"], json({"path"}));
   EXPECT_EQ(output["properties"]["every"]["default"], 1);
 
-  // One particle, then one alternative per builder the loader lists.
+  // One particle, then one alternative per builder the loader lists, then a
+  // CSV side file.
   const json& items = s["properties"]["particles"]["items"]["oneOf"];
   const auto builders = builder_specs();
-  ASSERT_EQ(items.size(), 1 + builders.size());
+  ASSERT_EQ(items.size(), 2 + builders.size());
+  EXPECT_EQ(items.back()["required"], json({"file"}));
+  EXPECT_EQ(items.back()["properties"]["file"]["type"], "string");
   EXPECT_EQ(items[0]["required"], json({"position", "mass"}));
   EXPECT_EQ(items[0]["properties"]["mass"]["exclusiveMinimum"], 0);
   EXPECT_EQ(items[0]["properties"]["velocity"]["default"], json({0.0, 0.0, 0.0}));
@@ -79,7 +82,7 @@ TEST(Schema, HasTheBoxRadiiTypesAndUnwrappedOutput) {
   EXPECT_EQ(items[0]["properties"]["radius"]["minimum"], 0);
   EXPECT_EQ(items[0]["properties"]["type"]["type"], "integer");
   EXPECT_EQ(items[0]["properties"]["type"]["maximum"], 2147483647);
-  for (std::size_t i = 1; i < items.size(); ++i) {
+  for (std::size_t i = 1; i + 1 < items.size(); ++i) {  // the builders (the last: a side file)
     const json& builder = items[i]["properties"].begin().value();
     EXPECT_EQ(builder["properties"]["particle_radius"]["minimum"], 0) << items[i];
     EXPECT_EQ(builder["properties"]["particle_type"]["minimum"], 0) << items[i];
