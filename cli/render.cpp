@@ -173,16 +173,20 @@ void draw_plane(cairo_t* cr, const Camera& cam, const std::array<Vec3, 4>& corne
   cairo_stroke(cr);
 }
 
-void draw_box(cairo_t* cr, const Camera& cam, const shape::Box& b) {
+// The twelve edges of the axis-aligned box [lo, hi], as a path to stroke.
+void box_edges(cairo_t* cr, const Camera& cam, const Vec3& lo, const Vec3& hi) {
   auto corner = [&](int k) {
-    return Vec3(k & 1 ? b.max.x() : b.min.x(), k & 2 ? b.max.y() : b.min.y(),
-                k & 4 ? b.max.z() : b.min.z());
+    return Vec3(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(), k & 4 ? hi.z() : lo.z());
   };
   for (int k = 0; k < 8; ++k) {
     for (int bit : {1, 2, 4}) {
       if (!(k & bit)) line(cr, cam, corner(k), corner(k | bit));
     }
   }
+}
+
+void draw_box(cairo_t* cr, const Camera& cam, const shape::Box& b) {
+  box_edges(cr, cam, b.min, b.max);
   cairo_set_source_rgb(cr, 0.40, 0.45, 0.52);
   cairo_set_line_width(cr, 1.5);
   cairo_stroke(cr);
@@ -191,15 +195,7 @@ void draw_box(cairo_t* cr, const Camera& cam, const shape::Box& b) {
 // The simulation box: a thin wire box, dashed when some axis is periodic
 // (its faces there are not walls but where the space repeats).
 void draw_domain(cairo_t* cr, const Camera& cam, const Domain& b) {
-  auto corner = [&](int k) {
-    return Vec3(k & 1 ? b.max.x() : b.min.x(), k & 2 ? b.max.y() : b.min.y(),
-                k & 4 ? b.max.z() : b.min.z());
-  };
-  for (int k = 0; k < 8; ++k) {
-    for (int bit : {1, 2, 4}) {
-      if (!(k & bit)) line(cr, cam, corner(k), corner(k | bit));
-    }
-  }
+  box_edges(cr, cam, b.min, b.max);
   const double dash[] = {5.0, 3.0};
   cairo_set_dash(cr, dash, b.any_periodic() ? 2 : 0, 0);
   cairo_set_source_rgb(cr, 0.30, 0.55, 0.45);

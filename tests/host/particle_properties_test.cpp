@@ -13,14 +13,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string problems(const std::string& yaml) {
-  try {
-    test::load_text(yaml);
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "(loaded without error)";
-}
+std::string problems(const std::string& yaml) { return test::load_problems(yaml); }
 
 const char* kHead = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n";
 

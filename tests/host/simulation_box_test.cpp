@@ -20,14 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string problems(const std::string& yaml) {
-  try {
-    test::load_text(yaml);
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "(loaded without error)";
-}
+std::string problems(const std::string& yaml) { return test::load_problems(yaml); }
 
 // What a force's factory saw in SceneContext::particles.
 struct Seen {

@@ -24,6 +24,15 @@ Scene load_text(const std::string& yaml, const std::vector<Override>& overrides)
   return load_scene_text(yaml, "test.yaml", shipped_plugins(), overrides);
 }
 
+std::string load_problems(const std::string& yaml) {
+  try {
+    load_text(yaml);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "(loaded without error)";
+}
+
 CommandResult pdyn(const std::vector<std::string>& args) {
   std::ostringstream out, err;
   CommandResult r;

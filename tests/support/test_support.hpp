@@ -17,6 +17,10 @@ const PluginRegistry& shipped_plugins();
 /// Loads a scene from YAML text (named "test.yaml" in messages).
 Scene load_text(const std::string& yaml, const std::vector<Override>& overrides = {});
 
+/// The located problems load_text reports for `yaml` (SceneError's text),
+/// or "(loaded without error)".
+std::string load_problems(const std::string& yaml);
+
 /// Result of running the `pdyn` command in-process.
 struct CommandResult {
   int status = -1;
