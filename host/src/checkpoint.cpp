@@ -227,11 +227,15 @@ Checkpoint read_checkpoint(const fs::path& path) {
   std::memcpy(&version, data.data() + sizeof(kMagic), sizeof(version));
   std::memcpy(&length, data.data() + sizeof(kMagic) + sizeof(version), sizeof(length));
   if (version < Checkpoint::kOldestReadableVersion || version > Checkpoint::kFormatVersion) {
+    const std::uint32_t oldest = Checkpoint::kOldestReadableVersion,
+                        newest_old = Checkpoint::kFormatVersion - 1;
+    const std::string older = oldest == newest_old
+                                  ? fmt::format("version {}", oldest)
+                                  : fmt::format("versions {} to {}", oldest, newest_old);
     throw CheckpointError(
         fmt::format("{}: checkpoint format version {} is not supported "
-                    "(expected version {}, or {} to {} from an earlier pdyn)",
-                    file, version, Checkpoint::kFormatVersion, Checkpoint::kOldestReadableVersion,
-                    Checkpoint::kFormatVersion - 1));
+                    "(expected version {}, or {} from an earlier pdyn)",
+                    file, version, Checkpoint::kFormatVersion, older));
   }
   // As unsigned sums, so that a corrupted length cannot wrap around.
   const std::uint64_t have = data.size() - kHeader;

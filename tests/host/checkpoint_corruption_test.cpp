@@ -161,7 +161,8 @@ TEST_F(CheckpointCorruption, WrongVersion) {
     SCOPED_TRACE("version " + std::to_string(v));
     expect_refused(patch(good_, 8, v),
                    {"bad.ckpt", "format version " + std::to_string(v) + " is not supported",
-                    "expected version " + std::to_string(current)});
+                    "expected version " + std::to_string(current) + ", or version " +
+                        std::to_string(oldest) + " from an earlier pdyn)"});
   }
 }
 
