@@ -1,4 +1,4 @@
-// `pdyn new force|solver|collider NAME [DIR]`: writes a ready out-of-tree
+// `pdyn new force|solver|collider|pair NAME [DIR]`: writes a ready out-of-tree
 // plugin project (CMakeLists.txt, NAME.cpp, README.md, scene.yaml) that
 // builds against the installed SDK and passes `pdyn check` as generated.
 //   exit 0: written; 2: bad name, kind or folder; 1: a file could not be written.
@@ -141,8 +141,10 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
     for (const auto& [path, text] : files) {
       const fs::path file = staging / path;
       fs::create_directories(file.parent_path());
+      // A pair force is a force plugin (pdyn_add_plugin(... KIND force)).
+      const std::string plugin_kind = a.kind == "pair" ? "force" : a.kind;
       write_file(file, replace_all(replace_all(replace_all(std::string(text), "@NAME@", a.name),
-                                               "@KIND@", a.kind),
+                                               "@KIND@", plugin_kind),
                                    "@DOCS@", guide));
     }
     // rename(2) replaces an empty folder, so an empty target is fine too.
@@ -172,9 +174,9 @@ SdkCommand add_new_command(CLI::App& app) {
   auto a = std::make_shared<NewArgs>();
   CLI::App* sub = app.add_subcommand(
       "new", "write a new plugin project (CMake, source, README, scene, conformance test)");
-  sub->add_option("kind", a->kind, "force, solver or collider")
+  sub->add_option("kind", a->kind, "force, solver, collider or pair (a pair force)")
       ->required()
-      ->check(CLI::IsMember({"force", "solver", "collider"}));
+      ->check(CLI::IsMember({"force", "solver", "collider", "pair"}));
   sub->add_option("name", a->name, "the plugin's name, [a-z0-9_]+")->required();
   sub->add_option("dir", a->dir, "folder to create (default: ./NAME); must be new or empty");
   add_plugin_path_option(sub, a->plugin_path,

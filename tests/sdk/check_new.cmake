@@ -1,5 +1,5 @@
 # `pdyn new` from the outside: the installed pdyn (prefix made by
-# install_sdk.cmake) writes a force, a solver and a collider project; each is
+# install_sdk.cmake) writes a force, a solver, a collider and a pair project; each is
 # configured and built against the prefix, runs its scene with the installed
 # pdyn, passes its own CTest tests (the conformance kit and the scene) and
 # `pdyn check`. Refusals are checked first: they are fast.
@@ -25,7 +25,7 @@ foreach(leftover bad gravity thing)
   endif()
 endforeach()
 
-foreach(kind force solver collider)
+foreach(kind force solver collider pair)
   set(name "my_${kind}")
   set(project "${WORK}/${name}")
   # The default folder is ./NAME.
@@ -54,8 +54,12 @@ foreach(kind force solver collider)
   endif()
 
   build_project("${project}" "${project}/build")
-  if(NOT EXISTS "${project}/build/pdyn_${kind}_${name}.so")
-    message(FATAL_ERROR "${project} did not build pdyn_${kind}_${name}.so")
+  set(plugin_kind ${kind})
+  if(kind STREQUAL "pair")  # a pair force is a force plugin
+    set(plugin_kind force)
+  endif()
+  if(NOT EXISTS "${project}/build/pdyn_${plugin_kind}_${name}.so")
+    message(FATAL_ERROR "${project} did not build pdyn_${plugin_kind}_${name}.so")
   endif()
   execute_process(COMMAND "${pdyn}" run "${project}/scene.yaml" --plugin-path "${project}/build"
                           --quiet
@@ -78,4 +82,4 @@ foreach(kind force solver collider)
                         "optimisation:\n${last_output}")
   endif()
 endforeach()
-message(STATUS "pdyn new force, solver and collider: built against ${PREFIX}, ran, passed pdyn check")
+message(STATUS "pdyn new force, solver, collider and pair: built against ${PREFIX}, ran, passed pdyn check")
