@@ -485,13 +485,18 @@ void read_polygon(BuilderHost& host, const YAML::Node& g, const std::string& pat
 
 }  // namespace
 
-std::vector<ParamSpec> particle_property_specs() {
+// One particle's keys are `radius` and `type`; a builder's, which set every
+// particle it makes, `particle_radius` and `particle_type`.
+std::vector<ParamSpec> particle_property_specs(const std::string& prefix) {
+  const bool one = prefix.empty();
   return {
-      param::optional("particle_radius", ParamType::Real, "m",
-                      "radius of each particle (what pair forces and pictures use)")
+      param::optional(prefix + "radius", ParamType::Real, "m",
+                      one ? "radius (what pair forces and pictures use); 0 if not given"
+                          : "radius of each particle (what pair forces and pictures use)")
           .at_least(0),
-      param::optional("particle_type", ParamType::Integer, "",
-                      "type of each particle, for forces that tell types apart")
+      param::optional(prefix + "type", ParamType::Integer, "",
+                      one ? "type, for forces that tell types apart; 0 if not given"
+                          : "type of each particle, for forces that tell types apart")
           .at_least(0)
           .at_most(std::numeric_limits<std::int32_t>::max()),
   };

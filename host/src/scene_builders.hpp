@@ -35,8 +35,9 @@ struct ParticleProperties {
 };
 
 /// The keys with which every builder gives all its particles one radius and
-/// one type: `particle_radius` and `particle_type` (`radius` is a ring's own).
-std::vector<ParamSpec> particle_property_specs();
+/// one type: `particle_radius` and `particle_type` (`radius` is a ring's own);
+/// with `prefix` "", a single particle's `radius` and `type`.
+std::vector<ParamSpec> particle_property_specs(const std::string& prefix = "particle_");
 /// The properties those keys (or a single particle's `radius` and `type`,
 /// with `prefix` "") give in `p`.
 ParticleProperties particle_properties(const Params& p, const std::string& prefix = "particle_");

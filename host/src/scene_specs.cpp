@@ -3,9 +3,6 @@
 // them with the same reader as plugin parameters, and `pdyn schema` lists them.
 #include "pdyn/host/scene_specs.hpp"
 
-#include <cstdint>
-#include <limits>
-
 #include "scene_builders.hpp"
 
 namespace pdyn {
@@ -30,19 +27,14 @@ std::vector<ParamSpec> simulation_specs() {
 }
 
 std::vector<ParamSpec> particle_specs() {
-  return {
+  std::vector<ParamSpec> specs = {
       param::required_vec3("position", "m", "initial position"),
       param::vec3("velocity", Vec3::Zero(), "m/s", "initial velocity"),
       param::required_real("mass", "kg", "mass").greater_than(0),
       param::boolean("fixed", false, "nailed in place"),
-      param::optional("radius", ParamType::Real, "m",
-                      "radius (what pair forces and pictures use); 0 if not given")
-          .at_least(0),
-      param::optional("type", ParamType::Integer, "",
-                      "type, for forces that tell types apart; 0 if not given")
-          .at_least(0)
-          .at_most(std::numeric_limits<std::int32_t>::max()),
   };
+  for (auto& s : particle_property_specs("")) specs.push_back(std::move(s));
+  return specs;
 }
 
 std::vector<ParamSpec> box_specs() {
