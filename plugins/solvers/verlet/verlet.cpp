@@ -70,7 +70,8 @@ class Verlet final : public pdyn::Solver {
     pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
       v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
     });
-    if (reuse_) remember(sys, a1);
+    // With a collider a0 is always evaluated (still_valid): nothing to keep.
+    if (reuse_ && sys.collider_objects().empty()) remember(sys, a1);
   }
 
  private:
