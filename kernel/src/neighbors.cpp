@@ -2,23 +2,29 @@
 //
 // A build has three steps, each O(N):
 //
-//   1. Grid. Cells of side >= reach (Allen & Tildesley sec. 5.3.2): along a
-//      periodic axis the box is cut into n = floor(L / reach) cells; along an
-//      open axis the bounding box of the listed particles is, so that the grid
-//      follows the particles wherever they go. The total is capped at about
-//      2 N cells by widening every cell, so a sparse system (a galaxy, a few
-//      particles in a huge periodic box) costs O(N) memory, not O(volume).
+//   1. Grid. Cells of side >= reach / 2 (LAMMPS's default binning; Allen &
+//      Tildesley sec. 5.3.2 use side >= reach, which scans 27 cells of
+//      volume reach^3, 6.4 times the sphere of reach, where 5 x 5 x 5 cells
+//      less the corners that cannot hold a partner scan about 2.5 times it).
+//      Along a periodic axis the box is cut into n = floor(2 L / reach)
+//      cells; along an open axis the bounding box of the listed particles is,
+//      so that the grid follows the particles wherever they go. The total is
+//      capped at about 2 N cells by widening every cell, so a sparse system
+//      (a galaxy, a few particles in a huge periodic box) costs O(N) memory,
+//      not O(volume).
 //   2. Counting sort by cell: count per cell, prefix sums, fill. Particles of
 //      one cell end up contiguous, ascending by index, with their positions
 //      copied next to them (wrapped into the box), so the pair search streams
 //      memory instead of gathering it. No per-cell std::vector.
-//   3. Pair search, in compressed sparse row form: for each particle i, scan
-//      its own and the adjacent cells (27, fewer where an axis has 1 or 2
-//      cells) and keep the j within reach. A first pass counts per i, a
-//      prefix sum makes the row offsets, a second pass fills and sorts each
-//      row. Both passes are split over threads by i (pdyn::parallel_ranges):
-//      row i is computed by the same operations from the same data whatever
-//      the split, so the list is bit-identical for every thread count.
+//   3. Pair search, one pass: for each particle i, scan the stencil (the rows
+//      of cells along x that can hold a partner, each a contiguous run of
+//      the sorted arrays) and keep the j within reach. Along a periodic axis
+//      a scanned cell comes with the image shift that brings it next to i's
+//      cell, so a distance is three subtractions, no fold, and the keep test
+//      is branch-free. Each thread lists its own range of i into its own
+//      buffer, rows are sorted, and the buffers are joined in order: row i is
+//      computed by the same operations from the same data whatever the
+//      split, so the list is bit-identical for every thread count.
 //
 // Every buffer is a member that only grows: once warm (a build with the same
 // N has run, and the pair count stays within the 1/8 headroom that the
@@ -153,31 +159,8 @@ void NeighborList::build(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
   }
 
   bin(x, domain);
-
-  // Pass 1: the length of every row, into offsets_[i + 1].
-  offsets_.resize(un + 1);
-  offsets_[0] = 0;
-  parallel_ranges(n, [&](Index begin, Index end) {
-    for (Index i = begin; i < end; ++i) {
-      Index count = 0;
-      for_each_partner(i, [&count](Index) { ++count; });
-      offsets_[static_cast<std::size_t>(i) + 1] = count;
-    }
-  });
-  for (std::size_t i = 0; i < un; ++i) offsets_[i + 1] += offsets_[i];
-
-  // Pass 2: fill each row, then sort it, so the order of a row depends only
-  // on the set of neighbors (not on the grid, the cell scan or the threads).
-  reserve_for(indices_, static_cast<std::size_t>(offsets_[un]));
-  indices_.resize(static_cast<std::size_t>(offsets_[un]));
-  parallel_ranges(n, [&](Index begin, Index end) {
-    for (Index i = begin; i < end; ++i) {
-      const auto row = indices_.begin() + offsets_[static_cast<std::size_t>(i)];
-      auto out = row;
-      for_each_partner(i, [&out](Index j) { *out++ = j; });
-      std::sort(row, out);
-    }
-  });
+  make_stencil();
+  fill_rows(n);
 
   built_ = true;
   ++builds_;
@@ -205,11 +188,11 @@ void NeighborList::make_grid(const Domain& domain, const std::array<double, 3>& 
     }
   }
 
-  // Cells per axis: floor(extent / side) with side >= reach (1 + margin); the
-  // side grows until the grid has at most `cap` cells. An extent that
+  // Cells per axis: floor(extent / side) with side >= reach / 2 (1 + margin);
+  // the side grows until the grid has at most `cap` cells. An extent that
   // overflowed to inf (particles near +-1e308) gets one cell, always right.
   const double cap = cell_cap(listed);
-  double side = reach() * (1 + kCellMargin);
+  double side = 0.5 * reach() * (1 + kCellMargin);
   std::array<double, 3> cells{};
   for (;;) {
     double total = 1;
@@ -221,10 +204,92 @@ void NeighborList::make_grid(const Domain& domain, const std::array<double, 3>& 
     if (total <= cap) break;
     side *= std::max(1.25, std::cbrt(total / cap));
   }
+  g.fold = false;
   for (int k = 0; k < 3; ++k) {
     g.n[k] = static_cast<Index>(cells[k]);
     g.inv_side[k] = g.n[k] > 1 ? cells[k] / extent[k] : 0.0;
+    g.side[k] = g.n[k] > 1 ? extent[k] / cells[k] : 0.0;
+    // Two particles within reach have cell coordinates t = (u - lo) / side
+    // less than reach / side apart, so floor(t) differs by at most
+    // floor(reach / side) + 1 (2 for cells of side > reach / 2).
+    g.reach[k] = g.n[k] > 1 ? static_cast<Index>(reach() * g.inv_side[k] * (1 + 1e-12)) + 1 : 1;
+    if (g.periodic[k] && g.n[k] < 2 * g.reach[k] + 1) g.fold = true;
   }
+}
+
+void NeighborList::make_stencil() {
+  const Grid& g = grid_;
+  // Per axis and cell coordinate c, what c + o is for |o| <= reach: offsets
+  // are visited by increasing |o|, so a cell that two offsets reach (a
+  // periodic axis of fewer than 2 reach + 1 cells) is kept for the smaller
+  // one only and scanned once; the fold then finds the nearest image.
+  for (int k = 0; k < 3; ++k) {
+    const Index n = g.n[k], m = g.reach[k];
+    edges_[k].fill(Near{});
+    for (Index c = 0; c < n; ++c) {
+      const Index slot = edge_slot(k, c);
+      if (slot < 0) continue;
+      Near* row = edges_[static_cast<std::size_t>(k)].data() + slot * kWidth + kMaxReach;
+      for (Index a = 0; a <= m; ++a) {
+        for (const Index o : {-a, a}) {
+          if (a == 0 && o == 0 && row[0].cell >= 0) continue;
+          Index u = c + o;
+          double shift = 0.0;
+          if (g.periodic[k]) {
+            if (u < 0) {
+              u += n;
+              shift = -g.length[k];
+            } else if (u >= n) {
+              u -= n;
+              shift = g.length[k];
+            }
+          }
+          if (u < 0 || u >= n) continue;
+          bool seen = false;
+          for (Index b = -m; b <= m; ++b) seen = seen || row[b].cell == u;
+          if (!seen) row[o] = {u, shift};
+        }
+      }
+    }
+  }
+
+  // The rows (dy, dz) whose cells can hold a partner, and how far along x:
+  // the gap between cells |d| apart is (|d| - 1) side, taken a little
+  // smaller (kCellMargin) so that rounding never drops a cell at exactly
+  // reach.
+  const auto gap = [&g](int k, Index d) {
+    const Index cells_between = std::max<Index>(0, std::abs(d) - 1);
+    return static_cast<double>(cells_between) * g.side[k] * (1 - kCellMargin);
+  };
+  const double reach2 = reach() * reach();
+  stencil_rows_ = 0;
+  for (Index dz = -g.reach[2]; dz <= g.reach[2]; ++dz) {
+    for (Index dy = -g.reach[1]; dy <= g.reach[1]; ++dy) {
+      const double rest = reach2 - gap(1, dy) * gap(1, dy) - gap(2, dz) * gap(2, dz);
+      if (rest < 0) continue;
+      Index half_x = g.reach[0];
+      if (g.side[0] > 0) {
+        const double cells_x = std::sqrt(rest) / (g.side[0] * (1 - kCellMargin));
+        half_x = std::min(half_x, static_cast<Index>(cells_x) + 1);
+      }
+      stencil_[static_cast<std::size_t>(stencil_rows_++)] = {dy, dz, half_x};
+    }
+  }
+}
+
+// Cells c < m take slots c, cells c >= max(m, n - m) slots 2 m - n + c: two
+// cells never share a slot, and there are at most 2 m <= 2 kMaxReach.
+Index NeighborList::edge_slot(int k, Index c) const {
+  const Index n = grid_.n[k], m = grid_.reach[k];
+  if (c < m) return c;
+  if (c >= n - m) return 2 * m - n + c;
+  return -1;
+}
+
+const NeighborList::Near* NeighborList::edge_row(int k, Index c) const {
+  const Index slot = edge_slot(k, c);
+  if (slot < 0) return nullptr;
+  return edges_[static_cast<std::size_t>(k)].data() + slot * kWidth + kMaxReach;
 }
 
 void NeighborList::bin(const Eigen::Ref<const Matrix3X>& x, const Domain& domain) {
@@ -297,70 +362,145 @@ void NeighborList::bin(const Eigen::Ref<const Matrix3X>& x, const Domain& domain
   }
 }
 
-// Calls visit(j) for every listed j within reach of listed particle i (j > i
-// for Kind::Half, j != i for Kind::Full), scanning i's own and adjacent cells.
-template <class Visit>
-void NeighborList::for_each_partner(Index i, Visit&& visit) const {
+// Lists the partners of particle i into buf[used, used + count), growing
+// buf when a scanned run could overflow it, and returns count: every listed j
+// within reach of i (j > i for Kind::Half, j != i for Kind::Full), in stencil
+// order. Fold: find the nearest image per pair instead of using the stencil's
+// shifts (Grid::fold).
+template <bool Fold>
+Index NeighborList::fill_row(Index i, std::vector<Index>& buf, Index used) const {
   const Index cell = cell_of_[static_cast<std::size_t>(i)];
-  if (cell < 0) return;
+  if (cell < 0) return 0;
   const Grid& g = grid_;
-  const Point& p = sorted_pos_[static_cast<std::size_t>(slot_of_[static_cast<std::size_t>(i)])];
-  const std::array<Index, 3> c{cell % g.n[0], (cell / g.n[0]) % g.n[1], cell / (g.n[0] * g.n[1])};
-
-  // The distinct cell coordinates next to c[k] along each axis. A periodic
-  // axis of 2 cells has c - 1 == c + 1, and one of 1 cell has only c: each
-  // cell is scanned once, so no pair is found twice.
-  std::array<std::array<Index, 3>, 3> near{};
-  std::array<int, 3> count{};
-  for (int k = 0; k < 3; ++k) {
-    const Index nk = g.n[k], ck = c[k];
-    auto& out = near[k];
-    int& m = count[k];
-    if (g.periodic[k] && nk >= 3) {
-      out = {(ck + nk - 1) % nk, ck, (ck + 1) % nk};
-      m = 3;
-    } else if (g.periodic[k]) {
-      out[m++] = ck;
-      if (nk == 2) out[m++] = 1 - ck;
-    } else {
-      if (ck > 0) out[m++] = ck - 1;
-      out[m++] = ck;
-      if (ck + 1 < nk) out[m++] = ck + 1;
-    }
-  }
-
+  const Point p = sorted_pos_[static_cast<std::size_t>(slot_of_[static_cast<std::size_t>(i)])];
+  const Index cx = cell % g.n[0], cy = (cell / g.n[0]) % g.n[1], cz = cell / (g.n[0] * g.n[1]);
+  const Near* edge_y = edge_row(1, cy);
+  const Near* edge_z = edge_row(2, cz);
   const double reach2 = reach() * reach();
   const bool half = kind_ == Kind::Half;
-  for (int a = 0; a < count[2]; ++a) {
-    for (int b = 0; b < count[1]; ++b) {
-      for (int e = 0; e < count[0]; ++e) {
-        const auto nc =
-            static_cast<std::size_t>(near[0][e] + g.n[0] * (near[1][b] + g.n[1] * near[2][a]));
-        const Index* first = sorted_index_.data() + cell_start_[nc];
-        const Index* last = sorted_index_.data() + cell_start_[nc + 1];
-        // A half list only wants j > i: a cell's particles are ascending.
-        if (half) first = std::upper_bound(first, last, i);
-        for (const Index* s = first; s < last; ++s) {
-          const Index j = *s;
-          if (j == i) continue;
-          const Point& q = sorted_pos_[static_cast<std::size_t>(s - sorted_index_.data())];
-          double r2 = 0;
-          for (int k = 0; k < 3; ++k) {
-            // Both positions are wrapped, so |d| < L: one fold gives the
-            // nearest image (half = +inf on open axes: no fold).
-            double d = q[k] - p[k];
-            if (d > g.half[k]) {
-              d -= g.length[k];
-            } else if (d < -g.half[k]) {
-              d += g.length[k];
-            }
-            r2 += d * d;
+  const Index* index = sorted_index_.data();
+  const Point* pos = sorted_pos_.data();
+  Index count = 0;
+
+  // The slots of cells [first, last] of one x row, images shifted by (sx, sy,
+  // sz). The candidate is written before the test and kept by advancing
+  // count: no branch on the outcome.
+  const auto scan = [&](Index first, Index last, double sx, double sy, double sz) {
+    const Index begin = cell_start_[static_cast<std::size_t>(first)];
+    const Index end = cell_start_[static_cast<std::size_t>(last) + 1];
+    if (static_cast<std::size_t>(used + count + (end - begin)) > buf.size()) {
+      const auto needed = static_cast<std::size_t>(used + count + (end - begin));
+      buf.resize(std::max(2 * buf.size(), needed + needed / 8));
+    }
+    Index* out = buf.data() + used;
+    for (Index s = begin; s < end; ++s) {
+      const Index j = index[s];
+      const Point& q = pos[s];
+      double r2 = 0;
+      if constexpr (Fold) {
+        for (int k = 0; k < 3; ++k) {
+          // Both positions are wrapped, so |d| < L: one fold gives the
+          // nearest image (half = +inf on open axes: no fold).
+          double d = q[k] - p[k];
+          if (d > g.half[k]) {
+            d -= g.length[k];
+          } else if (d < -g.half[k]) {
+            d += g.length[k];
           }
-          if (r2 <= reach2) visit(j);
+          r2 += d * d;
         }
+      } else {
+        const double dx = q[0] + sx - p[0], dy = q[1] + sy - p[1], dz = q[2] + sz - p[2];
+        r2 = dx * dx + dy * dy + dz * dz;
       }
+      out[count] = j;
+      count += static_cast<Index>((half ? j > i : j != i) & (r2 <= reach2));
+    }
+  };
+
+  const Index nx = g.n[0];
+  for (int r = 0; r < stencil_rows_; ++r) {
+    const StencilRow& row = stencil_[static_cast<std::size_t>(r)];
+    const Near y = edge_y ? edge_y[row.dy] : Near{cy + row.dy, 0.0};
+    const Near z = edge_z ? edge_z[row.dz] : Near{cz + row.dz, 0.0};
+    if (y.cell < 0 || z.cell < 0) continue;
+    const Index base = nx * (y.cell + g.n[1] * z.cell);
+    const Index lo = cx - row.half_x, hi = cx + row.half_x;
+    if (!g.periodic[0]) {
+      scan(base + std::max<Index>(lo, 0), base + std::min(hi, nx - 1), 0.0, y.shift, z.shift);
+    } else if (nx < 2 * row.half_x + 1) {
+      scan(base, base + nx - 1, 0.0, y.shift, z.shift);  // the whole row, once (Fold)
+    } else if (lo < 0) {
+      scan(base + lo + nx, base + nx - 1, -g.length[0], y.shift, z.shift);
+      scan(base, base + hi, 0.0, y.shift, z.shift);
+    } else if (hi >= nx) {
+      scan(base + lo, base + nx - 1, 0.0, y.shift, z.shift);
+      scan(base, base + hi - nx, g.length[0], y.shift, z.shift);
+    } else {
+      scan(base + lo, base + hi, 0.0, y.shift, z.shift);
     }
   }
+  // Ascending, so that a row depends only on the set of partners (not on
+  // the grid), and the force loop walks memory forwards.
+  std::sort(buf.begin() + used, buf.begin() + used + count);
+  return count;
+}
+
+void NeighborList::fill_rows(Index n) {
+  const auto un = static_cast<std::size_t>(n);
+  offsets_.resize(un + 1);
+  offsets_[0] = 0;
+  int threads = 1;
+#ifdef _OPENMP
+  if (n >= kParallelMinElements && !omp_in_parallel()) threads = max_threads();
+#endif
+  if (chunks_.size() < static_cast<std::size_t>(threads)) chunks_.resize(threads);
+
+  // Lists rows [begin, end) into chunk t (its whole capacity is room: no
+  // allocation once warm) and returns the number of entries.
+  const auto fill = [this](std::size_t t, Index begin, Index end) {
+    std::vector<Index>& buf = chunks_[t];
+    buf.resize(buf.capacity());
+    Index used = 0;
+    for (Index i = begin; i < end; ++i) {
+      const Index count = grid_.fold ? fill_row<true>(i, buf, used) : fill_row<false>(i, buf, used);
+      offsets_[static_cast<std::size_t>(i) + 1] = count;
+      used += count;
+    }
+    return used;
+  };
+  const auto prefix_sums = [this, un] {
+    for (std::size_t i = 0; i < un; ++i) offsets_[i + 1] += offsets_[i];
+  };
+
+  if (threads == 1) {
+    const Index used = fill(0, 0, n);
+    prefix_sums();
+    // The chunk becomes the list; the old list's buffer is the next chunk.
+    std::swap(indices_, chunks_[0]);
+    indices_.resize(static_cast<std::size_t>(used));
+    return;
+  }
+#ifdef _OPENMP
+#pragma omp parallel num_threads(threads)
+  {
+    const Index t = omp_get_thread_num(), nt = omp_get_num_threads();
+    const Index begin = n * t / nt, end = n * (t + 1) / nt;
+    fill(static_cast<std::size_t>(t), begin, end);
+#pragma omp barrier
+#pragma omp single
+    {
+      prefix_sums();
+      reserve_for(indices_, static_cast<std::size_t>(offsets_[un]));
+      indices_.resize(static_cast<std::size_t>(offsets_[un]));
+    }
+    const auto from = chunks_[static_cast<std::size_t>(t)].begin();
+    std::copy(from,
+              from + (offsets_[static_cast<std::size_t>(end)] -
+                      offsets_[static_cast<std::size_t>(begin)]),
+              indices_.begin() + offsets_[static_cast<std::size_t>(begin)]);
+  }
+#endif
 }
 
 }  // namespace pdyn

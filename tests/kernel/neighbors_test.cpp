@@ -208,10 +208,12 @@ TEST(NeighborList, MixedPeriodicMatchesBruteForce) {
 }
 
 TEST(NeighborList, OneTwoAndThreeCellsPerAxis) {
-  // reach = 1.5 and periodic lengths 3 (2 reach: 1 cell), 3.5 (2 cells) and
-  // 4.6 (3 cells), in every combination of axes: a pair across a 1- or
-  // 2-cell axis must be found once, not once per way round.
-  const double lengths[] = {3.0, 3.5, 4.6};
+  // reach = 1.5, cells of side >= 0.75, and periodic lengths 3 (2 reach: 3
+  // cells), 3.5 (4 cells), 3.8 (5 cells, the fewest that need no fold) and
+  // 4.6 (6 cells), in every combination of axes: a pair across an axis of
+  // fewer than 5 cells, where one cell is a neighbor both ways round, must be
+  // found once, at its nearest image.
+  const double lengths[] = {3.0, 3.5, 3.8, 4.6};
   std::uint64_t seed = 10;
   for (const double lx : lengths) {
     for (const double ly : lengths) {

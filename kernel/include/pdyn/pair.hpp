@@ -42,6 +42,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <span>
 #include <type_traits>
@@ -134,32 +135,45 @@ class PairForce : public Force {
   }
 
   // The box as the pair loop needs it, read once per evaluation.
+  // Along an open axis length = 0 and half = +inf: nothing is ever folded.
   struct Images {
-    std::array<bool, 3> periodic{};
     bool any = false;
     Vec3 length = Vec3::Zero(), half = Vec3::Zero();
-    explicit Images(const Domain& d)
-        : periodic(d.periodic), any(d.any_periodic()), length(d.length()), half(0.5 * d.length()) {}
+    explicit Images(const Domain& d) : any(d.any_periodic()) {
+      for (int k = 0; k < 3; ++k) {
+        length[k] = d.periodic[k] ? d.max[k] - d.min[k] : 0.0;
+        half[k] = d.periodic[k] ? 0.5 * length[k] : std::numeric_limits<double>::infinity();
+      }
+    }
   };
 
   // x_i - x_j, to the nearest image along periodic axes. Positions are
   // wrapped after every step and move little within one, so |d_k| < 1.5 L
-  // almost always and one conditional add gives the nearest image without
-  // the rounding call of Domain::minimum_image, which stays the fallback.
-  [[gnu::always_inline]] static inline Vec3 separation(const ParticleView& p, const Images& im,
-                                                       Index i, Index j) {
-    Vec3 d = p.x.col(i) - p.x.col(j);
+  // almost always, and one add of -L, 0 or +L chosen by two comparisons
+  // (no branch: which pairs straddle a face is unpredictable) gives the
+  // nearest image; Domain::minimum_image, with its rounding call, stays the
+  // fallback for the rest.
+  [[gnu::always_inline]] static inline Vec3 separation(const double* xi, const double* xj,
+                                                       const Images& im) {
+    Vec3 d(xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]);
     if (!im.any) return d;
+    bool far = false;
     for (int k = 0; k < 3; ++k) {
-      if (!im.periodic[k]) continue;
-      if (d[k] > im.half[k]) {
-        d[k] -= im.length[k];
-      } else if (d[k] < -im.half[k]) {
-        d[k] += im.length[k];
+      const double fold =
+          static_cast<double>(d[k] > im.half[k]) - static_cast<double>(d[k] < -im.half[k]);
+      d[k] -= fold * im.length[k];
+      far |= !(std::abs(d[k]) <= im.half[k]);
+    }
+    if (far) [[unlikely]] {
+      for (int k = 0; k < 3; ++k) {
+        if (!(std::abs(d[k]) <= im.half[k])) d[k] -= im.length[k] * std::round(d[k] / im.length[k]);
       }
-      if (!(std::abs(d[k]) <= im.half[k])) d[k] -= im.length[k] * std::round(d[k] / im.length[k]);
     }
     return d;
+  }
+  [[gnu::always_inline]] static inline Vec3 separation(const ParticleView& p, const Images& im,
+                                                       Index i, Index j) {
+    return separation(p.x.data() + 3 * i, p.x.data() + 3 * j, im);
   }
 
   // F_ij, or zero beyond the cutoff (the list's skin shell).
@@ -184,16 +198,28 @@ class PairForce : public Force {
     }
   }
 
+  // Raw pointers and strides are read once: through the Ref and the span the
+  // compiler would reload them after every store to f.
   void serial_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) const {
     const Images im(p.domain);
+    const double* x = p.x.data();
+    double* fd = f.data();
+    const Index fs = f.outerStride();
+    const Index* offsets = list_.offsets().data();
+    const Index* indices = list_.indices().data();
     for (Index i = 0; i < p.size(); ++i) {
-      Vec3 fi = f.col(i);
-      for (const Index j : list_.neighbors(i)) {
-        const Vec3 fij = pair_force(p, im, i, j);
+      const double* xi = x + 3 * i;
+      Vec3 fi = Eigen::Map<const Vec3>(fd + fs * i);
+      for (Index k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const Index j = indices[k];
+        const Vec3 d = separation(xi, x + 3 * j, im);
+        const double r2 = d.squaredNorm();
+        if (!(r2 < cutoff2_)) continue;
+        const Vec3 fij = evaluate(p, i, j, d, r2).force;
         fi += fij;
-        f.col(j) -= fij;
+        Eigen::Map<Vec3>(fd + fs * j) -= fij;
       }
-      f.col(i) = fi;
+      Eigen::Map<Vec3>(fd + fs * i) = fi;
     }
   }
 
