@@ -74,6 +74,16 @@ void thermo(const pdyn::System& sys, long step) {
   std::cout << fmt::format("{:8} {:.15g} {:.15g} {:.15g}\n", step, temp, pe / n, (ke + pe) / n);
 }
 
+// A line "Key:   123 kB" of /proc/self/status, in bytes (0 if absent).
+double status_bytes(const std::string& key) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(key + ":", 0) == 0) return 1024.0 * std::stod(line.substr(key.size() + 1));
+  }
+  return 0.0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -93,6 +103,10 @@ int main(int argc, char** argv) {
   pdyn::PluginRegistry registry;
   registry.discover({PDYN_PLUGIN_DIR});
 
+  // Memory of the simulation: the peak resident set's growth from here
+  // (the dump and the plugins already loaded), as LAMMPS's "Per MPI rank
+  // memory allocation" counts its own arrays.
+  const double rss_before = status_bytes("VmRSS");
   pdyn::System sys;
   sys.set_particles(dump.x, dump.v, Eigen::VectorXd::Ones(dump.x.cols()),
                     std::vector<std::uint8_t>(static_cast<std::size_t>(dump.x.cols()), 0));
@@ -124,5 +138,8 @@ int main(int argc, char** argv) {
       "Loop time of {:.6g} s on {} threads for {} steps with {} atoms: {:.1f} ns/atom-step\n",
       seconds, threads, steps, sys.size(),
       1e9 * seconds / (static_cast<double>(steps) * static_cast<double>(sys.size())));
+  const double bytes = status_bytes("VmHWM") - rss_before;
+  std::cout << fmt::format("Memory {:.2f} Mbytes, {:.0f} bytes/atom (peak resident set growth)\n",
+                           bytes / (1024.0 * 1024.0), bytes / static_cast<double>(sys.size()));
   return 0;
 }

@@ -26,7 +26,7 @@ for log in "$out"/log.1 "$out"/log.2; do
   [[ -f "$log" ]] || continue
   echo "== LAMMPS ($(basename "$log"))"
   grep -A2 "^ *Step" "$log" | head -3
-  grep -E "^Loop time" "$log"
+  grep -E "^Loop time|memory allocation|^Neighbor list builds" "$log"
 done
 for t in 1 2; do
   echo "== pdyn, $t thread(s)"

@@ -390,7 +390,7 @@ Index NeighborList::fill_row(Index i, std::vector<Index>& buf, Index used) const
     const Index end = cell_start_[static_cast<std::size_t>(last) + 1];
     if (static_cast<std::size_t>(used + count + (end - begin)) > buf.size()) {
       const auto needed = static_cast<std::size_t>(used + count + (end - begin));
-      buf.resize(std::max(2 * buf.size(), needed + needed / 8));
+      buf.resize(std::max(buf.size() + buf.size() / 2, needed + needed / 8));
     }
     Index* out = buf.data() + used;
     for (Index s = begin; s < end; ++s) {
@@ -454,12 +454,13 @@ void NeighborList::fill_rows(Index n) {
 #ifdef _OPENMP
   if (n >= kParallelMinElements && !omp_in_parallel()) threads = max_threads();
 #endif
-  if (chunks_.size() < static_cast<std::size_t>(threads)) chunks_.resize(threads);
+  if (chunks_.size() + 1 < static_cast<std::size_t>(threads)) chunks_.resize(threads - 1);
 
-  // Lists rows [begin, end) into chunk t (its whole capacity is room: no
-  // allocation once warm) and returns the number of entries.
+  // Lists rows [begin, end) into the buffer of thread t (the list itself for
+  // thread 0, so that one thread needs no copy; its whole capacity is room:
+  // no allocation once warm) and returns the number of entries.
   const auto fill = [this](std::size_t t, Index begin, Index end) {
-    std::vector<Index>& buf = chunks_[t];
+    std::vector<Index>& buf = t == 0 ? indices_ : chunks_[t - 1];
     buf.resize(buf.capacity());
     Index used = 0;
     for (Index i = begin; i < end; ++i) {
@@ -473,12 +474,27 @@ void NeighborList::fill_rows(Index n) {
     for (std::size_t i = 0; i < un; ++i) offsets_[i + 1] += offsets_[i];
   };
 
+  // A first build reserves the list from a sample of 1 row in 64 (and 1/4
+  // more), so that it does not grow by steps, holding old and new buffers at
+  // once (what LAMMPS's "memory allocation" would then count twice).
+  if (indices_.capacity() == 0 && n > 0) {
+    Index sampled = 0, rows = 0;
+    for (Index i = 0; i < n; i += 64, ++rows) {
+      sampled += grid_.fold ? fill_row<true>(i, indices_, 0) : fill_row<false>(i, indices_, 0);
+    }
+    const double estimate =
+        1.25 * static_cast<double>(sampled) * static_cast<double>(n) / static_cast<double>(rows);
+    std::vector<Index>().swap(indices_);
+    indices_.reserve(static_cast<std::size_t>(estimate) + 1024);
+    for (std::size_t t = 1; t < static_cast<std::size_t>(threads); ++t) {
+      chunks_[t - 1].reserve(static_cast<std::size_t>(estimate / threads) + 1024);
+    }
+  }
+
   if (threads == 1) {
-    const Index used = fill(0, 0, n);
+    fill(0, 0, n);
     prefix_sums();
-    // The chunk becomes the list; the old list's buffer is the next chunk.
-    std::swap(indices_, chunks_[0]);
-    indices_.resize(static_cast<std::size_t>(used));
+    indices_.resize(static_cast<std::size_t>(offsets_[un]));
     return;
   }
 #ifdef _OPENMP
@@ -490,15 +506,18 @@ void NeighborList::fill_rows(Index n) {
 #pragma omp barrier
 #pragma omp single
     {
+      // Thread 0's rows stay where they are, at the start of the list.
       prefix_sums();
       reserve_for(indices_, static_cast<std::size_t>(offsets_[un]));
       indices_.resize(static_cast<std::size_t>(offsets_[un]));
     }
-    const auto from = chunks_[static_cast<std::size_t>(t)].begin();
-    std::copy(from,
-              from + (offsets_[static_cast<std::size_t>(end)] -
-                      offsets_[static_cast<std::size_t>(begin)]),
-              indices_.begin() + offsets_[static_cast<std::size_t>(begin)]);
+    if (t > 0) {
+      const auto from = chunks_[static_cast<std::size_t>(t) - 1].begin();
+      std::copy(from,
+                from + (offsets_[static_cast<std::size_t>(end)] -
+                        offsets_[static_cast<std::size_t>(begin)]),
+                indices_.begin() + offsets_[static_cast<std::size_t>(begin)]);
+    }
   }
 #endif
 }

@@ -227,7 +227,8 @@ class NeighborList {
   std::array<StencilRow, kWidth * kWidth> stencil_{};
   int stencil_rows_ = 0;
 
-  // Rows listed by each thread before they are joined (one pass, no count).
+  // Rows listed by threads 1, 2, ... before they are joined after thread
+  // 0's, which it lists in place (one pass, no count).
   std::vector<std::vector<Index>> chunks_;
 
   // The Verlet list, CSR.
