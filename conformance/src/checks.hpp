@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,14 @@ void guarded(std::vector<CheckResult>& out, const std::string& name,
 // ---- the checks of each kind ----
 
 /// forces.cpp: construct.defaults, deterministic, read_only_state,
-/// adds_only, finite_on_degenerate and the force.* checks.
+/// adds_only, finite_on_degenerate, the force.* checks, then pair_checks.
 void force_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);
+
+/// pairs.cpp: the pair.* checks of a force that offers pdyn::PairReference
+/// (pdyn/pair.hpp; every PairForce does), or their skips. `params`: what
+/// the other checks built the force with; `force`: that object.
+void pair_checks(const PluginDescriptor& d, const Params& params, const Force& force,
+                 std::mt19937_64& rng, std::vector<CheckResult>& out);
 
 /// solvers.cpp: construct.defaults, deterministic, finite_on_degenerate and
 /// the solver.* checks.

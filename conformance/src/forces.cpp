@@ -1,7 +1,8 @@
 // The force checks: what every Force plugin must do (deterministic, read-only
 // on the state, adding only, finite on degenerate configurations) and what
 // its descriptor and methods claim (internal: zero net force and torque,
-// translation invariance; f = -grad U; analytic Jacobians; dissipative).
+// translation invariance; f = -grad U; analytic Jacobians; dissipative;
+// and, for a pair force, the pair.* checks of pairs.cpp).
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
@@ -227,6 +228,8 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
   } else {
     out.push_back(skip("force.dissipative", "not declared dissipative"));
   }
+
+  pair_checks(d, params, *force, rng, out);
 }
 
 }  // namespace pdyn::conformance::detail

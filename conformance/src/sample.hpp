@@ -31,6 +31,7 @@ struct State {
   Eigen::VectorXd mass;
   std::vector<std::uint8_t> fixed;
   std::vector<double> radius;
+  Domain domain{};  ///< open space unless a check (pair.matches_brute_force) makes a box
   double t = 0.0;
 
   Index size() const { return x.cols(); }
@@ -40,7 +41,7 @@ struct State {
                         Eigen::Map<const Matrix3X>(v.data(), 3, size()),
                         Eigen::Map<const Eigen::VectorXd>(mass.data(), size()),
                         std::span<const std::uint8_t>(fixed),
-                        Domain{},
+                        domain,
                         std::span<const double>(radius),
                         {}};
   }
@@ -51,7 +52,7 @@ struct State {
                                Eigen::Map<const Matrix3X>(f.data(), 3, size()),
                                Eigen::Map<const Eigen::VectorXd>(mass.data(), size()),
                                std::span<const std::uint8_t>(fixed),
-                               Domain{},
+                               domain,
                                std::span<const double>(radius),
                                {}};
   }

@@ -1,10 +1,14 @@
 // The out-of-line part of the pair-force SDK: the check that a cutoff fits
-// the periodic box, with the message a scene author sees.
+// the periodic box, with the message a scene author sees; and the key
+// function of PairReference, so that its type information lives once, in
+// the kernel, and dynamic_cast finds it from any plugin.
 #include "pdyn/pair.hpp"
 
 #include <fmt/format.h>
 
 namespace pdyn {
+
+PairReference::~PairReference() = default;
 
 void check_cutoff_fits(const Domain& domain, double cutoff, double skin) {
   const double reach = cutoff + skin;

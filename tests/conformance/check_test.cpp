@@ -1,8 +1,11 @@
 // `pdyn check` and the conformance kit: every shipped plugin passes, every
-// broken fixture fails, naming the check it breaks.
+// broken fixture fails, naming the check it breaks; the pair forces pass
+// the pair.* checks, and each broken pair force fails only its own.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "pdyn/conformance.hpp"
@@ -55,11 +58,79 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, CheckBroken,
                                          BrokenCase{"leaky_plane", "collider.obstacle_found"},
                                          BrokenCase{"misdrawn_plane", "collider.shape"},
                                          BrokenCase{"shared_scratch", "threads.two_systems"},
-                                         BrokenCase{"bad_default", "params.bad_rejected"}),
+                                         BrokenCase{"bad_default", "params.bad_rejected"},
+                                         BrokenCase{"bad_pair_gradient", "pair.gradient"},
+                                         BrokenCase{"lopsided_pair", "pair.newton_third_law"},
+                                         BrokenCase{"stale_pair_list", "pair.matches_brute_force"},
+                                         BrokenCase{"jumping_pair", "pair.continuous_at_cutoff"}),
                          [](const auto& param_info) {
                            return std::string(param_info.param.plugin) + "_" +
                                   std::to_string(param_info.index);
                          });
+
+// The verdicts of the pair.* rows of `pdyn check`'s table, by check name.
+std::map<std::string, std::string> pair_verdicts(const std::string& table) {
+  std::map<std::string, std::string> out;
+  std::istringstream lines(table);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("pair.", 0) != 0) continue;
+    std::istringstream row(line);
+    std::string name, verdict;
+    row >> name >> verdict;
+    out[name] = verdict;
+  }
+  return out;
+}
+
+TEST(Check, EachBrokenPairForceFailsOnlyItsOwnPairCheck) {
+  const std::map<std::string, std::string> own = {{"bad_pair_gradient", "pair.gradient"},
+                                                  {"lopsided_pair", "pair.newton_third_law"},
+                                                  {"stale_pair_list", "pair.matches_brute_force"},
+                                                  {"jumping_pair", "pair.continuous_at_cutoff"}};
+  for (const auto& [plugin, check] : own) {
+    const auto res = test::pdyn({"check", plugin, "--plugin-path", kBroken});
+    const auto verdicts = pair_verdicts(res.out);
+    EXPECT_EQ(verdicts.size(), 4u) << res.out;
+    for (const auto& [name, verdict] : verdicts) {
+      EXPECT_EQ(verdict, name == check ? "FAIL" : (verdict == "skip" ? "skip" : "pass"))
+          << plugin << ": " << name << "\n"
+          << res.out;
+    }
+  }
+}
+
+TEST(Check, PairForcesPassThePairChecks) {
+  // lennard_jones declares its energy continuous with shift: true (the kit
+  // turns its boolean `shift` on); soft_contact declares nothing there.
+  const std::map<std::string, std::map<std::string, conformance::Verdict>> expected = {
+      {"lennard_jones",
+       {{"pair.newton_third_law", conformance::Verdict::Pass},
+        {"pair.gradient", conformance::Verdict::Pass},
+        {"pair.matches_brute_force", conformance::Verdict::Pass},
+        {"pair.continuous_at_cutoff", conformance::Verdict::Pass}}},
+      {"soft_contact",
+       {{"pair.newton_third_law", conformance::Verdict::Pass},
+        {"pair.gradient", conformance::Verdict::Pass},
+        {"pair.matches_brute_force", conformance::Verdict::Pass},
+        {"pair.continuous_at_cutoff", conformance::Verdict::Skip}}},
+      {"spring",  // not a pair force
+       {{"pair.newton_third_law", conformance::Verdict::Skip},
+        {"pair.gradient", conformance::Verdict::Skip},
+        {"pair.matches_brute_force", conformance::Verdict::Skip},
+        {"pair.continuous_at_cutoff", conformance::Verdict::Skip}}}};
+  for (const auto& [plugin, verdicts] : expected) {
+    const auto* r = test::shipped_plugins().find(PluginKind::Force, plugin);
+    ASSERT_NE(r, nullptr) << plugin;
+    const auto results = conformance::run_checks(*r->descriptor, {.seed = 3});
+    for (const auto& [name, verdict] : verdicts) {
+      const auto row = std::find_if(results.begin(), results.end(),
+                                    [&](const auto& c) { return c.name == name; });
+      ASSERT_NE(row, results.end()) << plugin << ": no " << name;
+      EXPECT_EQ(row->verdict, verdict) << plugin << ": " << name << ": " << row->detail << "\n"
+                                       << conformance::table(results);
+    }
+  }
+}
 
 TEST(Check, MeasuresTheFakeSolversRealOrder) {
   const auto res = test::pdyn({"check", "fake_rk4", "--plugin-path", kBroken});

@@ -76,6 +76,14 @@ foreach(kind force solver collider pair)
   endif()
   run("pdyn check ${name}" "${pdyn}" check ${name} --plugin-path "${project}/build")
   message(STATUS "${last_output}")
+  if(kind STREQUAL "pair")  # the pair checks ran on the law, none skipped
+    foreach(check pair.newton_third_law pair.gradient pair.matches_brute_force
+                  pair.continuous_at_cutoff)
+      if(NOT last_output MATCHES "${check} +pass")
+        message(FATAL_ERROR "pdyn check ${name}: ${check} did not pass:\n${last_output}")
+      endif()
+    endforeach()
+  endif()
   # Configured with no build type, as a newcomer does: still optimised.
   if(last_output MATCHES "without optimisation")
     message(FATAL_ERROR "${project}, configured with no build type, was built without "

@@ -6,7 +6,9 @@
 //
 // You write only the law (the struct below); PairForce (pdyn/pair.hpp) runs
 // the neighbor list, the loop over pairs, Newton's third law, the periodic
-// images and the threads, bit-identically for every thread count.
+// images and the threads, bit-identically for every thread count. `pdyn
+// check` compares that loop with the law (the pair.* checks: Newton's third
+// law, F = -dU/dr, the list against a sum over all pairs, U(rc) = 0).
 #include <cmath>
 #include <pdyn/pair.hpp>
 #include <pdyn/plugin.hpp>
@@ -25,6 +27,10 @@ struct Law {
     // no force, the energy's maximum.
     return {eps * s * s, r > 0.0 ? 2.0 * eps * s / (rc * r) : 0.0};
   }
+  // U(rc) = 0: the energy is continuous at the cutoff, as `pdyn check`'s
+  // pair.continuous_at_cutoff then verifies. Leave it out (or return false)
+  // for a law that jumps there.
+  bool continuous_at_cutoff() const { return true; }
 };
 
 pdyn::PluginDescriptor describe() {

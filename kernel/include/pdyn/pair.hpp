@@ -43,10 +43,22 @@
 // buffer and no barrier in the force loop. Plugins are built with
 // -ffp-contract=off (pdyn_add_plugin) so that no compiler fuses the
 // arithmetic of two copies of the pair evaluation differently.
+//
+// Checking (PairReference below). Every PairForce also offers the
+// conformance kit (`pdyn check`) what it needs to check the pair loop
+// against the law: the cutoff, a brute-force sum over all pairs (no
+// neighbor list), and whether the energy is continuous at the cutoff. A law
+// declares the last with a member
+//
+//   bool continuous_at_cutoff() const;  // true: U(r) -> 0 as r -> rc
+//
+// (a shifted energy, or one that vanishes there by itself); a law without
+// it declares nothing, and the kit skips that check.
 #pragma once
 
 #include <array>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -88,11 +100,34 @@ struct PairVector {
 /// the force's cutoff.
 void check_cutoff_fits(const Domain& domain, double cutoff, double skin);
 
+/// The optional checking hook of a pair force: what the conformance kit
+/// (`pdyn check`, the pair.* checks) compares the force's fast path with.
+/// PairForce<Law> implements it; a pair force written by hand may too. The
+/// kit finds it with dynamic_cast<const PairReference*> on the Force, so it
+/// is a separate interface, not a new virtual of Force: forces built against
+/// an earlier SDK keep their vtable (no ABI bump).
+class PairReference {
+ public:
+  virtual ~PairReference();
+  /// The cutoff rc, m: pairs at r >= rc do not interact.
+  virtual double pair_cutoff() const = 0;
+  /// True when the force declares its energy continuous at the cutoff: U(r)
+  /// -> 0 as r -> rc from below (a shifted energy, or a law that vanishes
+  /// there).
+  virtual bool continuous_at_cutoff() const = 0;
+  /// The reference evaluation: adds to `f` (N) the force of every pair i < j
+  /// (of members) closer than the cutoff, measured to the nearest image with
+  /// Domain::minimum_image, visiting all N (N - 1) / 2 pairs with no
+  /// neighbor list, and returns the pairs' energy, J (0 for a force that
+  /// reports none). O(N^2): for checks only.
+  virtual double add_forces_all_pairs(const ParticleView& p, Eigen::Ref<Matrix3X> f) const = 0;
+};
+
 /// A force from a central pair law within a cutoff (see the top of this
 /// file). `members`: N flags (a selection) or empty for every particle; only
 /// pairs of two members interact.
 template <class Law>
-class PairForce : public Force {
+class PairForce : public Force, public PairReference {
  public:
   PairForce(Law law, double cutoff, double skin, std::vector<std::uint8_t> members = {})
       : law_(std::move(law)),
@@ -131,6 +166,39 @@ class PairForce : public Force {
   const Law& law() const noexcept { return law_; }
   /// The neighbor list (for statistics: builds, pairs).
   const NeighborList& neighbor_list() const noexcept { return list_; }
+
+  // ---- PairReference ----
+  double pair_cutoff() const override { return std::sqrt(cutoff2_); }
+  bool continuous_at_cutoff() const override {
+    if constexpr (requires(const Law& l) {
+                    { l.continuous_at_cutoff() } -> std::convertible_to<bool>;
+                  }) {
+      return law_.continuous_at_cutoff();
+    } else {
+      return false;
+    }
+  }
+  double add_forces_all_pairs(const ParticleView& p, Eigen::Ref<Matrix3X> f) const override {
+    auto member = [&](Index i) {
+      return members_.empty() || (static_cast<std::size_t>(i) < members_.size() &&
+                                  members_[static_cast<std::size_t>(i)] != 0);
+    };
+    double u = 0.0;
+    for (Index i = 0; i < p.size(); ++i) {
+      if (!member(i)) continue;
+      for (Index j = i + 1; j < p.size(); ++j) {
+        if (!member(j)) continue;
+        const Vec3 d = p.domain.minimum_image(p.x.col(i) - p.x.col(j));
+        const double r2 = d.squaredNorm();
+        if (!(r2 < cutoff2_)) continue;
+        const PairVector t = evaluate(p, i, j, d, r2);
+        f.col(i) += t.force;
+        f.col(j) -= t.force;
+        u += t.energy;
+      }
+    }
+    return u;
+  }
 
  private:
   void update(const ParticleView& p) const {
@@ -183,15 +251,6 @@ class PairForce : public Force {
   [[gnu::always_inline]] static inline Vec3 separation(const ParticleView& p, const Images& im,
                                                        Index i, Index j) {
     return separation(p.x.data() + 3 * i, p.x.data() + 3 * j, im);
-  }
-
-  // F_ij, or zero beyond the cutoff (the list's skin shell).
-  [[gnu::always_inline]] inline Vec3 pair_force(const ParticleView& p, const Images& im, Index i,
-                                                Index j) const {
-    const Vec3 d = separation(p, im, i, j);
-    const double r2 = d.squaredNorm();
-    if (!(r2 < cutoff2_)) return Vec3::Zero();
-    return evaluate(p, i, j, d, r2).force;
   }
 
   // The law, in whichever of its two forms it is written.
