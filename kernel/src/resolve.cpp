@@ -163,7 +163,7 @@ Resolved resolve(const std::vector<ParamSpec>& specs, const Params& given) {
 std::string expectation(const ParamSpec& s) {
   std::string e = describe(s.type);
   if (s.min && s.max) {
-    e += fmt::format(" in [{}, {}]", num(*s.min), num(*s.max));
+    e += fmt::format(" in {}{}, {}]", s.min_exclusive ? "(" : "[", num(*s.min), num(*s.max));
   } else if (s.min) {
     e += fmt::format(" {} {}", s.min_exclusive ? ">" : ">=", num(*s.min));
   } else if (s.max) {

@@ -1,5 +1,5 @@
 // No heap allocation inside the step loop after the first step, nor in a
-// warm neighbor list's updates and rebuilds.
+// warm neighbor list's updates and rebuilds, nor in a warm Barnes-Hut tree's.
 //
 // A separate test executable, because it replaces the process's allocator:
 // global operator new/delete and malloc/calloc/realloc/free (Eigen's
@@ -236,6 +236,42 @@ TEST(NeighborListAllocations, NoneOnceWarm) {
       EXPECT_EQ(count, 0) << threads << " threads, " << (periodic ? "periodic" : "open");
       EXPECT_GT(list.builds(), 5);  // it did rebuild
     }
+  }
+}
+
+// nbody with method barnes_hut rebuilds its octree at every force and
+// energy evaluation: 5000 bodies in a cluster (above kParallelMinElements),
+// stepped by verlet; once the tree has been built a few times, neither the
+// steps nor the potential energy allocate.
+TEST(NBodyTreeAllocations, NoneOnceWarm) {
+  for (const int threads : {1, 2}) {
+    Scene scene = load_scene_text(
+        "simulation: { dt: 0.001, steps: 100, solver: { type: verlet } }\n"
+        "particles:\n"
+        "  - cloud: { n: 5000, sphere: { center: [0, 0, 0], radius: 1 }, mass: 0.0002, seed: 3 "
+        "}\n"
+        "forces:\n  - { type: nbody, G: 1, softening: 0.05, method: barnes_hut }\n",
+        "nbody.yaml", plugins());
+    set_threads(threads);
+    System& sys = *scene.system;
+    for (int k = 0; k < 3; ++k) {
+      scene.solver->step(sys, scene.dt);
+      (void)sys.potential_energy();
+    }
+    const Eigen::VectorXd before = sys.state();
+    long count = 0;
+    double u = 0.0;
+    {
+      AllocationWindow window;
+      for (int k = 0; k < 20; ++k) {
+        scene.solver->step(sys, scene.dt);
+        u += sys.potential_energy();
+      }
+      count = window.count();
+    }
+    EXPECT_EQ(count, 0) << threads << " threads";
+    EXPECT_NE(sys.state(), before);  // it did step
+    EXPECT_LT(u, 0.0);
   }
 }
 

@@ -60,7 +60,7 @@ TEST(Resolve, BoundsAreCheckedOnNumbersVectorsListsAndNamedReals) {
   EXPECT_EQ(r.problems[0].message,
             "parameter 'ks': -1 is out of range (expected a number >= 0 in N/m)");
   EXPECT_EQ(r.problems[1].message,
-            "parameter 'dt': 0 is out of range (expected a number in [0, 1] in s)");
+            "parameter 'dt': 0 is out of range (expected a number in (0, 1] in s)");
   EXPECT_EQ(r.problems[2].message,
             "parameter 'every': -2 is out of range (expected a whole number >= 0)");
   EXPECT_EQ(r.problems[3].element, (std::vector<std::size_t>{1}));
