@@ -5,7 +5,7 @@
 // makes it). Prints LAMMPS-style thermo for steps 0 and 100 (temperature,
 // potential and total energy per atom) and the time per atom-step.
 //
-//   pdyn_bench_lj_melt init.dump [--threads N] [--steps S]
+//   pdyn_bench_lj_melt init.dump [--threads N] [--steps S] [--plugins DIR]
 #include <fmt/format.h>
 
 #include <chrono>
@@ -88,20 +88,22 @@ double status_bytes(const std::string& key) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::cerr << "usage: pdyn_bench_lj_melt init.dump [--threads N] [--steps S]\n";
+    std::cerr << "usage: pdyn_bench_lj_melt init.dump [--threads N] [--steps S] [--plugins DIR]\n";
     return 2;
   }
   int threads = 1;
   long steps = 100;
+  std::string plugins = PDYN_PLUGIN_DIR;  // another build's plugins, to compare two versions
   for (int k = 2; k + 1 < argc; k += 2) {
     const std::string opt = argv[k];
     if (opt == "--threads") threads = std::stoi(argv[k + 1]);
     if (opt == "--steps") steps = std::stol(argv[k + 1]);
+    if (opt == "--plugins") plugins = argv[k + 1];
   }
   pdyn::set_threads(threads);
   const Dump dump = read_dump(argv[1]);
   pdyn::PluginRegistry registry;
-  registry.discover({PDYN_PLUGIN_DIR});
+  registry.discover({plugins});
 
   // Memory of the simulation: the peak resident set's growth from here
   // (the dump and the plugins already loaded), as LAMMPS's "Per MPI rank

@@ -226,25 +226,23 @@ class PairForce : public Force, public PairReference {
 
   // x_i - x_j, to the nearest image along periodic axes. Positions are
   // wrapped after every step and move little within one, so |d_k| < 1.5 L
-  // almost always, and one add of -L, 0 or +L chosen by two comparisons
-  // (no branch: which pairs straddle a face is unpredictable) gives the
-  // nearest image; Domain::minimum_image, with its rounding call, stays the
-  // fallback for the rest.
+  // almost always and one conditional add gives the nearest image without
+  // the rounding call of Domain::minimum_image, which stays the fallback.
+  // Branches, not arithmetic selects: few pairs straddle a face, and those
+  // of one particle come together, so the branches are well predicted; a
+  // branch-free fold (an add of -L, 0 or +L chosen by two comparisons) made
+  // the LJ melt 1.9 times slower.
   [[gnu::always_inline]] static inline Vec3 separation(const double* xi, const double* xj,
                                                        const Images& im) {
     Vec3 d(xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]);
     if (!im.any) return d;
-    bool far = false;
     for (int k = 0; k < 3; ++k) {
-      const double fold =
-          static_cast<double>(d[k] > im.half[k]) - static_cast<double>(d[k] < -im.half[k]);
-      d[k] -= fold * im.length[k];
-      far |= !(std::abs(d[k]) <= im.half[k]);
-    }
-    if (far) [[unlikely]] {
-      for (int k = 0; k < 3; ++k) {
-        if (!(std::abs(d[k]) <= im.half[k])) d[k] -= im.length[k] * std::round(d[k] / im.length[k]);
+      if (d[k] > im.half[k]) {
+        d[k] -= im.length[k];
+      } else if (d[k] < -im.half[k]) {
+        d[k] += im.length[k];
       }
+      if (!(std::abs(d[k]) <= im.half[k])) d[k] -= im.length[k] * std::round(d[k] / im.length[k]);
     }
     return d;
   }
