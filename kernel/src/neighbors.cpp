@@ -133,8 +133,11 @@ bool NeighborList::stale(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
       const Vec3 now = x.col(i);
       const Vec3 then = Eigen::Map<const Vec3>(x0_.data() + 3 * i);
       const bool finite_now = now.allFinite();
-      if (finite_now != then.allFinite() ||
-          (finite_now && domain.minimum_image(now - then).squaredNorm() > limit2)) {
+      // The nearest image is never further than the raw difference, so its
+      // rounding calls are needed only for the few that moved far or wrapped.
+      const Vec3 d = now - then;
+      if (finite_now != then.allFinite() || (finite_now && d.squaredNorm() > limit2 &&
+                                             domain.minimum_image(d).squaredNorm() > limit2)) {
         moved.store(true, std::memory_order_relaxed);
       }
     }
@@ -392,7 +395,10 @@ Index NeighborList::fill_row(Index i, std::vector<Index>& buf, Index used) const
       const auto needed = static_cast<std::size_t>(used + count + (end - begin));
       buf.resize(std::max(buf.size() + buf.size() / 2, needed + needed / 8));
     }
+    // A local count: `out` and `count` are both Index, so through the
+    // reference every store to out would force a reload of count.
     Index* out = buf.data() + used;
+    Index kept = count;
     for (Index s = begin; s < end; ++s) {
       const Index j = index[s];
       const Point& q = pos[s];
@@ -413,9 +419,10 @@ Index NeighborList::fill_row(Index i, std::vector<Index>& buf, Index used) const
         const double dx = q[0] + sx - p[0], dy = q[1] + sy - p[1], dz = q[2] + sz - p[2];
         r2 = dx * dx + dy * dy + dz * dz;
       }
-      out[count] = j;
-      count += static_cast<Index>((half ? j > i : j != i) & (r2 <= reach2));
+      out[kept] = j;
+      kept += static_cast<Index>((half ? j > i : j != i) & (r2 <= reach2));
     }
+    count = kept;
   };
 
   const Index nx = g.n[0];

@@ -236,13 +236,16 @@ class PairForce : public Force, public PairReference {
                                                        const Images& im) {
     Vec3 d(xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]);
     if (!im.any) return d;
-    for (int k = 0; k < 3; ++k) {
-      if (d[k] > im.half[k]) {
-        d[k] -= im.length[k];
-      } else if (d[k] < -im.half[k]) {
-        d[k] += im.length[k];
+    if ((std::abs(d[0]) > im.half[0]) | (std::abs(d[1]) > im.half[1]) |
+        (std::abs(d[2]) > im.half[2])) [[unlikely]] {
+      for (int k = 0; k < 3; ++k) {
+        if (d[k] > im.half[k]) {
+          d[k] -= im.length[k];
+        } else if (d[k] < -im.half[k]) {
+          d[k] += im.length[k];
+        }
+        if (!(std::abs(d[k]) <= im.half[k])) d[k] -= im.length[k] * std::round(d[k] / im.length[k]);
       }
-      if (!(std::abs(d[k]) <= im.half[k])) d[k] -= im.length[k] * std::round(d[k] / im.length[k]);
     }
     return d;
   }
