@@ -15,6 +15,7 @@
 #include <string>
 
 #include "pdyn/host/registry.hpp"
+#include "pdyn/pair.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/plugin.hpp"
 #include "pdyn/resolve.hpp"
@@ -136,6 +137,12 @@ int main(int argc, char** argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   thermo(sys, steps);
   std::cout << fmt::format("force evaluations {}\n", sys.force_evaluations());
+  const auto* pair =
+      dynamic_cast<const pdyn::PairReference*>(sys.force_objects().front().force.get());
+  if (const pdyn::NeighborList* list = pair ? pair->pair_neighbors() : nullptr) {
+    std::cout << fmt::format("Neighbor list builds = {}, pairs listed = {}\n", list->builds(),
+                             list->pair_count());
+  }
   std::cout << fmt::format(
       "Loop time of {:.6g} s on {} threads for {} steps with {} atoms: {:.1f} ns/atom-step\n",
       seconds, threads, steps, sys.size(),

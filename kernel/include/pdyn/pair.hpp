@@ -121,6 +121,9 @@ class PairReference {
   /// neighbor list, and returns the pairs' energy, J (0 for a force that
   /// reports none). O(N^2): for checks only.
   virtual double add_forces_all_pairs(const ParticleView& p, Eigen::Ref<Matrix3X> f) const = 0;
+  /// The force's neighbor list, if it has one (for statistics: builds(),
+  /// pair_count()).
+  virtual const NeighborList* pair_neighbors() const { return nullptr; }
 };
 
 /// A force from a central pair law within a cutoff (see the top of this
@@ -169,6 +172,7 @@ class PairForce : public Force, public PairReference {
 
   // ---- PairReference ----
   double pair_cutoff() const override { return std::sqrt(cutoff2_); }
+  const NeighborList* pair_neighbors() const override { return &list_; }
   bool continuous_at_cutoff() const override {
     if constexpr (requires(const Law& l) {
                     { l.continuous_at_cutoff() } -> std::convertible_to<bool>;
