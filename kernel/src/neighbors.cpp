@@ -69,6 +69,10 @@ void reserve_for(std::vector<T>& v, std::size_t n) {
 
 NeighborList::NeighborList(double cutoff, double skin, Kind kind)
     : cutoff_(cutoff), skin_(skin), kind_(kind) {
+  set_range(cutoff, skin);
+}
+
+void NeighborList::set_range(double cutoff, double skin) {
   if (!std::isfinite(cutoff) || cutoff <= 0) {
     throw std::invalid_argument(
         fmt::format("neighbor list: cutoff must be finite and > 0 m, got {}", cutoff));
@@ -77,6 +81,9 @@ NeighborList::NeighborList(double cutoff, double skin, Kind kind)
     throw std::invalid_argument(
         fmt::format("neighbor list: skin must be finite and >= 0 m, got {}", skin));
   }
+  cutoff_ = cutoff;
+  skin_ = skin;
+  built_ = false;
 }
 
 bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
@@ -167,6 +174,10 @@ void NeighborList::build(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
 
   built_ = true;
   ++builds_;
+  // Stamps are unique in the process: a cache keyed on one can never match
+  // another list's build, or a build of this list before set_range().
+  static std::atomic<std::uint64_t> last_stamp{0};
+  stamp_ = last_stamp.fetch_add(1, std::memory_order_relaxed) + 1;
 }
 
 void NeighborList::make_grid(const Domain& domain, const std::array<double, 3>& lo,

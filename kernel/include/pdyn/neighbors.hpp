@@ -37,6 +37,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -136,6 +137,13 @@ class NeighborList {
 
   /// Number of builds so far (update()'s rebuilds and build()'s).
   std::int64_t builds() const noexcept { return builds_; }
+  /// A number that changes with every build of any list in the process
+  /// (never the same for two builds): what is derived from a list stays
+  /// valid while its stamp() is unchanged. 0 before the first build.
+  std::uint64_t stamp() const noexcept { return stamp_; }
+  /// Changes the cutoff and skin (same ranges as the constructor); the next
+  /// update() rebuilds.
+  void set_range(double cutoff, double skin);
 
   /// Number of distinct pairs listed (each counted once, also for Kind::Full,
   /// which stores 2 pair_count() indices).
@@ -208,6 +216,7 @@ class NeighborList {
   double cutoff_, skin_;
   Kind kind_;
   std::int64_t builds_ = 0;
+  std::uint64_t stamp_ = 0;
 
   // The last build's inputs, to tell when the list is stale.
   Domain domain_;
@@ -234,6 +243,46 @@ class NeighborList {
   // The Verlet list, CSR.
   std::vector<Index> offsets_{0};
   std::vector<Index> indices_;
+};
+
+/// A neighbor list shared by every pair force on the same particles. Forces
+/// whose lists would hold the same kind of pairs of the same particles (the
+/// same positions array, N, box and member mask) share one list, built at
+/// the largest of their cutoffs and reaches (cutoff + skin); each force
+/// skips the pairs beyond its own cutoff. A Lennard-Jones force and a
+/// contact force on one system then bin and search once per rebuild, not
+/// twice. Sharing never changes a result: a pair force sums only the pairs
+/// within its cutoff, in ascending order of the partner, whatever else the
+/// list holds. Forces evaluated on different particle arrays (two systems,
+/// a copy of the state) never share. Thread-safe across systems.
+class SharedNeighborList {
+ public:
+  /// As NeighborList's constructor (same errors); what this force needs.
+  SharedNeighborList(double cutoff, double skin,
+                     NeighborList::Kind kind = NeighborList::Kind::Half);
+  ~SharedNeighborList();
+  SharedNeighborList(SharedNeighborList&&) noexcept;
+  SharedNeighborList& operator=(SharedNeighborList&&) noexcept;
+
+  /// Joins the list of the forces on these particles (or starts one),
+  /// widens it to this force's cutoff and reach if needed, brings it up to
+  /// date as NeighborList::update() does (same arguments and errors), and
+  /// returns it. Its cutoff() is >= this force's.
+  const NeighborList& update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+                             const std::vector<std::uint8_t>* members = nullptr);
+
+  /// The list of the last update(), or nullptr before the first.
+  const NeighborList* list() const noexcept;
+
+  double cutoff() const noexcept { return cutoff_; }  ///< this force's cutoff, m
+  double skin() const noexcept { return skin_; }      ///< this force's skin, m
+
+  struct Entry;  ///< the shared list and what it is for (opaque)
+
+ private:
+  double cutoff_, skin_;
+  NeighborList::Kind kind_;
+  std::shared_ptr<Entry> entry_;
 };
 
 }  // namespace pdyn

@@ -135,7 +135,7 @@ class PairForce : public Force, public PairReference {
   PairForce(Law law, double cutoff, double skin, std::vector<std::uint8_t> members = {})
       : law_(std::move(law)),
         cutoff2_(cutoff * cutoff),
-        list_(cutoff, skin, NeighborList::Kind::Half),
+        shared_(cutoff, skin, NeighborList::Kind::Half),
         members_(std::move(members)) {}
 
   void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) override {
@@ -153,11 +153,11 @@ class PairForce : public Force, public PairReference {
 
   /// Sum of U over the pairs closer than the cutoff, J.
   std::optional<double> potential_energy(const ParticleView& p) const override {
-    update(p);
+    const NeighborList& list = update(p);
     double u = 0.0;
     const Images im(p.domain);
     for (Index i = 0; i < p.size(); ++i) {
-      for (const Index j : list_.neighbors(i)) {
+      for (const Index j : list.neighbors(i)) {
         const Vec3 d = separation(p, im, i, j);
         const double r2 = d.squaredNorm();
         if (r2 < cutoff2_) u += evaluate(p, i, j, d, r2).energy;
@@ -167,12 +167,14 @@ class PairForce : public Force, public PairReference {
   }
 
   const Law& law() const noexcept { return law_; }
-  /// The neighbor list (for statistics: builds, pairs).
-  const NeighborList& neighbor_list() const noexcept { return list_; }
+  /// The neighbor list of the last evaluation (for statistics: builds,
+  /// pairs), shared with the other pair forces on the same particles
+  /// (SharedNeighborList); nullptr before the first evaluation.
+  const NeighborList* neighbor_list() const noexcept { return shared_.list(); }
 
   // ---- PairReference ----
   double pair_cutoff() const override { return std::sqrt(cutoff2_); }
-  const NeighborList* pair_neighbors() const override { return &list_; }
+  const NeighborList* pair_neighbors() const override { return shared_.list(); }
   bool continuous_at_cutoff() const override {
     if constexpr (requires(const Law& l) {
                     { l.continuous_at_cutoff() } -> std::convertible_to<bool>;
@@ -205,10 +207,10 @@ class PairForce : public Force, public PairReference {
   }
 
  private:
-  void update(const ParticleView& p) const {
+  const NeighborList& update(const ParticleView& p) const {
     // Particles added since (an interactive host's) are not members.
     if (!members_.empty()) members_.resize(static_cast<std::size_t>(p.size()), 0);
-    list_.update(p.x, p.domain, members_.empty() ? nullptr : &members_);
+    return shared_.update(p.x, p.domain, members_.empty() ? nullptr : &members_);
   }
 
   static std::int32_t type_of(const ParticleView& p, Index i) {
@@ -291,8 +293,9 @@ class PairForce : public Force, public PairReference {
         Eigen::Map<Vec3>(fd + fs * j) -= evaluate(p, i, j, d, r2).force;
       }
     }
-    const Index* offsets = list_.offsets().data();
-    const Index* indices = list_.indices().data();
+    const NeighborList& list = *shared_.list();
+    const Index* offsets = list.offsets().data();
+    const Index* indices = list.indices().data();
     for (Index i = begin; i < end; ++i) {
       const double* xi = x + 3 * i;
       Vec3 fi = Eigen::Map<const Vec3>(fd + fs * i);
@@ -316,7 +319,8 @@ class PairForce : public Force, public PairReference {
   // range, in row order, and all wait for all.
   void parallel_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) {
     const Index n = p.size();
-    const bool listed = cross_build_ == list_.builds() && cross_n_ == n;
+    const NeighborList& list = *shared_.list();
+    const bool listed = cross_stamp_ == list.stamp() && cross_n_ == n;
 #pragma omp parallel
     {
       const Index t = omp_get_thread_num(), nt = omp_get_num_threads();
@@ -328,14 +332,14 @@ class PairForce : public Force, public PairReference {
         {
           if (cross_.size() < static_cast<std::size_t>(nt))
             cross_.resize(static_cast<std::size_t>(nt));
-          cross_build_ = list_.builds();
+          cross_stamp_ = list.stamp();
           cross_n_ = n;
           cross_threads_ = nt;
         }
         auto& out = cross_[static_cast<std::size_t>(t)];
         out.clear();
         for (Index i = begin; i < end; ++i) {
-          for (const Index j : list_.neighbors(i)) {
+          for (const Index j : list.neighbors(i)) {
             if (j >= end) out.push_back({i, j});
           }
         }
@@ -348,13 +352,14 @@ class PairForce : public Force, public PairReference {
 
   Law law_;
   double cutoff2_;
-  mutable NeighborList list_;  // brought up to date by const potential_energy too
+  mutable SharedNeighborList shared_;  // brought up to date by const potential_energy too
   mutable std::vector<std::uint8_t> members_;
   // The threaded path's pairs across ranges: cross_[t] holds, in row order,
   // the listed (i, j) with i in thread t's range and j past it; valid for
-  // list build cross_build_, N = cross_n_ and cross_threads_ threads.
+  // the list build stamped cross_stamp_, N = cross_n_ and cross_threads_
+  // threads.
   std::vector<std::vector<std::pair<Index, Index>>> cross_;
-  std::int64_t cross_build_ = -1;
+  std::uint64_t cross_stamp_ = 0;
   Index cross_n_ = -1, cross_threads_ = 0;
 };
 
