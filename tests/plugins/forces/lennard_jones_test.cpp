@@ -148,9 +148,19 @@ TEST(LennardJones, NeighborListSumEqualsTheBruteForceSum) {
   }
 }
 
-TEST(LennardJones, ForcesAreBitIdenticalForOneToFourThreads) {
+// Forces of lennard_jones with `given` on 21,952 particles of a periodic
+// lattice (the threaded path), every third of type 1 if `two_types`, on 1
+// to 4 threads: bit-identical to one thread's, added onto forces already
+// there.
+void ExpectBitIdenticalForOneToFourThreads(std::uint64_t seed, const Params& given,
+                                           bool two_types) {
   System sys;
-  set(sys, lattice(28, 1.1, 11));  // 21,952 particles: the threaded path
+  set(sys, lattice(28, 1.1, seed));
+  if (two_types) {
+    std::vector<std::int32_t> type(static_cast<std::size_t>(sys.size()));
+    for (std::size_t i = 0; i < type.size(); ++i) type[i] = static_cast<std::int32_t>(i % 3 == 0);
+    sys.set_types(type);
+  }
   Domain d;
   d.max = Vec3::Constant(28 * 1.1);
   d.periodic = {true, true, true};
@@ -158,8 +168,8 @@ TEST(LennardJones, ForcesAreBitIdenticalForOneToFourThreads) {
   Matrix3X reference;
   for (const int threads : {1, 2, 3, 4}) {
     set_threads(threads);
-    auto force = make(sys, Params{});
-    Matrix3X f = Matrix3X::Constant(3, sys.size(), 0.125);  // added onto forces already there
+    auto force = make(sys, given);
+    Matrix3X f = Matrix3X::Constant(3, sys.size(), 0.125);
     force->add_forces(sys.view(), f);
     if (threads == 1) {
       reference = f;
@@ -168,6 +178,10 @@ TEST(LennardJones, ForcesAreBitIdenticalForOneToFourThreads) {
     }
   }
   set_threads(available_threads());
+}
+
+TEST(LennardJones, ForcesAreBitIdenticalForOneToFourThreads) {
+  ExpectBitIdenticalForOneToFourThreads(11, Params{}, false);
 }
 
 // 256 atoms of an fcc Lennard-Jones liquid (reduced density 0.8442, the
@@ -423,30 +437,9 @@ TEST(LennardJones, OneRowForTypeZeroIsTheOneTypeLawBitForBit) {
 }
 
 TEST(LennardJones, MixtureForcesAreBitIdenticalForOneToFourThreads) {
-  System sys;
-  set(sys, lattice(28, 1.1, 13));  // 21,952 particles: the threaded path
-  std::vector<std::int32_t> type(static_cast<std::size_t>(sys.size()));
-  for (std::size_t i = 0; i < type.size(); ++i) type[i] = static_cast<std::int32_t>(i % 3 == 0);
-  sys.set_types(type);
-  Domain d;
-  d.max = Vec3::Constant(28 * 1.1);
-  d.periodic = {true, true, true};
-  sys.set_domain(d);
   Params given;
   given.set("pair_coeff", std::vector<std::string>{"0 0 1 1", "1 1 0.5 0.9 2.0"});
-  Matrix3X reference;
-  for (const int threads : {1, 2, 3, 4}) {
-    set_threads(threads);
-    auto force = make(sys, given);
-    Matrix3X f = Matrix3X::Constant(3, sys.size(), 0.125);
-    force->add_forces(sys.view(), f);
-    if (threads == 1) {
-      reference = f;
-    } else {
-      EXPECT_TRUE(f.cwiseEqual(reference).all()) << threads << " threads";
-    }
-  }
-  set_threads(available_threads());
+  ExpectBitIdenticalForOneToFourThreads(13, given, true);
 }
 
 // Three particles of types 0, 1, 1 and a lennard_jones entry `entry`
