@@ -14,7 +14,16 @@
 //     pdyn::PairTerm operator()(double r2, std::int32_t ti, std::int32_t tj) const;
 //   };
 //
-// and derives from, or instantiates, PairForce<Law>. A law that needs more
+// and derives from, or instantiates, PairForce<Law>. A central law may also
+// give the derivative of its force for implicit solvers' Jacobians:
+//
+//     // d/d(r^2) of -U'(r)/r (N/m^3) at r2 < rc^2.
+//     double force_over_r_slope(double r2, std::int32_t ti, std::int32_t tj) const;
+//
+// With g = -U'(r)/r and d = x_i - x_j, F_ij = g d and dF_ij/dx_i =
+// g I + 2 g'(r^2) d d^T = -dF_ij/dx_j; PairForce then gives add_jacobians()
+// (without it an implicit solver differentiates add_forces numerically, and
+// `pdyn check`'s force.jacobians row compares the two). A law that needs more
 // than the distance (a contact law: radii, relative velocity, masses) takes
 // the pair itself instead and returns the force vector:
 //
@@ -171,6 +180,38 @@ class PairForce : public Force, public PairReference {
   /// pairs), shared with the other pair forces on the same particles
   /// (SharedNeighborList); nullptr before the first evaluation.
   const NeighborList* neighbor_list() const noexcept { return shared_.list(); }
+
+  /// df/dx of every listed pair within the cutoff (see the top of this
+  /// file), when the law gives force_over_r_slope(); false otherwise. No
+  /// df/dv: a central law depends on positions only.
+  bool add_jacobians(const ParticleView& p, JacobianSink& sink) override {
+    if constexpr (kCentral && requires(const Law& l) {
+                    {
+                      l.force_over_r_slope(1.0, std::int32_t{}, std::int32_t{})
+                      } -> std::convertible_to<double>;
+                  }) {
+      const NeighborList& list = update(p);
+      const Images im(p.domain);
+      for (Index i = 0; i < p.size(); ++i) {
+        for (const Index j : list.neighbors(i)) {
+          const Vec3 d = separation(p, im, i, j);
+          const double r2 = d.squaredNorm();
+          if (!(r2 < cutoff2_)) continue;
+          const std::int32_t ti = type_of(p, i), tj = type_of(p, j);
+          const double g = law_(r2, ti, tj).force_over_r;
+          const Eigen::Matrix3d k = g * Eigen::Matrix3d::Identity() +
+                                    (2.0 * law_.force_over_r_slope(r2, ti, tj)) * d * d.transpose();
+          sink.add_dfdx(i, i, k);
+          sink.add_dfdx(i, j, -k);
+          sink.add_dfdx(j, i, -k);
+          sink.add_dfdx(j, j, k);
+        }
+      }
+      return true;
+    } else {
+      return Force::add_jacobians(p, sink);
+    }
+  }
 
   // ---- PairReference ----
   double pair_cutoff() const override { return std::sqrt(cutoff2_); }

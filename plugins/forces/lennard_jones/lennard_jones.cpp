@@ -63,6 +63,13 @@ struct Coefficients {
     const double r6inv = r2inv * r2inv * r2inv;
     return {r6inv * (lj3 * r6inv - lj4) - offset, r6inv * (lj1 * r6inv - lj2) * r2inv};
   }
+  // d/d(r^2) of -U'(r)/r = lj1 r^-14 - lj2 r^-8: -7 lj1 r^-16 + 4 lj2 r^-10,
+  // for the analytic Jacobians of implicit solvers.
+  double slope(double r2) const {
+    const double r2inv = 1.0 / r2;
+    const double r6inv = r2inv * r2inv * r2inv;
+    return r2inv * r2inv * r6inv * (4.0 * lj2 - 7.0 * lj1 * r6inv);
+  }
 };
 
 // One set of coefficients for every pair (no `pair_coeff`): the types are
@@ -72,6 +79,7 @@ struct LennardJones {
   bool shift;
 
   pdyn::PairTerm operator()(double r2, std::int32_t, std::int32_t) const { return c.at(r2); }
+  double force_over_r_slope(double r2, std::int32_t, std::int32_t) const { return c.slope(r2); }
   bool continuous_at_cutoff() const { return shift; }
 };
 
@@ -91,6 +99,11 @@ struct LennardJonesTypes {
     const Coefficients& c = table[slot(ti) * (n + 1) + slot(tj)];
     if (!(r2 < c.cutoff2)) return {};
     return c.at(r2);
+  }
+  double force_over_r_slope(double r2, std::int32_t ti, std::int32_t tj) const {
+    const Coefficients& c = table[slot(ti) * (n + 1) + slot(tj)];
+    if (!(r2 < c.cutoff2)) return 0.0;
+    return c.slope(r2);
   }
   bool continuous_at_cutoff() const { return shift; }
 };

@@ -239,6 +239,55 @@ TEST(LennardJones, SmallLiquidConservesEnergyToSecondOrder) {
   EXPECT_NEAR(order, 2.0, 0.3);
 }
 
+// df/dx from the law's force_over_r_slope (PairForce::add_jacobians) equals
+// central differences of the forces (h = 1e-6 sigma) to 1e-6 of the largest
+// block, for one type and for a mixture, on 125 particles of a jittered
+// lattice filling a periodic box (pairs across the faces included).
+struct DenseSink final : JacobianSink {
+  explicit DenseSink(Index n) : dfdx(Eigen::MatrixXd::Zero(3 * n, 3 * n)) {}
+  void add_dfdx(Index i, Index j, const Eigen::Matrix3d& block) override {
+    dfdx.block<3, 3>(3 * i, 3 * j) += block;
+  }
+  void add_dfdv(Index, Index, const Eigen::Matrix3d&) override { ADD_FAILURE() << "no df/dv"; }
+  Eigen::MatrixXd dfdx;
+};
+
+TEST(LennardJones, AnalyticJacobiansMatchCentralDifferences) {
+  Params mixture;
+  mixture.set("pair_coeff", std::vector<std::string>{"0 0 1 1", "1 1 0.5 0.9 2.0"});
+  for (const Params& given : {Params{}, mixture}) {
+    System sys;
+    set(sys, lattice(5, 1.15, 5));
+    std::vector<std::int32_t> type(125);
+    for (std::size_t i = 0; i < type.size(); ++i) type[i] = static_cast<std::int32_t>(i % 3 == 0);
+    sys.set_types(type);
+    Domain d;
+    d.max = Vec3::Constant(5 * 1.15);  // 5.75 >= 2 (2.5 + 0.3)
+    d.periodic = {true, true, true};
+    sys.set_domain(d);
+    auto force = make(sys, given);
+    DenseSink sink(sys.size());
+    ASSERT_TRUE(force->add_jacobians(sys.view(), sink));
+    const double h = 1e-6;
+    Eigen::MatrixXd numeric(3 * sys.size(), 3 * sys.size());
+    for (Index k = 0; k < sys.size(); ++k) {
+      for (int c = 0; c < 3; ++c) {
+        const double saved = sys.positions()(c, k);
+        sys.positions()(c, k) = saved + h;
+        const Matrix3X plus = forces(*force, sys);
+        sys.positions()(c, k) = saved - h;
+        const Matrix3X minus = forces(*force, sys);
+        sys.positions()(c, k) = saved;
+        const Matrix3X diff = (plus - minus) / (2 * h);
+        numeric.col(3 * k + c) = Eigen::Map<const Eigen::VectorXd>(diff.data(), 3 * sys.size());
+      }
+    }
+    const double scale = sink.dfdx.cwiseAbs().maxCoeff();
+    EXPECT_GT(scale, 1.0);
+    EXPECT_LT((sink.dfdx - numeric).cwiseAbs().maxCoeff(), 1e-6 * scale);
+  }
+}
+
 TEST(LennardJones, ACutoffThatDoesNotFitThePeriodicBoxIsRefused) {
   System sys;
   set(sys, lattice(2, 1.1, 1));
