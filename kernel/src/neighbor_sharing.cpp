@@ -69,7 +69,7 @@ Registry& registry() {
 
 SharedNeighborList::SharedNeighborList(double cutoff, double skin, NeighborList::Kind kind)
     : cutoff_(cutoff), skin_(skin), kind_(kind) {
-  NeighborList(cutoff, skin, kind);  // the constructor's checks, with its messages
+  [[maybe_unused]] const NeighborList checked(cutoff, skin, kind);  // its checks and messages
 }
 
 SharedNeighborList::~SharedNeighborList() = default;
