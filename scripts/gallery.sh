@@ -23,6 +23,10 @@ shots=(
   "rope_over_sphere 1.5  xz"
   "jelly_in_box    0.6   3d"
   "blob            1.0   xz"
+  "cloth_on_heap   2.0   3d"
+  "granular_column 4.0   xz"
+  "lj_liquid       5.0   3d"
+  "galaxies        3.0   xy"
 )
 for shot in "${shots[@]}"; do
   read -r scene t view <<<"$shot"
