@@ -339,9 +339,9 @@ pdyn::PluginDescriptor describe() {
       pdyn::param::real("softening", 0.0, "m", "Plummer softening length eps").at_least(0),
       pdyn::param::string("method", "direct",
                           "direct (every pair, exact, O(N^2)) or barnes_hut (octree, O(N log N))"),
-      pdyn::param::real("theta", 0.5, "",
-                        "barnes_hut opening angle: a cell of side s at distance d acts as its "
-                        "centre of mass when s/d < theta")
+      pdyn::param::optional("theta", pdyn::ParamType::Real, "",
+                            "barnes_hut opening angle (0.5 if not given): a cell of side s at "
+                            "distance d acts as its centre of mass when s/d < theta")
           .greater_than(0)
           .at_most(1),
   };
@@ -361,7 +361,14 @@ pdyn::PluginDescriptor describe() {
                                          "barnes_hut)",
                                          name));
     }
-    return std::make_unique<NBody>(p.real("G"), p.real("softening"), method, p.real("theta"),
+    // A theta that would be ignored is refused, not silently dropped.
+    if (method == Method::Direct && p.has("theta")) {
+      throw pdyn::ParamError("theta",
+                             "only the barnes_hut method has an opening angle (expected method: "
+                             "barnes_hut, or no theta)");
+    }
+    const double theta = p.has("theta") ? p.real("theta") : 0.5;
+    return std::make_unique<NBody>(p.real("G"), p.real("softening"), method, theta,
                                    pdyn::Selection::from_params(p, ctx));
   };
   return d;

@@ -361,6 +361,10 @@ TEST(NBody, BadMethodAndThetaAreRefusedAtTheirKeys) {
             "test.yaml:6:53: forces[0].theta: 0 is out of range (expected a number in (0, 1])");
   EXPECT_EQ(problems("method: barnes_hut, theta: 1.5"),
             "test.yaml:6:53: forces[0].theta: 1.5 is out of range (expected a number in (0, 1])");
+  // A theta the direct sum would ignore.
+  EXPECT_EQ(problems("theta: 0.3"),
+            "test.yaml:6:33: forces[0].theta: only the barnes_hut method has an opening angle "
+            "(expected method: barnes_hut, or no theta)");
 }
 
 }  // namespace
