@@ -72,10 +72,6 @@ SharedNeighborList::SharedNeighborList(double cutoff, double skin, NeighborList:
   [[maybe_unused]] const NeighborList checked(cutoff, skin, kind);  // its checks and messages
 }
 
-SharedNeighborList::~SharedNeighborList() = default;
-SharedNeighborList::SharedNeighborList(SharedNeighborList&&) noexcept = default;
-SharedNeighborList& SharedNeighborList::operator=(SharedNeighborList&&) noexcept = default;
-
 const NeighborList* SharedNeighborList::list() const noexcept {
   return entry_ ? &entry_->list : nullptr;
 }

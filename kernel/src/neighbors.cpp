@@ -477,12 +477,15 @@ void NeighborList::fill_rows(Index n) {
   // Lists rows [begin, end) into the buffer of thread t (the list itself for
   // thread 0, so that one thread needs no copy; its whole capacity is room:
   // no allocation once warm) and returns the number of entries.
-  const auto fill = [this](std::size_t t, Index begin, Index end) {
+  const auto row = [this](Index i, std::vector<Index>& buf, Index used) {
+    return grid_.fold ? fill_row<true>(i, buf, used) : fill_row<false>(i, buf, used);
+  };
+  const auto fill = [this, &row](std::size_t t, Index begin, Index end) {
     std::vector<Index>& buf = t == 0 ? indices_ : chunks_[t - 1];
     buf.resize(buf.capacity());
     Index used = 0;
     for (Index i = begin; i < end; ++i) {
-      const Index count = grid_.fold ? fill_row<true>(i, buf, used) : fill_row<false>(i, buf, used);
+      const Index count = row(i, buf, used);
       offsets_[static_cast<std::size_t>(i) + 1] = count;
       used += count;
     }
@@ -498,7 +501,7 @@ void NeighborList::fill_rows(Index n) {
   if (indices_.capacity() == 0 && n > 0) {
     Index sampled = 0, rows = 0;
     for (Index i = 0; i < n; i += 64, ++rows) {
-      sampled += grid_.fold ? fill_row<true>(i, indices_, 0) : fill_row<false>(i, indices_, 0);
+      sampled += row(i, indices_, 0);
     }
     const double estimate =
         1.25 * static_cast<double>(sampled) * static_cast<double>(n) / static_cast<double>(rows);

@@ -21,20 +21,9 @@ TEST(GalleryGranularColumn, CollapsesAndComesToRest) {
   const double front0 = sys.positions().row(0).maxCoeff();
   double deepest = 0.0;
   test::RunAll(scene, [&](std::int64_t k) {
-    if (k % 100 != 0) return;
-    for (Index i = 0; i < sys.size(); ++i) {
-      for (Index j = i + 1; j < sys.size(); ++j) {
-        deepest =
-            std::max(deepest, 0.09 - (sys.positions().col(i) - sys.positions().col(j)).norm());
-      }
-    }
+    if (k % 100 == 0) deepest = std::max(deepest, test::DeepestOverlap(sys, 0.09));
   });
-  double resting = 0.0;  // the deepest overlap of the heap at rest
-  for (Index i = 0; i < sys.size(); ++i) {
-    for (Index j = i + 1; j < sys.size(); ++j) {
-      resting = std::max(resting, 0.09 - (sys.positions().col(i) - sys.positions().col(j)).norm());
-    }
-  }
+  const double resting = test::DeepestOverlap(sys, 0.09);  // the heap at rest
   const double lost = u0 - sys.potential_energy();
   const double front = sys.positions().row(0).maxCoeff();
   std::cout << "granular_column: kinetic " << sys.kinetic_energy() << " J after losing " << lost

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -28,6 +29,20 @@ inline std::string Num(double x) {
 /// "[x, y, z]" with 17 significant digits.
 inline std::string Vec(const Vec3& v) {
   return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
+}
+
+/// The deepest overlap of equal spheres of `diameter` (m) centred on the
+/// system's particles: the largest diameter - |x_i - x_j| over all pairs, m
+/// (negative when none touch). O(N^2), for checks.
+inline double DeepestOverlap(const System& sys, double diameter) {
+  double deepest = -std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < sys.size(); ++i) {
+    for (Index j = i + 1; j < sys.size(); ++j) {
+      deepest =
+          std::max(deepest, diameter - (sys.positions().col(i) - sys.positions().col(j)).norm());
+    }
+  }
+  return deepest;
 }
 
 /// Step k (1-based) of length h, as the kernel's runner takes it: the solver

@@ -260,9 +260,6 @@ class SharedNeighborList {
   /// As NeighborList's constructor (same errors); what this force needs.
   SharedNeighborList(double cutoff, double skin,
                      NeighborList::Kind kind = NeighborList::Kind::Half);
-  ~SharedNeighborList();
-  SharedNeighborList(SharedNeighborList&&) noexcept;
-  SharedNeighborList& operator=(SharedNeighborList&&) noexcept;
 
   /// Joins the list of the forces on these particles (or starts one),
   /// widens it to this force's cutoff and reach if needed, brings it up to

@@ -162,24 +162,14 @@ class PairForce : public Force, public PairReference {
 
   /// Sum of U over the pairs closer than the cutoff, J.
   std::optional<double> potential_energy(const ParticleView& p) const override {
-    const NeighborList& list = update(p);
     double u = 0.0;
-    const Images im(p.domain);
-    for (Index i = 0; i < p.size(); ++i) {
-      for (const Index j : list.neighbors(i)) {
-        const Vec3 d = separation(p, im, i, j);
-        const double r2 = d.squaredNorm();
-        if (r2 < cutoff2_) u += evaluate(p, i, j, d, r2).energy;
-      }
-    }
+    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2) {
+      u += evaluate(p, i, j, d, r2).energy;
+    });
     return u;
   }
 
   const Law& law() const noexcept { return law_; }
-  /// The neighbor list of the last evaluation (for statistics: builds,
-  /// pairs), shared with the other pair forces on the same particles
-  /// (SharedNeighborList); nullptr before the first evaluation.
-  const NeighborList* neighbor_list() const noexcept { return shared_.list(); }
 
   /// df/dx of every listed pair within the cutoff (see the top of this
   /// file), when the law gives force_over_r_slope(); false otherwise. No
@@ -190,23 +180,16 @@ class PairForce : public Force, public PairReference {
                       l.force_over_r_slope(1.0, std::int32_t{}, std::int32_t{})
                       } -> std::convertible_to<double>;
                   }) {
-      const NeighborList& list = update(p);
-      const Images im(p.domain);
-      for (Index i = 0; i < p.size(); ++i) {
-        for (const Index j : list.neighbors(i)) {
-          const Vec3 d = separation(p, im, i, j);
-          const double r2 = d.squaredNorm();
-          if (!(r2 < cutoff2_)) continue;
-          const std::int32_t ti = type_of(p, i), tj = type_of(p, j);
-          const double g = law_(r2, ti, tj).force_over_r;
-          const Eigen::Matrix3d k = g * Eigen::Matrix3d::Identity() +
-                                    (2.0 * law_.force_over_r_slope(r2, ti, tj)) * d * d.transpose();
-          sink.add_dfdx(i, i, k);
-          sink.add_dfdx(i, j, -k);
-          sink.add_dfdx(j, i, -k);
-          sink.add_dfdx(j, j, k);
-        }
-      }
+      for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2) {
+        const std::int32_t ti = type_of(p, i), tj = type_of(p, j);
+        const double g = law_(r2, ti, tj).force_over_r;
+        const Eigen::Matrix3d k = g * Eigen::Matrix3d::Identity() +
+                                  (2.0 * law_.force_over_r_slope(r2, ti, tj)) * d * d.transpose();
+        sink.add_dfdx(i, i, k);
+        sink.add_dfdx(i, j, -k);
+        sink.add_dfdx(j, i, -k);
+        sink.add_dfdx(j, j, k);
+      });
       return true;
     } else {
       return Force::add_jacobians(p, sink);
@@ -215,6 +198,9 @@ class PairForce : public Force, public PairReference {
 
   // ---- PairReference ----
   double pair_cutoff() const override { return std::sqrt(cutoff2_); }
+  /// The neighbor list of the last evaluation, shared with the other pair
+  /// forces on the same particles (SharedNeighborList); nullptr before the
+  /// first evaluation.
   const NeighborList* pair_neighbors() const override { return shared_.list(); }
   bool continuous_at_cutoff() const override {
     if constexpr (requires(const Law& l) {
@@ -252,6 +238,21 @@ class PairForce : public Force, public PairReference {
     // Particles added since (an interactive host's) are not members.
     if (!members_.empty()) members_.resize(static_cast<std::size_t>(p.size()), 0);
     return shared_.update(p.x, p.domain, members_.empty() ? nullptr : &members_);
+  }
+
+  // visit(i, j, d, r2) for every listed pair closer than the cutoff, in the
+  // one-thread loop's order (the serial paths: energy, Jacobians).
+  template <class Visit>
+  void for_each_pair(const ParticleView& p, Visit&& visit) const {
+    const NeighborList& list = update(p);
+    const Images im(p.domain);
+    for (Index i = 0; i < p.size(); ++i) {
+      for (const Index j : list.neighbors(i)) {
+        const Vec3 d = separation(p, im, i, j);
+        const double r2 = d.squaredNorm();
+        if (r2 < cutoff2_) visit(i, j, d, r2);
+      }
+    }
   }
 
   static std::int32_t type_of(const ParticleView& p, Index i) {

@@ -283,13 +283,7 @@ TEST(SoftContact, APouredHeapOfAThousandBallsComesToRestWithoutDeepOverlaps) {
   Stepper stepper(sys, *scene.solver, scene.solver_label);
   for (int k = 1; k <= 30000; ++k) ASSERT_TRUE(stepper.step_to(k * 0.0002).has_value()) << k;
   const double lost = 0.1 * 9.81 * (z0 - sys.positions().row(2).sum());
-  double worst = 0.0;
-  for (Index i = 0; i < sys.size(); ++i) {
-    for (Index j = i + 1; j < sys.size(); ++j) {
-      worst =
-          std::max(worst, 2 * radius - (sys.positions().col(i) - sys.positions().col(j)).norm());
-    }
-  }
+  const double worst = test::DeepestOverlap(sys, 2 * radius);
   std::cout << "soft_contact heap: kinetic " << sys.kinetic_energy() << " J after losing " << lost
             << " J; deepest overlap " << worst / radius << " radius\n";
   EXPECT_GT(lost, 100.0);
