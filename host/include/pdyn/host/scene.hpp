@@ -96,4 +96,16 @@ Scene load_scene(const std::filesystem::path& file, const PluginRegistry& regist
 Scene load_scene_text(const std::string& text, const std::string& file,
                       const PluginRegistry& registry, const std::vector<Override>& overrides = {});
 
+/// Adds one plugin object to the assembled `scene`, or replaces its solver:
+/// `text` is what a scene would hold for it, as YAML (`{type: spring, ks:
+/// 100, pairs: [[0, 1]]}`, one item of `forces:` or `colliders:`, or the
+/// `solver:` mapping), checked exactly as a scene's is (names, types, ranges,
+/// particle indices against the current particles). `origin` names the
+/// caller in messages and, with the plugin's name, labels the object
+/// ("spring (ORIGIN)"): give each call its own. Returns that label. Throws
+/// SceneError (diagnostics located at `origin`) or PluginError; on a throw
+/// the scene is unchanged.
+std::string add_plugin(Scene& scene, const PluginRegistry& registry, PluginKind kind,
+                       const std::string& text, const std::string& origin);
+
 }  // namespace pdyn
