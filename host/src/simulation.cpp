@@ -153,9 +153,13 @@ void Simulation::restore_checkpoint(const std::filesystem::path& path) {
   steps_ = c.step;
   next_frame_ = c.next_frame > 0 ? c.next_frame : 1;
   has_dense_ = c.has_dense;
-  // A checkpoint of a run whose clock never restarted continues k dt.
-  clock_step_ = 0;
-  clock_time_ = 0.0;
+  // A checkpoint of a run whose step times never restarted is at k dt
+  // exactly, and continues k dt as pdyn run --resume does; any other (dt
+  // or the solver changed before it) continues from its own time.
+  const bool at_origin = static_cast<double>(c.step) * scene_.dt == c.time ||
+                         (c.step == scene_.steps && c.time == scene_.end_time);
+  clock_step_ = at_origin ? 0 : c.step;
+  clock_time_ = at_origin ? 0.0 : c.time;
 }
 
 std::unique_ptr<System> Simulation::add_particles(const Matrix3X& x, const Matrix3X& v,

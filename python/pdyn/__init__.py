@@ -3,7 +3,7 @@ NumPy arrays, add forces (written in C++ plugins or in Python), sweep
 parameters over a process pool or a dask cluster.
 
     import pdyn
-    sim = pdyn.load("configs/hanging_cloth.yaml", set={"simulation.dt": 5e-4})
+    sim = pdyn.load("configs/hanging_cloth.yaml", set={"simulation.steps": 200})
     sim.step(100)
     print(sim.t, sim.x[0], sim.energies())
 
@@ -303,7 +303,8 @@ class Force:
     force accumulator, valid during the call only (self.t is the time, s).
     Optionally potential_energy(self, x, v, mass) -> float (J). Class
     attributes describe it as a plugin: `parameters` (name -> pdyn.param;
-    the constructor receives them as keywords), `internal`, `dissipative`,
+    the constructor receives them as keywords, and the base class's sets
+    them as attributes), `internal`, `dissipative`,
     `singular` (the conformance kit checks each claim), `name` (default:
     the class name in snake_case), `version`. pdyn.check(cls) runs the kit;
     a scene loaded after the class is defined may use it by name."""
@@ -314,6 +315,23 @@ class Force:
     singular = False
     version = "0.1.0"
     t = 0.0
+
+    def __init__(self, **params):
+        """Sets each declared parameter as an attribute (self.k), from
+        `params` or its default; a subclass with its own __init__ may call
+        super().__init__(**params)."""
+        declared = type(self).parameters
+        for key in params:
+            if key not in declared:
+                raise TypeError(f"{type(self).__name__}: unknown parameter '{key}' (expected one "
+                                f"of: {', '.join(declared) or 'none'})")
+        for key, spec in declared.items():
+            if key in params:
+                setattr(self, key, params[key])
+            elif spec.required and spec.default is None:
+                raise TypeError(f"{type(self).__name__}: missing parameter '{key}'")
+            else:
+                setattr(self, key, spec.default)
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)

@@ -169,7 +169,11 @@ const PluginDescriptor& python_descriptor(py::handle cls) {
 }
 
 void add_python_plugins(PluginRegistry& registry) {
-  for (const auto& [origin, d] : descriptors()) registry.add(*d, origin);
+  for (const auto& [origin, d] : descriptors()) {
+    // Those it already has (a registry is refreshed before each add_force).
+    const PluginRecord* known = registry.find(d->kind, d->name);
+    if (!known || known->descriptor != d.get()) registry.add(*d, origin);
+  }
 }
 
 void bind_python_force(py::module_& m) {

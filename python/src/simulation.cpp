@@ -164,6 +164,8 @@ class PySimulation {
 
   // ---- plugin objects ----
   std::string add_plugin(PluginKind kind, const std::string& yaml, const std::string& call) {
+    // Python forces declared since the scene was loaded are known by name too.
+    add_python_plugins(*registry_);
     const std::string origin = fmt::format("{} #{}", call, ++calls_);
     std::string label = pdyn::add_plugin(sim_.scene(), *registry_, kind, yaml, origin);
     if (kind == PluginKind::Solver) sim_.solver_changed();
