@@ -3,7 +3,7 @@ NumPy arrays, add forces (written in C++ plugins or in Python), sweep
 parameters over a process pool or a dask cluster.
 
     import pdyn
-    sim = pdyn.load("configs/hanging_cloth.yaml", set={"simulation.steps": 200})
+    sim = pdyn.load("configs/hanging_cloth.yaml", set={"simulation.duration": 0.06})
     sim.step(100)
     print(sim.t, sim.x[0], sim.energies())
 
