@@ -41,7 +41,6 @@ void require_finite(const System& sys) {
 
 Simulation::Simulation(Scene scene, int threads) : scene_(std::move(scene)) {
   set_threads(threads > 0 ? threads : scene_.threads > 0 ? scene_.threads : available_threads());
-  steps_ = 0;
   stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
 }
 

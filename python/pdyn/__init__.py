@@ -68,6 +68,11 @@ def _item(type_name, params):
                      [f"{k}: {_yaml(v)}" for k, v in params.items()]) + "\n"
 
 
+def _overrides(set):
+    """`set=` as (path, YAML value) pairs, as `pdyn run --set` takes them."""
+    return [(str(k), _yaml(v)) for k, v in (set or {}).items()]
+
+
 def _paths(plugin_path):
     if plugin_path is None:
         return []
@@ -88,7 +93,7 @@ def load(scene, set=None, plugin_path=None, threads=0):
     plugin_path: extra folders searched for plugins first.
     threads: force and solver threads; 0: the scene's, else every core.
     Raises SceneError (with file, line, column) or PluginError."""
-    overrides = [(str(k), _yaml(v)) for k, v in (set or {}).items()]
+    overrides = _overrides(set)
     text = isinstance(scene, str) and ("\n" in scene or not os.path.exists(scene))
     if text and "\n" not in scene and re.search(r"\.ya?ml$", scene):
         raise SceneError(f"{scene}: cannot read the scene file (expected a readable YAML file)")
@@ -99,8 +104,7 @@ def load(scene, set=None, plugin_path=None, threads=0):
 
 def loads(text, name="<string>", set=None, plugin_path=None, threads=0):
     """Loads a scene from YAML text; `name` stands for the file in messages."""
-    overrides = [(str(k), _yaml(v)) for k, v in (set or {}).items()]
-    return Simulation(_pdyn._load(text, True, name, overrides, _paths(plugin_path), int(threads)))
+    return Simulation(_pdyn._load(text, True, name, _overrides(set), _paths(plugin_path), int(threads)))
 
 
 # ---------------------------------------------------------------------------
@@ -119,20 +123,23 @@ class Simulation:
         self._core = core
 
     # ---- state ----
-    x = property(lambda self: self._core.x, doc="positions, m: (N, 3) view")
-    v = property(lambda self: self._core.v, doc="velocities, m/s: (N, 3) view")
-    f = property(lambda self: self._core.f,
-                 doc="forces of the last evaluation, N: (N, 3) read-only view")
-    fixed = property(lambda self: self._core.fixed, doc="nailed particles: (N,) bool, read-only")
-    n = property(lambda self: self._core.n, doc="number of particles")
-    t = property(lambda self: self._core.t, doc="simulated time, s")
-    steps = property(lambda self: self._core.steps, doc="steps taken")
-    end_time = property(lambda self: self._core.end_time,
-                        doc="the scene's end (simulation.steps * dt or duration), s")
-    file = property(lambda self: self._core.file, doc="the scene's file")
-    solver = property(lambda self: self._core.solver, doc="the solver's plugin name")
-    force_evaluations = property(lambda self: self._core.force_evaluations,
-                                 doc="force evaluations so far (the cost measure)")
+    def _forward(name, doc):
+        """A read-only attribute of the compiled simulation, as a property."""
+        return property(lambda self: getattr(self._core, name), doc=doc)
+
+    x = _forward("x", "positions, m: (N, 3) view")
+    v = _forward("v", "velocities, m/s: (N, 3) view")
+    f = _forward("f", "forces of the last evaluation, N: (N, 3) read-only view")
+    fixed = _forward("fixed", "nailed particles: (N,) bool, read-only")
+    n = _forward("n", "number of particles")
+    t = _forward("t", "simulated time, s")
+    steps = _forward("steps", "steps taken")
+    end_time = _forward("end_time", "the scene's end (simulation.steps * dt or duration), s")
+    file = _forward("file", "the scene's file")
+    solver = _forward("solver", "the solver's plugin name")
+    force_evaluations = _forward("force_evaluations",
+                                 "force evaluations so far (the cost measure)")
+    del _forward
 
     @property
     def mass(self):

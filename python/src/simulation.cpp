@@ -135,28 +135,22 @@ class PySimulation {
   // ---- stepping ----
   std::int64_t step(std::int64_t n) {
     if (n < 0) throw py::value_error(fmt::format("step({}): expected a count >= 0", n));
-    std::int64_t taken;
-    {
-      py::gil_scoped_release release;
-      taken = sim_.step(n, interrupted);
-    }
-    if (PyErr_Occurred()) throw py::error_already_set();
-    return taken;
+    return released([&] { return sim_.step(n, interrupted); });
   }
   std::int64_t run_until(double t, std::int64_t max_steps) {
-    std::int64_t taken;
-    {
-      py::gil_scoped_release release;
-      taken = sim_.run_until(t, max_steps, interrupted);
-    }
-    if (PyErr_Occurred()) throw py::error_already_set();
-    return taken;
+    return released([&] { return sim_.run_until(t, max_steps, interrupted); });
   }
   std::int64_t run_to_end() {
+    return released([&] { return sim_.run_to_end(interrupted); });
+  }
+
+  // Steps with the GIL released; a Ctrl-C seen meanwhile is raised after.
+  template <class Steps>
+  static std::int64_t released(const Steps& steps) {
     std::int64_t taken;
     {
       py::gil_scoped_release release;
-      taken = sim_.run_to_end(interrupted);
+      taken = steps();
     }
     if (PyErr_Occurred()) throw py::error_already_set();
     return taken;
