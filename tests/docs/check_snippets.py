@@ -565,7 +565,8 @@ class Checker:
 # The columns of a README's parameter table, as `pdyn plugins describe` prints them.
 TABLE_COLUMNS = ["key", "type", "default", "unit", "range", "meaning"]
 COMPARED_COLUMNS = ["type", "default", "unit", "range"]
-KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider"}
+KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider",
+                "writers": "writer"}
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|pi"
 
 
