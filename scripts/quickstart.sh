@@ -30,6 +30,7 @@ packages=(
   libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
   libbenchmark-dev                 # bench/ (Google Benchmark)
   clang-format-14                  # the formatting check (tests/format.cmake)
+  libhdf5-dev                      # the h5md writer (HDF5 C library)
 )
 # pdyn serve's page takes three.js from the npm registry (viewer/package.json
 # and its lock file); Node.js and npm come from Debian unless the machine
@@ -37,6 +38,8 @@ packages=(
 command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 # The browser test drives Debian's Chromium headless (no browser download).
 [[ "$what" == test ]] && packages+=(chromium)
+# The writers' read-back tests read every file with VTK's and h5py's own readers.
+[[ "$what" == test ]] && packages+=(python3-vtk9 python3-h5py)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

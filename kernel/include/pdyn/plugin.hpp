@@ -95,6 +95,7 @@ struct PluginDescriptor {
   // Since ABI 5.
   WriterTraits writer_traits;   ///< kind Writer: fields it writes, whether it needs energy
   WriterFactory create_writer;  ///< set for kind Writer
+  WriterReader read_back;       ///< kind Writer, optional: reads its output back (pdyn check)
 };
 
 }  // namespace pdyn

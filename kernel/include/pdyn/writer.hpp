@@ -25,6 +25,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
@@ -115,6 +116,18 @@ struct WriterContext {
   std::vector<std::uint8_t> resume;
   bool resuming = false;  ///< true when resume holds a mark (which may be empty)
 };
+
+/// One frame as a writer's reader gives it back (WriterReader).
+struct FrameRecord {
+  double time = 0.0;  ///< s
+  Matrix3X x;         ///< positions, m (3 x N)
+  Matrix3X v;         ///< velocities, m/s (3 x N); empty when the format holds none
+};
+
+/// A writer's optional reader of its own output: every frame in `path`
+/// (the writer's path), in order. `pdyn check` compares them bit for bit
+/// with the frames it wrote. Throws pdyn::Error if the output is unreadable.
+using WriterReader = std::function<std::vector<FrameRecord>(const std::filesystem::path& path)>;
 
 class Writer : public PluginObject {
  public:
