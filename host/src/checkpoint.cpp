@@ -9,7 +9,8 @@
 // Payload: string scene_file, string scene_text, i64 step, f64 time,
 // i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
 // i32[3N] images (x, y, z per particle), u64 count, count x (string label,
-// bytes state), u64 writers, writers x (string path, bytes mark). A string
+// bytes state), u64 writers, writers x (string path, bytes mark, i8
+// wrote_state). A string
 // or byte block is a u64 length and its bytes.
 //
 // Version 3 ended with 2 x (string path, u64 bytes, u32 crc) instead of the
@@ -153,6 +154,7 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   for (const auto& m : c.outputs) {
     tail.string(m.path);
     tail.bytes(m.mark.data(), m.mark.size());
+    tail.pod(m.wrote_state);
   }
   payload += tail.data();
 
@@ -309,8 +311,10 @@ Checkpoint read_checkpoint(const fs::path& path) {
     for (std::uint64_t i = 0; i < writers; ++i) {
       std::string written = r.bytes();
       std::string mark = r.bytes();
+      const auto wrote = r.pod<std::int8_t>();
+      if (wrote < -1 || wrote > 1) r.fail("a flag is neither -1, 0 nor 1");
       c.outputs.push_back(
-          {std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end())});
+          {std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end()), wrote});
     }
   } else {
     for (int k = 0; k < 2; ++k) {  // frames, energy

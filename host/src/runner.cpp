@@ -11,6 +11,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <numeric>
 #include <ostream>
@@ -236,14 +237,26 @@ class Output {
     }
   }
   /// After a resume: which writers wrote the checkpoint's state (it is in
-  /// the output they continue).
-  void set_current(const std::function<bool(std::int64_t every)>& wrote) {
-    for (auto& s : slots_) s.current = wrote(s.spec->every);
+  /// the output they continue): as the checkpoint says, else (older
+  /// checkpoints) as `wrote` says from the writer's schedule. A writer that
+  /// did not, although the state is on its schedule (`n`, -1: off the base
+  /// schedule), writes it now.
+  void resume_at(const Checkpoint& c, std::int64_t n,
+                 const std::function<bool(std::int64_t every)>& wrote) {
+    for (auto& s : slots_) {
+      const WriterMark* m = c.output(s.spec->path.string());
+      s.current = m && m->wrote_state >= 0 ? m->wrote_state == 1 : wrote(s.spec->every);
+      if (!s.current && n >= 0 && due(s, n)) {
+        write(s, n);
+        s.current = true;
+      }
+    }
   }
   /// The first writer failure since the last call, as a message, or empty.
   std::string take_failure() { return std::exchange(failure_, {}); }
 
   fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame, bool has_dense) {
+    step_ = step;
     Checkpoint c;
     c.scene_file = scene_.file;
     c.scene_text = scene_.canonical_text;
@@ -268,21 +281,29 @@ class Output {
       c.plugin_states.emplace_back(col.label, col.collider->save_state());
     }
     for (auto& s : slots_) {
-      c.outputs.push_back({s.spec->path.string(), s.held ? *s.held : mark(s)});
+      auto m = s.held ? *s.held : mark(s);
+      const bool wrote = s.current && !s.held && !s.failed;
+      c.outputs.push_back({s.spec->path.string(), std::move(m), static_cast<std::int8_t>(wrote)});
     }
     write_checkpoint(checkpoint_, c);
     // From now on the temporary files are what a resume continues.
     if (crash_report_) crash_report_->keep_temp_files(checkpoint_);
     return checkpoint_;
   }
-  /// Completes every output; a writer that failed keeps its temporary
-  /// files (a resumed run continues them) and is not committed.
+  /// Completes every output (a writer that failed keeps its complete
+  /// frames); throws the first failure after trying them all.
   void commit() {
+    std::exception_ptr first;
     for (auto& s : slots_) {
-      if (s.failed) continue;
-      const crash::CallScope call(s.spec->label, "commit");
-      s.writer->commit();
+      try {
+        const crash::CallScope call(s.spec->label, "commit");
+        s.writer->commit();
+      } catch (...) {
+        // A writer that failed during the run has been reported already.
+        if (!first && !s.failed) first = std::current_exception();
+      }
     }
+    if (first) std::rethrow_exception(first);
   }
   std::vector<fs::path> temp_files() const {
     std::vector<fs::path> files;
@@ -297,9 +318,21 @@ class Output {
   std::string library_of(const WriterSpec& spec) const {
     return fmt::format(" (library {})", spec.record.library.string());
   }
+  // A writer whose mark() fails (its flush met a full disk) has failed:
+  // asked again, it gives the mark of its last complete output.
   std::vector<std::uint8_t> mark(Slot& s) {
     const crash::CallScope call(s.spec->label, "mark");
-    return s.writer->mark();
+    try {
+      return s.writer->mark();
+    } catch (const std::exception& e) {
+      s.failed = true;
+      if (failure_.empty()) {
+        failure_ = fmt::format(
+            "writer {} failed at step {}: {}{}; its output keeps the frames it completed",
+            s.spec->label, step_, e.what(), library_of(*s.spec));
+      }
+      return s.writer->mark();
+    }
   }
   void write(Slot& s, std::int64_t step) {
     if (s.failed) return;
@@ -320,15 +353,9 @@ class Output {
     } catch (const std::exception& e) {
       s.failed = true;
       if (failure_.empty()) {
-        failure_ = fmt::format("writer {} failed at step {}: {}{}", s.spec->label, step, e.what(),
-                               library_of(*s.spec));
-        auto temps = s.writer->temp_files();
-        std::vector<std::string> names;
-        for (const auto& t : temps) names.push_back(t.string());
-        if (!names.empty()) {
-          failure_ += fmt::format(
-              "; its output up to the last complete frame is kept as {} for --resume", join(names));
-        }
+        failure_ = fmt::format(
+            "writer {} failed at step {}: {}{}; its output keeps the frames before this one",
+            s.spec->label, step, e.what(), library_of(*s.spec));
       }
     }
   }
@@ -338,6 +365,7 @@ class Output {
   fs::path checkpoint_;
   std::vector<Slot> slots_;
   std::string failure_;
+  std::int64_t step_ = 0;  // of the checkpoint being written, for messages
   crash::FatalSignalReport* crash_report_ = nullptr;
 };
 
@@ -563,6 +591,7 @@ void run_fixed(Loop& loop, std::int64_t k0) {
     if (!loop.energy_ok(k, k == n_steps)) return;
     if (ckpt_every > 0 && k % ckpt_every == 0 && k != n_steps) {
       loop.result.checkpoint = loop.out.write_checkpoint_now(k, 0, false);
+      if (!loop.writes_ok()) return;
     }
     loop.progress.update(k, t_end);
     if (k == n_steps || loop.signals.raised()) {
@@ -649,6 +678,7 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
     if (!loop.energy_ok(k, done)) break;
     if (ckpt_every > 0 && k % ckpt_every == 0 && !done) {
       loop.result.checkpoint = loop.out.write_checkpoint_now(k, next_frame, has_dense);
+      if (!loop.writes_ok()) break;
     }
     loop.progress.update(k, t_new);
     if (done || loop.signals.raised()) {
@@ -703,9 +733,13 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
     const double frame_dt = static_cast<double>(every) * scene.dt;
     const std::int64_t m = loop.next_frame - 1;
     const bool on_base = frame_dt > 0 && static_cast<double>(m) * frame_dt == sys.time();
-    out.set_current([&](std::int64_t e) {
+    out.resume_at(*options.resume, adaptive ? (on_base ? m * every : -1) : k0, [&](std::int64_t e) {
       return adaptive ? on_base && e > 0 && (m * every) % e == 0 : e > 0 && k0 % e == 0;
     });
+    if (const std::string failure = out.take_failure(); !failure.empty()) {
+      result.exit_code = 3;
+      result.message = failure;
+    }
   }
   result.steps_done = k0;
   if (result.exit_code == 0) {

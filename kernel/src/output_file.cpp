@@ -104,7 +104,7 @@ std::vector<fs::path> leftover_temporaries(const fs::path& path) {
 }
 
 OutputFile::OutputFile(fs::path path, const FileMark* resume)
-    : path_(std::move(path)), temp_(temporary_name(path_)) {
+    : path_(std::move(path)), temp_(temporary_name(path_)), boundaries_(1) {
   std::error_code ec;
   if (path_.has_parent_path()) fs::create_directories(path_.parent_path(), ec);
   file_ = std::fopen(temp_.c_str(), "wb");
@@ -134,6 +134,8 @@ void OutputFile::resume_from(const FileMark& mark) {
     if (std::fseek(file_, 0, SEEK_SET) != 0) break;
     if (copy_prefix(c, mark, file_, crc_)) {
       bytes_ = mark.bytes;
+      boundaries_.assign(1, written());
+      resumed_ = true;
       return;
     }
   }
@@ -159,7 +161,27 @@ void OutputFile::write(const void* data, std::size_t n) {
 
 FileMark OutputFile::mark() {
   if (std::fflush(file_) != 0) throw Error(write_failure(path_, errno));
+  boundaries_.assign(1, written());
   return {bytes_, crc_};
+}
+
+void OutputFile::flush() {
+  if (std::fflush(file_) != 0) throw Error(write_failure(path_, errno));
+}
+
+FileMark OutputFile::last_whole_frame() {
+  if (whole_) return *whole_;
+  if (file_) std::fflush(file_);  // as much as still fits
+  std::error_code ec;
+  const auto size = fs::file_size(temp_, ec);
+  whole_ = FileMark{};
+  for (const auto& b : boundaries_) {
+    if (!ec && b.bytes <= size) whole_ = b;
+  }
+  // Every frame that began was followed by a successful write of it: the
+  // file ends at the current position.
+  if (!ec && size >= bytes_) whole_ = written();
+  return *whole_;
 }
 
 void OutputFile::commit() {
@@ -169,11 +191,43 @@ void OutputFile::commit() {
   file_ = nullptr;
   std::error_code ec;
   if (ok && closed) fs::rename(temp_, path_, ec);
+  if (ok && closed && !ec && resumed_) remove_leftovers(path_);
   if (!ok || !closed || ec) {
     std::error_code ignored;
     fs::remove(temp_, ignored);
     throw Error(write_failure(path_, ok ? (ec ? ec.value() : errno) : err));
   }
+}
+
+void OutputFile::commit_at(const FileMark& mark, std::string_view tail) {
+  std::fclose(file_);  // may fail to flush the rest: it is cut off below anyway
+  file_ = nullptr;
+  bytes_ = mark.bytes;
+  crc_ = mark.crc;
+  bool ok = ::truncate(temp_.c_str(), static_cast<off_t>(mark.bytes)) == 0;
+  int err = errno;
+  if (ok) {
+    const int fd = ::open(temp_.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+    ok = fd >= 0 &&
+         (tail.empty() ||
+          ::write(fd, tail.data(), tail.size()) == static_cast<ssize_t>(tail.size())) &&
+         ::fsync(fd) == 0;
+    err = errno;
+    if (fd >= 0) ::close(fd);
+  }
+  std::error_code ec;
+  if (ok) fs::rename(temp_, path_, ec);
+  if (ok && !ec && resumed_) remove_leftovers(path_);
+  if (!ok || ec) {
+    std::error_code ignored;
+    fs::remove(temp_, ignored);
+    throw Error(write_failure(path_, ok ? ec.value() : err));
+  }
+}
+
+void remove_leftovers(const fs::path& path) {
+  std::error_code ec;
+  for (const auto& p : leftover_temporaries(path)) fs::remove(p, ec);
 }
 
 void write_file_atomically(const fs::path& path, std::span<const char> data) {

@@ -173,7 +173,7 @@ TEST_F(CheckpointCorruption, WrongVersion) {
 // u64 bytes and u32 CRC (the csv and energy writers' marks).
 std::string with_v3_marks(const std::string& payload, const Checkpoint& now) {
   std::size_t tail = 8;
-  for (const auto& m : now.outputs) tail += 8 + m.path.size() + 8 + m.mark.size();
+  for (const auto& m : now.outputs) tail += 8 + m.path.size() + 8 + m.mark.size() + 1;
   std::string old = payload.substr(0, payload.size() - tail);
   for (std::size_t k = 0; k < 2; ++k) {
     std::string path;

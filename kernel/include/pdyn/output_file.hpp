@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -67,6 +68,10 @@ class OutputFile {
   void write(std::string_view s) { write(s.data(), s.size()); }
   /// Flushes and returns how far the file has been written.
   FileMark mark();
+  /// Hands what is buffered to the system (no fsync). Throws pdyn::Error on
+  /// failure: a writer calls it after each frame, so that a full disk is met
+  /// at the frame that does not fit.
+  void flush();
   /// What has been written so far (including a resumed prefix), without
   /// flushing: a writer notes it before a frame, so that after a failed
   /// write its mark() can still name the last complete frame.
@@ -74,6 +79,18 @@ class OutputFile {
   /// Flushes, fsyncs, closes and renames to the final name. Throws pdyn::Error
   /// on failure, after removing the temporary file.
   void commit();
+  /// The same, keeping only what `mark` covers (last_whole_frame()): after
+  /// a failed write (a full disk), the file up to its last complete frame.
+  /// `tail` is appended after the cut (the closing tags of an XML file).
+  void commit_at(const FileMark& mark, std::string_view tail = {});
+
+  /// Notes that a frame starts here (call before writing each frame).
+  void begin_frame() { boundaries_.push_back(written()); }
+  /// After a failed write or mark(): the start of the first frame that is
+  /// not wholly on disk, i.e. the end of the last complete one (found from
+  /// the file's size on disk and the frame starts noted since the last
+  /// successful mark()). The same value on every call.
+  FileMark last_whole_frame();
   /// The final name, and the temporary name written to until commit().
   const std::filesystem::path& path() const noexcept { return path_; }
   const std::filesystem::path& temp_path() const noexcept { return temp_; }
@@ -85,6 +102,9 @@ class OutputFile {
   std::FILE* file_ = nullptr;
   std::uint64_t bytes_ = 0;
   std::uint32_t crc_ = 0;
+  bool resumed_ = false;  // continued a file: commit removes what the interrupted run left
+  std::vector<FileMark> boundaries_;  // frame starts since the last successful mark()
+  std::optional<FileMark> whole_;     // last_whole_frame(), once asked
 };
 
 /// `path` with ".tmp-PID" appended: the temporary name OutputFile and
@@ -99,5 +119,7 @@ void write_file_atomically(const std::filesystem::path& path, std::span<const ch
 /// The files `PATH.tmp-*` that runs which were killed outright left beside
 /// `path` (not this process's own).
 std::vector<std::filesystem::path> leftover_temporaries(const std::filesystem::path& path);
+/// Removes them: a resumed output, once committed, has taken their place.
+void remove_leftovers(const std::filesystem::path& path);
 
 }  // namespace pdyn

@@ -22,7 +22,7 @@ class Csv final : public pdyn::Writer {
   }
 
   void write(const pdyn::Frame& frame) override {
-    before_ = file_.written();
+    file_.begin_frame();
     failed_ = true;  // until the frame is complete
     const auto& p = frame.particles;
     const double t = frame.time();
@@ -48,14 +48,26 @@ class Csv final : public pdyn::Writer {
       }
     }
     file_.write(buf_.data(), buf_.size());
+    file_.flush();  // a full disk is met at this frame, not at a later one
     failed_ = false;
   }
 
   // After a failed write, the file up to the last complete frame.
   std::vector<std::uint8_t> mark() override {
-    return failed_ ? before_.encode() : file_.mark().encode();
+    if (failed_) return file_.last_whole_frame().encode();
+    failed_ = true;  // a flush that fails (a full disk) fails the writer
+    const auto m = file_.mark();
+    failed_ = false;
+    return m.encode();
   }
-  void commit() override { file_.commit(); }
+  // After a failed write, the file up to the last complete frame.
+  void commit() override {
+    if (failed_) {
+      file_.commit_at(file_.last_whole_frame());
+    } else {
+      file_.commit();
+    }
+  }
   std::vector<std::filesystem::path> temp_files() const override { return {file_.temp_path()}; }
 
  private:
@@ -63,7 +75,6 @@ class Csv final : public pdyn::Writer {
   std::optional<pdyn::FileMark> resume_;  // where a resumed run continues the file
   pdyn::OutputFile file_;
   fmt::memory_buffer buf_;
-  pdyn::FileMark before_;
   bool failed_ = false;
 };
 

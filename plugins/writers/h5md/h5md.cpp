@@ -48,6 +48,9 @@ class Id {
     if (id_ >= 0 && close_) close_(id_);
     id_ = -1;
   }
+  /// Forgets the identifier without closing it (HDF5 may crash closing a
+  /// file whose writes failed).
+  void release() { id_ = -1; }
   operator hid_t() const { return id_; }
   bool ok() const { return id_ >= 0; }
 
@@ -98,6 +101,7 @@ class H5md final : public pdyn::Writer {
   }
 
   ~H5md() override {
+    if (failed_) abandon();
     elements_.clear();
     if (file_.ok()) {
       file_.reset();
@@ -121,13 +125,23 @@ class H5md final : public pdyn::Writer {
   }
 
   std::vector<std::uint8_t> mark() override {
-    if (H5Fflush(file_, H5F_SCOPE_GLOBAL) < 0) fail("flush");
+    // A flush that fails (a full disk) fails the writer; asked again, it
+    // gives the frames it completed.
+    if (!failed_ && H5Fflush(file_, H5F_SCOPE_GLOBAL) < 0) fail("flush");
     std::vector<std::uint8_t> out;
     for (int k = 0; k < 8; ++k) out.push_back(static_cast<std::uint8_t>(frames_ >> (8 * k)));
     return out;
   }
 
   void commit() override {
+    if (failed_) {
+      abandon();
+      throw pdyn::Error(fmt::format(
+          "{}: not completed: writing it failed earlier, and HDF5 cannot close a file whose "
+          "writes failed (free some space and resume from the checkpoint: the run is written "
+          "again from its start)",
+          path_.string()));
+    }
     elements_.clear();
     const bool closed = H5Fclose(file_) >= 0;
     file_ = Id();
@@ -139,6 +153,7 @@ class H5md final : public pdyn::Writer {
     }
     std::error_code ec;
     if (ok) fs::rename(temp_, path_, ec);
+    if (ok && !ec && resumed_) pdyn::remove_leftovers(path_);
     if (!ok || ec) {
       fs::remove(temp_, ec);
       throw pdyn::Error(
@@ -149,7 +164,22 @@ class H5md final : public pdyn::Writer {
   std::vector<fs::path> temp_files() const override { return {temp_}; }
 
  private:
-  [[noreturn]] void fail(const char* what) const {
+  // After a failed write or flush: no more HDF5 calls on this file, and
+  // its temporary file is removed (it cannot be trusted).
+  void abandon() {
+    for (auto& [name, e] : elements_) {
+      e.group.release();
+      e.step.release();
+      e.time.release();
+      e.value.release();
+    }
+    elements_.clear();
+    file_.release();
+    std::error_code ec;
+    fs::remove(temp_, ec);
+  }
+  [[noreturn]] void fail(const char* what) {
+    failed_ = true;
     throw pdyn::Error(fmt::format("{}: cannot write output file ({} failed: {})", path_.string(),
                                   what, last_hdf5_error()));
   }
@@ -194,7 +224,7 @@ class H5md final : public pdyn::Writer {
       H5Pset_deflate(props, static_cast<unsigned>(compression_));
     }
     Id v(H5Dcreate2(g, "value", type, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose);
-    const hsize_t zero1[1] = {0}, unlimited1[1] = {H5S_UNLIMITED}, chunk1[1] = {1024};
+    const hsize_t zero1[1] = {0}, unlimited1[1] = {H5S_UNLIMITED}, chunk1[1] = {128};
     Id space1(H5Screate_simple(1, zero1, unlimited1), H5Sclose);
     Id props1(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
     H5Pset_chunk(props1, 1, chunk1);
@@ -302,6 +332,7 @@ class H5md final : public pdyn::Writer {
       file_ = Id(H5Fopen(temp_.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose);
       if (file_.ok() && cut_to(frames)) {
         frames_ = frames;
+        resumed_ = true;
         return;
       }
       file_ = Id();
@@ -372,6 +403,8 @@ class H5md final : public pdyn::Writer {
   Id file_;
   std::vector<std::pair<std::string, Element>> elements_;
   std::uint64_t frames_ = 0;
+  bool failed_ = false;
+  bool resumed_ = false;  // commit removes what the interrupted run left
 };
 
 // ---- the reader (pdyn check): position and velocity of every frame ----
@@ -409,6 +442,10 @@ std::vector<pdyn::FrameRecord> read_back(const fs::path& path) {
 }
 
 pdyn::PluginDescriptor describe() {
+  // No clean-up of HDF5 when the plugin is unloaded: a file whose closing
+  // failed (a full disk) would be closed again then, and HDF5 1.10 crashes
+  // on it. This writer closes its files itself.
+  H5dont_atexit();
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Writer;
   d.name = "h5md";

@@ -205,10 +205,15 @@ class Vtk final : public pdyn::Writer {
     }
     if (resume_) {
       frames_ = resume_->second;
+      last_mark_ = *resume_;
       // Frames an interrupted run wrote past the checkpoint.
       for (const auto& e : fs::directory_iterator(folder_, ec)) {
         const std::string name = e.path().filename().string();
         const std::string prefix = stem_ + "_";
+        if (name.find(".vtp.tmp-") != std::string::npos) {  // a killed run's unfinished frame
+          fs::remove(e.path(), ec);
+          continue;
+        }
         if (name.rfind(prefix, 0) != 0 || e.path().extension() != ".vtp") continue;
         const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - 4);
         if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) continue;
@@ -269,15 +274,28 @@ class Vtk final : public pdyn::Writer {
     failed_ = false;
   }
 
+  // After a failed write, the output before that frame; after a failed
+  // flush, the output at the last mark.
   std::vector<std::uint8_t> mark() override {
-    const auto [file, frames] = failed_ ? before_ : std::pair(pvd_.mark(), frames_);
+    if (!failed_) {
+      failed_ = true;
+      before_ = last_mark_;
+      last_mark_ = {pvd_.mark(), frames_};
+      failed_ = false;
+    }
+    const auto [file, frames] = failed_ ? before_ : last_mark_;
     std::vector<std::uint8_t> out = file.encode();
     for (int k = 0; k < 8; ++k) out.push_back(static_cast<std::uint8_t>(frames >> (8 * k)));
     return out;
   }
   void commit() override {
-    pvd_.write("  </Collection>\n</VTKFile>\n");
-    pvd_.commit();
+    static constexpr std::string_view kTail = "  </Collection>\n</VTKFile>\n";
+    if (failed_) {
+      pvd_.commit_at(before_.first, kTail);
+    } else {
+      pvd_.write(kTail);
+      pvd_.commit();
+    }
   }
   std::vector<fs::path> temp_files() const override { return {pvd_.temp_path()}; }
 
@@ -329,7 +347,7 @@ class Vtk final : public pdyn::Writer {
   std::vector<char> buffer_;
   std::uint64_t frames_ = 0;
   bool has_obstacles_ = false;
-  std::pair<pdyn::FileMark, std::uint64_t> before_;
+  std::pair<pdyn::FileMark, std::uint64_t> before_, last_mark_;
   bool failed_ = false;
 };
 

@@ -23,6 +23,10 @@ class CheckpointError : public Error {
 struct WriterMark {
   std::string path;                ///< the writer's path as the scene names it
   std::vector<std::uint8_t> mark;  ///< the writer's own bytes (csv: pdyn::FileMark)
+  /// Whether the output holds the checkpoint's state as a frame: 1 yes, 0
+  /// no (a resumed run writes it first if it is on the writer's schedule),
+  /// -1 unknown (versions 2 and 3: the writer's schedule says).
+  std::int8_t wrote_state = -1;
 };
 
 struct Checkpoint {
