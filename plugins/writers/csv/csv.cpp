@@ -4,6 +4,9 @@
 // pdyn wrote before writers were plugins (tests/host/config_outputs.sha256).
 #include <fmt/format.h>
 
+#include <array>
+#include <cstdlib>
+#include <fstream>
 #include <optional>
 #include <pdyn/output_file.hpp>
 #include <pdyn/plugin.hpp>
@@ -78,6 +81,48 @@ class Csv final : public pdyn::Writer {
   bool failed_ = false;
 };
 
+// The reader (pdyn check): every frame's t, x and v; 17 significant digits
+// read back to the same doubles.
+std::vector<pdyn::FrameRecord> read_back(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw pdyn::Error(fmt::format("{}: cannot read", path.string()));
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<pdyn::FrameRecord> frames;
+  std::vector<std::array<double, 6>> rows;
+  double t = 0.0;
+  auto flush = [&] {
+    if (rows.empty()) return;
+    pdyn::FrameRecord f;
+    f.time = t;
+    const auto n = static_cast<pdyn::Index>(rows.size());
+    f.x.resize(3, n);
+    f.v.resize(3, n);
+    for (pdyn::Index i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        f.x(k, i) = rows[static_cast<std::size_t>(i)][k];
+        f.v(k, i) = rows[static_cast<std::size_t>(i)][3 + k];
+      }
+    }
+    frames.push_back(std::move(f));
+    rows.clear();
+  };
+  while (std::getline(in, line)) {
+    std::array<double, 8> c{};
+    const char* p = line.c_str();
+    for (auto& value : c) {
+      char* end = nullptr;
+      value = std::strtod(p, &end);
+      p = *end == ',' ? end + 1 : end;
+    }
+    if (!rows.empty() && c[0] != t) flush();
+    t = c[0];
+    rows.push_back({c[2], c[3], c[4], c[5], c[6], c[7]});
+  }
+  flush();
+  return frames;
+}
+
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Writer;
@@ -91,6 +136,7 @@ pdyn::PluginDescriptor describe() {
   d.create_writer = [](const pdyn::Params& p, const pdyn::WriterContext& ctx) {
     return std::make_unique<Csv>(ctx, p.boolean("unwrapped"));
   };
+  d.read_back = read_back;
   return d;
 }
 
