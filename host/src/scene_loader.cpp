@@ -701,6 +701,7 @@ Scene Loader::load(const std::string& text) {
     scene.solver_params = p.params;
     scene.libraries[label(p)] = p.record->library;
   }
+  for (const auto& w : scene.output.writers) scene.libraries[w.label] = w.record.library;
   if (!diags_.empty()) fail();
   return scene;
 }
