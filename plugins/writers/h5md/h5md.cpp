@@ -258,7 +258,12 @@ class H5md final : public pdyn::Writer {
     Id particles = group(file_, "particles");
     Id all = group(particles, "all");
     Id box = group(all, "box");
-    array_attribute(box, "dimension", H5T_NATIVE_INT, std::vector<int>{3});
+    {  // a scalar (H5MD: "dimension: Integer[]")
+      const int three = 3;
+      Id space(H5Screate(H5S_SCALAR), H5Sclose);
+      Id a(H5Acreate2(box, "dimension", H5T_NATIVE_INT, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+      if (!a.ok() || H5Awrite(a, H5T_NATIVE_INT, &three) < 0) fail("writing an attribute");
+    }
     {
       const auto& d = ctx.particles.domain;
       Id type(H5Tcopy(H5T_C_S1), H5Tclose);
