@@ -31,6 +31,7 @@ packages=(
   libbenchmark-dev                 # bench/ (Google Benchmark)
   clang-format-14                  # the formatting check (tests/format.cmake)
   libhdf5-dev                      # the h5md writer (HDF5 C library)
+  pybind11-dev python3-dev python3-numpy   # `import pdyn` (python/)
 )
 # pdyn serve's page takes three.js from the npm registry (viewer/package.json
 # and its lock file); Node.js and npm come from Debian unless the machine
@@ -40,14 +41,17 @@ command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 [[ "$what" == test ]] && packages+=(chromium)
 # The writers' read-back tests read every file with VTK's and h5py's own readers.
 [[ "$what" == test ]] && packages+=(python3-vtk9 python3-h5py)
+# The Python module's tests and examples: pytest, dask.distributed for the
+# sweep across workers, matplotlib for the examples' plots.
+[[ "$what" == test ]] && packages+=(python3-pytest python3-distributed python3-matplotlib)
+sudo=""
+[[ $(id -u) -ne 0 ]] && sudo="sudo"
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if ((${#missing[@]})); then
   echo "quickstart: installing ${missing[*]}"
-  sudo=""
-  [[ $(id -u) -ne 0 ]] && sudo="sudo"
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
@@ -66,12 +70,23 @@ if command -v ccache >/dev/null 2>&1; then
 fi
 
 if [[ "$what" == demo ]]; then
-  # Only what the demo needs: the program and the shipped plugins.
+  # Only what the demo needs: the program, the shipped plugins, the Python module.
   cmake --preset default "${launcher[@]}"
-  cmake --build --preset default --target pdyn pdyn_plugins
-  ./build/bin/pdyn run configs/demo.yaml
+  cmake --build --preset default --target pdyn pdyn_plugins pdyn_python
 else
   cmake --preset default -DPDYN_BROWSER_TEST=ON "${launcher[@]}"  # fail, not skip, if it cannot run
   cmake --build --preset default
+fi
+
+# `import pdyn` for Debian's python3 from anywhere: a .pth file in its
+# site-packages naming this build's package folder (a development install;
+# `cmake --install build` installs a copy instead).
+site=$(/usr/bin/python3 -c "import sysconfig; print(sysconfig.get_path('purelib'))")
+{ $sudo mkdir -p "$site" && echo "$PWD/build/python" | $sudo tee "$site/pdyn-build.pth" >/dev/null; } ||
+  echo "quickstart: could not write $site/pdyn-build.pth: use PYTHONPATH=$PWD/build/python" >&2
+
+if [[ "$what" == demo ]]; then
+  ./build/bin/pdyn run configs/demo.yaml
+else
   ctest --preset default
 fi

@@ -21,7 +21,7 @@ if(NOT version MATCHES "version 14\\.")
   message(FATAL_ERROR "${CLANG_FORMAT} is not clang-format 14: ${version}")
 endif()
 
-set(folders kernel host plugins cli conformance viewer/server bench tests fuzz examples)
+set(folders kernel host plugins cli conformance viewer/server bench tests fuzz examples python)
 set(files "")
 foreach(folder IN LISTS folders)
   file(GLOB_RECURSE found "${SOURCE_DIR}/${folder}/*.cpp" "${SOURCE_DIR}/${folder}/*.hpp")

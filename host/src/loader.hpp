@@ -64,6 +64,10 @@ class Loader final : public BuilderHost {
       : file_(std::move(file)), registry_(registry), overrides_(std::move(overrides)) {}
 
   Scene load(const std::string& text);
+  /// Adds the plugin object described by `text` (one item of `forces:` or
+  /// `colliders:`, or a `solver:` mapping, as YAML) to the assembled `scene`,
+  /// checked like a scene's; locations name the file only (see add_plugin).
+  std::string add_to(Scene& scene, PluginKind kind, const std::string& text);
 
  private:
   // ---- diagnostics ----
@@ -159,6 +163,7 @@ class Loader final : public BuilderHost {
   auto create(const PendingPlugin& p, Create&& create_fn) -> decltype(create_fn());
 
   std::string file_;
+  bool marks_ = true;  // locations carry LINE:COLUMN (false: `file_` names a call, not a file)
   const PluginRegistry& registry_;
   std::vector<Override> overrides_;
   std::vector<Diagnostic> diags_;

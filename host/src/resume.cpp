@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/text.hpp"
 
@@ -120,6 +121,32 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
     sys.set_images(c.images);
   }
   sys.set_time(c.time);
+}
+
+Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step) {
+  const System& sys = *scene.system;
+  Checkpoint c;
+  c.scene_file = scene.file;
+  c.scene_text = scene.canonical_text;
+  c.step = step;
+  c.time = sys.time();
+  c.state = sys.state();
+  c.mass = sys.masses();
+  c.fixed = sys.fixed();
+  c.images = sys.images();
+  {
+    const crash::CallScope call(scene.solver_label, "save_state");
+    c.plugin_states.emplace_back(scene.solver_label, scene.solver->save_state());
+  }
+  for (const auto& f : sys.force_objects()) {
+    const crash::CallScope call(f.label, "save_state");
+    c.plugin_states.emplace_back(f.label, f.force->save_state());
+  }
+  for (const auto& col : sys.collider_objects()) {
+    const crash::CallScope call(col.label, "save_state");
+    c.plugin_states.emplace_back(col.label, col.collider->save_state());
+  }
+  return c;
 }
 
 }  // namespace pdyn

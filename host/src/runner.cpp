@@ -29,6 +29,59 @@ namespace pdyn {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+std::string blow_up_message(const StepFault& f, std::int64_t step, const std::string& culprit,
+                            std::string_view kept) {
+  return fmt::format(
+      "the state became non-finite at step {} (t = {:.17g} s): particle {} has position "
+      "[{}, {}, {}]{}; the last good state (step {}) {}. Try a smaller dt or a more stable "
+      "solver.",
+      step, f.end_time, f.particle, f.position(0), f.position(1), f.position(2),
+      culprit.empty() ? "" : "; " + culprit, step - 1, kept);
+}
+
+// " (library PATH)": which file a faulty plugin object came from.
+std::string library_of(const Scene& scene, const std::string& label) {
+  const auto it = scene.libraries.find(label);
+  return it == scene.libraries.end() ? "" : fmt::format(" (library {})", it->second.string());
+}
+
+}  // namespace
+
+std::string step_fault_message(const StepFault& f, const Scene& scene, std::int64_t k,
+                               std::string_view kept) {
+  const std::string solver = fmt::format("{} reported: {}", scene.solver_label, f.solver_message);
+  using Kind = StepFault::Kind;
+  switch (f.kind) {
+    case Kind::PluginThrew:
+      if (f.found_by_replay) {
+        return fmt::format("plugin {}{} at step {} (found by replaying the step; {})", f.what,
+                           library_of(scene, f.label), k, solver);
+      }
+      return fmt::format("plugin {} at step {}{}", f.what, k, library_of(scene, f.label));
+    case Kind::NonFiniteForce:
+      return fmt::format(
+          "a force produced a non-finite value at step {} (t = {:.17g} s): {}{}; "
+          "then {}; the last good state (step {}) {}",
+          k, f.start_time, f.what, library_of(scene, f.label), solver, k - 1, kept);
+    case Kind::SolverThrew:
+      if (f.non_standard) {
+        return fmt::format("plugin {}: step threw a non-standard exception at step {}{}", f.label,
+                           k, library_of(scene, f.label));
+      }
+      return fmt::format("plugin {}: step threw at step {}: {}{}", f.label, k, f.what,
+                         library_of(scene, f.label));
+    case Kind::NonFiniteState:
+      break;
+  }
+  return blow_up_message(f, k,
+                         f.label.empty() ? ""
+                                         : fmt::format("the first non-finite force came from {}{}",
+                                                       f.what, library_of(scene, f.label)),
+                         kept);
+}
+
 fs::path checkpoint_path(const Scene& scene) {
   if (!scene.output.checkpoint.empty()) return scene.output.checkpoint;
   if (!scene.output.checkpoint_beside.empty()) {
@@ -192,11 +245,7 @@ class Output {
 
   /// The base period in steps (gcd of the writers' `every`); 0: no writer
   /// writes between the first and the final frame.
-  std::int64_t period() const {
-    std::int64_t g = 0;
-    for (const auto& s : slots_) g = std::gcd(g, s.spec->every);
-    return g;
-  }
+  std::int64_t period() const { return scene_.output.period(); }
   /// Whether the writer's schedule includes step n.
   static bool due(const Slot& s, std::int64_t n) {
     return s.spec->every > 0 && n % s.spec->every == 0;
@@ -257,29 +306,9 @@ class Output {
 
   fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame, bool has_dense) {
     step_ = step;
-    Checkpoint c;
-    c.scene_file = scene_.file;
-    c.scene_text = scene_.canonical_text;
-    c.step = step;
-    c.time = sys_.time();
+    Checkpoint c = capture_checkpoint(scene_, step);
     c.next_frame = next_frame;
     c.has_dense = has_dense;
-    c.state = sys_.state();
-    c.mass = sys_.masses();
-    c.fixed = sys_.fixed();
-    c.images = sys_.images();
-    {
-      const crash::CallScope call(scene_.solver_label, "save_state");
-      c.plugin_states.emplace_back(scene_.solver_label, scene_.solver->save_state());
-    }
-    for (const auto& f : sys_.force_objects()) {
-      const crash::CallScope call(f.label, "save_state");
-      c.plugin_states.emplace_back(f.label, f.force->save_state());
-    }
-    for (const auto& col : sys_.collider_objects()) {
-      const crash::CallScope call(col.label, "save_state");
-      c.plugin_states.emplace_back(col.label, col.collider->save_state());
-    }
     for (auto& s : slots_) {
       auto m = s.held ? *s.held : mark(s);
       const bool wrote = s.current && !s.held && !s.failed;
@@ -371,15 +400,6 @@ class Output {
 
 // ---------------------------------------------------------------------------
 // The loops
-
-std::string blow_up_message(const StepFault& f, std::int64_t step, const std::string& culprit) {
-  return fmt::format(
-      "the state became non-finite at step {} (t = {:.17g} s): particle {} has position "
-      "[{}, {}, {}]{}; the last good state (step {}) was written as the final frame. Try a "
-      "smaller dt or a more stable solver.",
-      step, f.end_time, f.particle, f.position(0), f.position(1), f.position(2),
-      culprit.empty() ? "" : "; " + culprit, step - 1);
-}
 
 // The energy check: a run that diverges without ever becoming NaN (explicit
 // Euler on a stiff chain reaches 1e293 J) must not pass for a success.
@@ -523,42 +543,7 @@ struct Loop {
     crash::set_step(k);
     if (const auto h = take()) return h;
     const StepFault& f = stepper.fault();
-    using Kind = StepFault::Kind;
-    const std::string solver = fmt::format("{} reported: {}", scene.solver_label, f.solver_message);
-    switch (f.kind) {
-      case Kind::PluginThrew:
-        if (f.found_by_replay) {
-          return stop(f, fmt::format("plugin {}{} at step {} (found by replaying the step; {})",
-                                     f.what, library_of(f.label), k, solver));
-        }
-        return stop(f, fmt::format("plugin {} at step {}{}", f.what, k, library_of(f.label)));
-      case Kind::NonFiniteForce:
-        return stop(f, fmt::format("a force produced a non-finite value at step {} (t = {:.17g} "
-                                   "s): {}{}; then {}; the last good state (step {}) was written "
-                                   "as the final frame",
-                                   k, f.start_time, f.what, library_of(f.label), solver, k - 1));
-      case Kind::SolverThrew:
-        if (f.non_standard) {
-          return stop(f, fmt::format("plugin {}: step threw a non-standard exception at step {}{}",
-                                     f.label, k, library_of(f.label)));
-        }
-        return stop(f, fmt::format("plugin {}: step threw at step {}: {}{}", f.label, k, f.what,
-                                   library_of(f.label)));
-      case Kind::NonFiniteState:
-        return stop(f,
-                    blow_up_message(f, k,
-                                    f.label.empty()
-                                        ? ""
-                                        : fmt::format("the first non-finite force came from {}{}",
-                                                      f.what, library_of(f.label))));
-    }
-    return std::nullopt;
-  }
-
-  // " (library PATH)": which file a faulty plugin object came from.
-  std::string library_of(const std::string& label) const {
-    const auto it = scene.libraries.find(label);
-    return it == scene.libraries.end() ? "" : fmt::format(" (library {})", it->second.string());
+    return stop(f, step_fault_message(f, scene, k, "was written as the final frame"));
   }
 
   // The Stepper has restored the last good state: written as the final

@@ -433,6 +433,7 @@ void Loader::read_output_map(const YAML::Node& n, Scene& scene) {
   if (!p) return;
   read_checkpoint(n["checkpoint"], "output.checkpoint", scene);
   const std::int64_t every = p->integer("every");
+  scene.output.every = every;
   if (p->has("path") && output_file_name(n["path"], "output.path", p->string("path"))) {
     Params csv;
     csv.set("unwrapped", p->boolean("unwrapped"));
@@ -706,7 +707,70 @@ Scene Loader::load(const std::string& text) {
   return scene;
 }
 
+std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& text) {
+  marks_ = false;
+  System& sys = *scene.system;
+  YAML::Node item;
+  try {
+    item = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    diags_.push_back(
+        {file_, fmt::format("malformed parameters: {} (expected a YAML mapping)", e.msg)});
+    fail();
+  }
+  const std::string path = kind_name(kind);
+  if (!check_plugin_map(item, path, kind)) fail();
+  const PluginRecord* rec = find_plugin(item, path, kind);
+  if (!rec) fail();
+  // Index parameters are checked against the system's particles now.
+  x_.assign(static_cast<std::size_t>(sys.size()), Vec3::Zero());
+  auto params = read_plugin_params(item, path, *rec, {});
+  if (!params) fail();
+  PendingPlugin p{rec, std::move(*params), item, path};
+  const SceneContext ctx{sys.view(), &scene.groups};
+  const std::string name = rec->descriptor->name;
+  const std::string label = fmt::format("{} ({})", name, file_);
+  switch (kind) {
+    case PluginKind::Force: {
+      auto f = create(p, [&] { return registry_.create_force(*rec, p.params, ctx); });
+      if (!f) fail();
+      sys.add_force(std::move(f), label);
+      scene.force_traits[label] = rec->descriptor->force_traits;
+      break;
+    }
+    case PluginKind::Collider: {
+      auto c = create(p, [&] { return registry_.create_collider(*rec, p.params, ctx); });
+      if (!c) fail();
+      sys.add_collider(std::move(c), label);
+      break;
+    }
+    case PluginKind::Solver: {
+      auto s = create(p, [&] { return registry_.create_solver(*rec, p.params, ctx); });
+      if (!s) fail();
+      scene.solver = std::move(s);
+      scene.solver_name = name;
+      scene.solver_label = label;
+      scene.solver_params = p.params;
+      scene.libraries[label] = rec->library;
+      return label;
+    }
+    case PluginKind::Writer:  // writers belong to a scene's output list, not to its system
+      diags_.push_back({file_, fmt::format("{}: '{}' is a writer (expected a force, collider or "
+                                           "solver)",
+                                           path, name)});
+      fail();
+  }
+  scene.libraries[label] = rec->library;
+  scene.uses.push_back({kind, name, label, std::move(p.params)});
+  return label;
+}
+
 }  // namespace loading
+
+std::string add_plugin(Scene& scene, const PluginRegistry& registry, PluginKind kind,
+                       const std::string& text, const std::string& origin) {
+  return loading::Loader(origin, registry, {}).add_to(scene, kind, text);
+}
 
 Scene load_scene_text(const std::string& text, const std::string& file,
                       const PluginRegistry& registry, const std::vector<Override>& overrides) {

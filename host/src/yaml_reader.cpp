@@ -126,7 +126,7 @@ std::string Loader::where(const YAML::Node& at, const std::string& path) const {
   }
   if (at.IsDefined()) {
     const YAML::Mark m = at.Mark();
-    if (m.line >= 0) return fmt::format("{}:{}:{}", file_, m.line + 1, m.column + 1);
+    if (m.line >= 0 && marks_) return fmt::format("{}:{}:{}", file_, m.line + 1, m.column + 1);
   }
   // Nor does a mapping that --set created on the way to its value.
   for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it) {

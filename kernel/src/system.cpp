@@ -157,6 +157,15 @@ void System::add_collider(std::shared_ptr<Collider> collider, std::string label)
   colliders_.push_back({std::move(collider), std::move(label)});
 }
 
+bool System::remove_collider(const Collider* collider) {
+  const auto it = std::find_if(colliders_.begin(), colliders_.end(), [&](const ColliderEntry& e) {
+    return e.collider.get() == collider;
+  });
+  if (it == colliders_.end()) return false;
+  colliders_.erase(it);
+  return true;
+}
+
 void System::get_state(Eigen::Ref<Eigen::VectorXd> y) const { y = state_; }
 
 void System::set_state(const Eigen::Ref<const Eigen::VectorXd>& y) {

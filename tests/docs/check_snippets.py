@@ -526,6 +526,74 @@ class Checker:
             self.fail(block, f"sh: `pdyn {' '.join(argv)}` failed ({r.returncode}): "
                              f"{first_line(r.stderr)}", line)
 
+    # ---- python ----------------------------------------------------------------------------
+
+    def check_python(self, block):
+        """A block with `if __name__ == "__main__":` is a whole script, run alone; the
+        others of a doc run in order in one interpreter (a tour: later blocks use the
+        names of earlier ones). Run from a temporary folder holding a link to configs/,
+        with the build's Python package on PYTHONPATH; the first failing block fails."""
+        if self.args.python == "off":
+            self.note(block, "not run: this build has no Python module")
+            return
+        if not hasattr(self, "_python_results"):
+            self._python_results = {}
+        if block.path not in self._python_results:
+            self._python_results[block.path] = self.run_python_doc(block.path)
+        problem = self._python_results[block.path].get(block.line)
+        if problem:
+            self.fail(block, f"python: {problem}")
+        else:
+            self.note(block, "ran")
+
+    def run_python_doc(self, path):
+        blocks = [b for b in read_blocks(os.path.join(self.src, path), self.src)
+                  if b.lang == "python" and b.not_checked is None]
+        d = self.block_dir(Block(path, 0, "python", "", {}))
+        if not os.path.exists(os.path.join(d, "configs")):
+            os.symlink(os.path.join(self.src, "configs"), os.path.join(d, "configs"))
+        env = dict(self.env)
+        package = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(self.args.pdyn))),
+                               "python")
+        env["PYTHONPATH"] = package + os.pathsep + env.get("PYTHONPATH", "")
+        env["MPLBACKEND"] = "Agg"
+        results, tour = {}, []
+        for b in blocks:
+            if 'if __name__ == "__main__":' not in b.text:
+                tour.append(b)
+                continue
+            script = os.path.join(d, f"block{b.line}.py")
+            with open(script, "w") as f:
+                f.write(b.text)
+            r = subprocess.run([sys.executable, script], cwd=d, env=env, capture_output=True,
+                               text=True, timeout=300)
+            if r.returncode != 0:
+                results[b.line] = first_line(r.stderr.strip().splitlines()[-1] if r.stderr.strip()
+                                             else f"exit status {r.returncode}")
+        if tour:
+            runner = ["import sys, traceback", "ns = {'__name__': '__main__'}"]
+            for b in tour:
+                runner += [f"try:\n    exec(compile({b.text!r}, {f'{path}:{b.line}'!r}, 'exec'), ns)",
+                           f"except BaseException as e:\n    print('FAILED {b.line}', "
+                           "''.join(traceback.format_exception_only(e)).strip(), "
+                           "file=sys.stderr)\n    sys.exit(1)"]
+            script = os.path.join(d, "tour.py")
+            with open(script, "w") as f:
+                f.write("\n".join(runner) + "\n")
+            r = subprocess.run([sys.executable, script], cwd=d, env=env, capture_output=True,
+                               text=True, timeout=600)
+            m = re.search(r"^FAILED (\d+) (.*)", r.stderr, re.M | re.S)
+            if m:
+                results[int(m.group(1))] = m.group(2).strip().splitlines()[-1]
+                # the blocks after it did not run
+                for b in tour:
+                    if b.line > int(m.group(1)):
+                        results[b.line] = f"not run: the block at line {m.group(1)} failed"
+            elif r.returncode != 0:
+                for b in tour:
+                    results[b.line] = f"the tour failed: {first_line(r.stderr)}"
+        return results
+
     # ---- driver ----------------------------------------------------------------------------
 
     def check(self, block):
@@ -882,6 +950,9 @@ def main():
     p.add_argument("--generator", default="Ninja")
     p.add_argument("--sdk-prefix", help="an installed pdyn SDK: configure and build the "
                                         "CMake snippets against it")
+    p.add_argument("--python", default="on", choices=["on", "off"],
+                   help="off: the build has no Python module (sanitizer builds): Python blocks "
+                        "pass unrun")
     p.add_argument("--verbose", action="store_true", help="also say what passed, and how")
     p.add_argument("--expect-failed-lines", help="self-test: succeed if exactly the blocks "
                    "opening at these comma-separated lines failed, and nothing else")

@@ -48,6 +48,8 @@ class System {
   bool remove_force(const Force* force);
   /// Adds a collider; `label` names it in messages.
   void add_collider(std::shared_ptr<Collider> collider, std::string label);
+  /// Removes a collider added with add_collider; false if it is not held.
+  bool remove_collider(const Collider* collider);
   /// Sets the simulation box (default: open space). Throws Error unless
   /// min < max, both finite, along every periodic axis.
   void set_domain(const Domain& domain);

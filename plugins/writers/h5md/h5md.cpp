@@ -31,6 +31,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Before the first HDF5 call: no clean-up of HDF5 at exit (a file whose
+// closing failed, on a full disk, would be closed again then, and HDF5 1.10
+// crashes on it; this writer closes its files itself), and no error stack
+// printed (errors become exceptions naming the file).
+void init_hdf5() {
+  static const bool done = [] { return H5dont_atexit() >= 0; }();
+  (void)done;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // per thread in a thread-safe HDF5
+}
+
 // An HDF5 identifier closed by the matching H5?close.
 class Id {
  public:
@@ -82,7 +92,7 @@ class H5md final : public pdyn::Writer {
  public:
   H5md(const pdyn::WriterContext& ctx, int compression)
       : path_(ctx.path), temp_(pdyn::temporary_name(ctx.path)), compression_(compression) {
-    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors become exceptions with the file's name
+    init_hdf5();
     n_ = static_cast<hsize_t>(ctx.particles.size());
     std::error_code ec;
     if (path_.has_parent_path()) fs::create_directories(path_.parent_path(), ec);
@@ -415,7 +425,7 @@ class H5md final : public pdyn::Writer {
 // ---- the reader (pdyn check): position and velocity of every frame ----
 
 std::vector<pdyn::FrameRecord> read_back(const fs::path& path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  init_hdf5();
   Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!file.ok())
     throw pdyn::Error(fmt::format("{}: cannot open ({})", path.string(), last_hdf5_error()));
@@ -447,10 +457,6 @@ std::vector<pdyn::FrameRecord> read_back(const fs::path& path) {
 }
 
 pdyn::PluginDescriptor describe() {
-  // No clean-up of HDF5 when the plugin is unloaded: a file whose closing
-  // failed (a full disk) would be closed again then, and HDF5 1.10 crashes
-  // on it. This writer closes its files itself.
-  H5dont_atexit();
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Writer;
   d.name = "h5md";

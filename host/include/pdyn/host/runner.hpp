@@ -6,9 +6,11 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "pdyn/host/checkpoint.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/stepper.hpp"
 
 namespace pdyn {
 
@@ -53,6 +55,18 @@ struct RunResult {
 /// step, the last good state is restored, written as the final frame and
 /// checkpointed. Throws CheckpointError if resumed output files do not match.
 RunResult run_scene(Scene& scene, const RunOptions& options = {});
+
+/// One line for the user on a failed step `k` (Stepper::fault()): which
+/// plugin object is at fault and its library, or where the state became
+/// non-finite. `kept` completes "the last good state (step k-1) ...": what
+/// the host did with it ("was written as the final frame").
+std::string step_fault_message(const StepFault& fault, const Scene& scene, std::int64_t k,
+                               std::string_view kept);
+
+/// The scene's complete state as a checkpoint at step `step`: particles,
+/// time, and every plugin object's save_state(), solver first. Output marks
+/// and the adaptive schedule (next_frame, has_dense) are left for the caller.
+Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step);
 
 /// Applies checkpoint `c` to a freshly loaded `scene`: state, masses, fixed
 /// flags, time and every plugin's internal state. Throws CheckpointError if

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,19 @@ struct OutputSpec {
   std::vector<WriterSpec> writers;
   std::filesystem::path checkpoint;   ///< checkpoint file; empty: none unless interrupted
   std::int64_t checkpoint_every = 0;  ///< a checkpoint every N steps (and at the end); 0: end only
+  /// The frame schedule when there is no writer: 1 (a scene without
+  /// output), or the mapping form's `every`. Adaptive solvers without dense
+  /// output stop on its frame times, so it still shapes their steps.
+  std::int64_t every = 1;
+  /// The frame schedule the run steps through, in steps: the greatest
+  /// common divisor of the writers' `every` (0: first and final frames
+  /// only), or `every` when there is no writer.
+  std::int64_t period() const {
+    if (writers.empty()) return every;
+    std::int64_t g = 0;
+    for (const auto& w : writers) g = std::gcd(g, w.every);
+    return g;
+  }
   /// Without `checkpoint`, an interrupted run checkpoints to this path with
   /// .ckpt: output.path in the mapping form, the first writer's path in the
   /// list form; empty: `<scene name>.ckpt`.
@@ -108,5 +122,17 @@ Scene load_scene(const std::filesystem::path& file, const PluginRegistry& regist
 /// The same, from text; `file` only names it in messages.
 Scene load_scene_text(const std::string& text, const std::string& file,
                       const PluginRegistry& registry, const std::vector<Override>& overrides = {});
+
+/// Adds one plugin object to the assembled `scene`, or replaces its solver:
+/// `text` is what a scene would hold for it, as YAML (`{type: spring, ks:
+/// 100, pairs: [[0, 1]]}`, one item of `forces:` or `colliders:`, or the
+/// `solver:` mapping), checked exactly as a scene's is (names, types, ranges,
+/// particle indices against the current particles). `origin` names the
+/// caller in messages and, with the plugin's name, labels the object
+/// ("spring (ORIGIN)"): give each call its own. Returns that label. Throws
+/// SceneError (diagnostics located at `origin`) or PluginError; on a throw
+/// the scene is unchanged.
+std::string add_plugin(Scene& scene, const PluginRegistry& registry, PluginKind kind,
+                       const std::string& text, const std::string& origin);
 
 }  // namespace pdyn

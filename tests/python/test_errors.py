@@ -1,0 +1,106 @@
+"""Bad input: Python exceptions with the command line's located messages."""
+import pytest
+
+import pdyn
+from conftest import CONFIGS
+
+BAD = """simulation: { dt: 0.01, steps: 10 }
+particles:
+  - { position: [0, 0, 0], mass: 1 }
+forces:
+  - { type: gravity, g: [0, 0, -9.81], gg: 1 }
+"""
+
+
+def test_scene_error_carries_file_line_column(tmp_path):
+    scene = tmp_path / "bad.yaml"
+    scene.write_text(BAD)
+    with pytest.raises(pdyn.SceneError) as e:
+        pdyn.load(scene)
+    assert (e.value.file, e.value.line, e.value.column) == (str(scene), 5, 40)
+    assert str(e.value) == (f"{scene}:5:40: unknown key 'gg' in forces[0] (did you mean 'g'? "
+                            "expected one of: g, group, ids, type)")
+    (d,) = e.value.diagnostics
+    assert d[2:] == (str(scene), 5, 40)
+
+
+def test_yaml_text_and_overrides():
+    with pytest.raises(pdyn.SceneError) as e:
+        pdyn.loads(BAD.replace(", gg: 1", ""), name="text.yaml", set={"simulation.dt": -1})
+    assert e.value.line is None  # an override has no place in the file
+    assert str(e.value).startswith("--set simulation.dt=-1: simulation.dt: -1 is out of range")
+
+
+def test_missing_file():
+    with pytest.raises(pdyn.SceneError, match=r"nowhere.yaml: cannot read the scene file "
+                                              r"\(expected a readable YAML file\)"):
+        pdyn.load("nowhere.yaml")
+
+
+def test_unknown_plugin_and_keyword(fall):
+    with pytest.raises(pdyn.SceneError) as e:
+        fall.add_force("sprng", ks=1)
+    # The list goes on with the Python forces other tests declared.
+    assert str(e.value).startswith(
+        "add_force #1: force.type: unknown force type 'sprng' (did you mean 'spring'? expected "
+        "one of: anchor, angle, area, attractor, drag, field, gravity, lennard_jones, ")
+    with pytest.raises(pdyn.SceneError, match=r"unknown key 'kd' in force \(did you mean 'k'\?"):
+        fall.add_force("drag", kd=0.1)
+    with pytest.raises(pdyn.PluginError, match=r"unknown plugin 'nope' \(expected one of: "):
+        pdyn.describe("nope")
+    assert len(fall.forces) == 1  # nothing was added
+
+
+def test_parameter_values_are_checked_as_in_a_scene(fall):
+    with pytest.raises(pdyn.SceneError, match=r"force.ks: -1 is out of range \(expected a "
+                                              r"number >= 0 in N/m\)"):
+        fall.add_force("spring", ks=-1, pairs=[[0, 1]])
+    with pytest.raises(pdyn.SceneError, match=r"force.pairs\[0\]\[1\]: particle index 5 is out "
+                                              r"of range"):
+        fall.add_force("spring", ks=1, pairs=[[0, 5]])
+    with pytest.raises(TypeError, match="has no scene form"):
+        fall.add_force("spring", ks=object())
+
+
+def test_add_force_by_name_then_remove(fall):
+    label = fall.add_force("spring", ks=100.0, kd=0.0, pairs=[[0, 1]])
+    assert label == "spring (add_force #1)"
+    assert label in fall.energies()["potential"]
+    fall.remove(label)
+    with pytest.raises(KeyError, match="no force or collider is labelled"):
+        fall.remove(label)
+
+
+def test_plugin_fault_names_the_force_and_keeps_the_last_good_state(fall):
+    class Boom(pdyn.Force):
+        def add_forces(self, x, v, mass, f):
+            if self.t > 0.045:
+                raise RuntimeError("boom")
+
+    label = fall.add_force(Boom())
+    with pytest.raises(pdyn.StepError) as e:
+        fall.step(10)
+    assert e.value.label == label and not e.value.non_finite
+    assert "boom" in str(e.value) and f"plugin {label}" in str(e.value)
+    assert fall.steps == 4 and fall.t == pytest.approx(0.04, abs=1e-15)
+
+
+def test_non_finite_force_is_named(fall):
+    class Nan(pdyn.Force):
+        def add_forces(self, x, v, mass, f):
+            f[1, 0] += float("nan") if self.t > 0.026 else 0.0
+
+    label = fall.add_force(Nan())
+    with pytest.raises(pdyn.StepError) as e:
+        fall.step(5)
+    assert e.value.non_finite and e.value.label == label
+    assert "is kept: the simulation is at it" in str(e.value)
+    assert fall.steps == 2
+
+
+def test_solver_change(fall):
+    fall.set_solver("verlet")
+    assert fall.solver == "verlet"
+    with pytest.raises(pdyn.SceneError, match="is a force plugin, not a solver"):
+        fall.set_solver("gravity")
+    fall.step(10)
