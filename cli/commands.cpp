@@ -194,13 +194,13 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
       out << fmt::format("pdyn: {}, {:.3g} particle-steps/s\n",
                          count_of(static_cast<long long>(evaluations), "force evaluation"),
                          wall > 0 ? particle_steps / wall : 0.0);
-      if (!scene.output.path.empty()) {
-        out << fmt::format("pdyn: frames written to {}\n",
-                           fs::absolute(scene.output.path).string());
-      }
-      if (!scene.output.energy.empty()) {
-        out << fmt::format("pdyn: energy written to {}\n",
-                           fs::absolute(scene.output.energy).string());
+      for (const auto& w : scene.output.writers) {
+        const std::string& type = w.record.descriptor->name;
+        out << fmt::format("pdyn: {} written to {}\n",
+                           type == "csv"      ? std::string("frames")
+                           : type == "energy" ? std::string("energy")
+                                              : type + " frames",
+                           fs::absolute(w.path).string());
       }
       if (!r.checkpoint.empty()) {
         out << fmt::format("pdyn: checkpoint written to {}\n", fs::absolute(r.checkpoint).string());
@@ -239,6 +239,11 @@ nlohmann::json to_json(const PluginRecord& r) {
     j["dissipative"] = d.force_traits.dissipative;
     j["singular"] = d.force_traits.singular;
   }
+  if (d.kind == PluginKind::Writer) {
+    j["fields"] = d.writer_traits.fields;
+    j["default_fields"] = d.writer_traits.default_fields;
+    j["energy"] = d.writer_traits.energy;
+  }
   auto params = nlohmann::json::array();
   const Params defaults = resolve(d.params, Params{}).params;
   for (const auto& p : d.params) {
@@ -268,6 +273,11 @@ std::string traits_text(const PluginDescriptor& d) {
     if (d.force_traits.internal) t.push_back("internal");
     if (d.force_traits.dissipative) t.push_back("dissipative");
     if (d.force_traits.singular) t.push_back("singular");
+  } else if (d.kind == PluginKind::Writer) {
+    if (!d.writer_traits.fields.empty()) {
+      t.push_back("fields " + join(d.writer_traits.fields, " "));
+    }
+    if (d.writer_traits.energy) t.push_back("energy");
   }
   return join(t);
 }
@@ -297,7 +307,8 @@ int cmd_plugins(const Common& c, bool json, std::ostream& out) {
   }
   out << fmt::format("{:<9} {:<{}} {:<{}} {:<{}} {}\n", "KIND", "NAME", name_w, "VERSION",
                      version_w, "TRAITS", traits_w, "DESCRIPTION");
-  for (PluginKind kind : {PluginKind::Force, PluginKind::Solver, PluginKind::Collider}) {
+  for (PluginKind kind :
+       {PluginKind::Force, PluginKind::Solver, PluginKind::Collider, PluginKind::Writer}) {
     for (const auto& r : registry.plugins()) {
       const PluginDescriptor& d = *r.descriptor;
       if (d.kind != kind) continue;

@@ -1,4 +1,4 @@
-// `pdyn new force|solver|collider|pair NAME [DIR]`: writes a ready out-of-tree
+// `pdyn new force|solver|collider|pair|writer NAME [DIR]`: writes a ready out-of-tree
 // plugin project (CMakeLists.txt, NAME.cpp, README.md, scene.yaml) that
 // builds against the installed SDK and passes `pdyn check` as generated.
 //   exit 0: written; 2: bad name, kind or folder; 1: a file could not be written.
@@ -174,9 +174,9 @@ SdkCommand add_new_command(CLI::App& app) {
   auto a = std::make_shared<NewArgs>();
   CLI::App* sub = app.add_subcommand(
       "new", "write a new plugin project (CMake, source, README, scene, conformance test)");
-  sub->add_option("kind", a->kind, "force, solver, collider or pair (a pair force)")
+  sub->add_option("kind", a->kind, "force, solver, collider, pair (a pair force) or writer")
       ->required()
-      ->check(CLI::IsMember({"force", "solver", "collider", "pair"}));
+      ->check(CLI::IsMember({"force", "solver", "collider", "pair", "writer"}));
   sub->add_option("name", a->name, "the plugin's name, [a-z0-9_]+")->required();
   sub->add_option("dir", a->dir, "folder to create (default: ./NAME); must be new or empty");
   add_plugin_path_option(sub, a->plugin_path,

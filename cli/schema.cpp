@@ -189,7 +189,10 @@ Json make_schema(const PluginRegistry& registry) {
   for (const auto& r : registry.plugins()) {
     const PluginDescriptor& d = *r.descriptor;
     Json type{{"const", d.name}};
-    Json j = object(d.params, true, Json{{"type", type}});
+    std::vector<ParamSpec> specs;
+    if (d.kind == PluginKind::Writer) specs = writer_entry_keys();  // path, every, fields
+    specs.insert(specs.end(), d.params.begin(), d.params.end());
+    Json j = object(specs, true, Json{{"type", type}});
     j["description"] =
         fmt::format("{} {} {}: {}", kind_name(d.kind), d.name, d.version, d.description);
     defs[def_name(d)] = j;
@@ -197,6 +200,7 @@ Json make_schema(const PluginRegistry& registry) {
   defs["force"] = plugin_entry(registry, PluginKind::Force);
   defs["collider"] = plugin_entry(registry, PluginKind::Collider);
   defs["solver"] = plugin_entry(registry, PluginKind::Solver);
+  defs["writer"] = plugin_entry(registry, PluginKind::Writer);
 
   // periodic is a list of three booleans, which no ParamType describes.
   Json flag = Json::object();
@@ -219,9 +223,18 @@ Json make_schema(const PluginRegistry& registry) {
   simulation["oneOf"] = Json::array({{{"required", {"steps"}}}, {{"required", {"duration"}}}});
 
   Json checkpoint = object(checkpoint_specs(), false);
-  Json output = object(output_specs(), false, Json{{"checkpoint", checkpoint}});
-  output["type"] = Json::array({"object", "null"});
-  output["description"] = "what is written: frames, energies, checkpoints";
+  Json output_map = object(output_specs(), false, Json{{"checkpoint", checkpoint}});
+  output_map["type"] = Json::array({"object", "null"});
+  output_map["description"] =
+      "one csv writer (path), one energy writer (energy) and the checkpoints";
+  Json output{
+      {"description",
+       "what is written: a list of writers (docs/output.md), or the mapping "
+       "{ path, every, energy, unwrapped, checkpoint }"},
+      {"anyOf",
+       Json::array({output_map, {{"type", "array"}, {"items", {{"$ref", "#/$defs/writer"}}}}})}};
+  Json top_checkpoint = checkpoint;
+  top_checkpoint["description"] = "checkpoints (also output.checkpoint in the mapping form)";
 
   Json particle = object(particle_specs(), false);
   particle["description"] = "one particle";
@@ -289,6 +302,7 @@ Json make_schema(const PluginRegistry& registry) {
               {"properties",
                {{"simulation", simulation},
                 {"output", output},
+                {"checkpoint", top_checkpoint},
                 {"particles", {{"type", "array"}, {"minItems", 1}, {"items", {{"oneOf", items}}}}},
                 {"forces", plugin_list("force")},
                 {"colliders", plugin_list("collider")}}},

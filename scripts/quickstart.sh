@@ -30,6 +30,7 @@ packages=(
   libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
   libbenchmark-dev                 # bench/ (Google Benchmark)
   clang-format-14                  # the formatting check (tests/format.cmake)
+  libhdf5-dev                      # the h5md writer (HDF5 C library)
   pybind11-dev python3-dev python3-numpy   # `import pdyn` (python/)
 )
 # pdyn serve's page takes three.js from the npm registry (viewer/package.json
@@ -38,6 +39,8 @@ packages=(
 command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 # The browser test drives Debian's Chromium headless (no browser download).
 [[ "$what" == test ]] && packages+=(chromium)
+# The writers' read-back tests read every file with VTK's and h5py's own readers.
+[[ "$what" == test ]] && packages+=(python3-vtk9 python3-h5py)
 # The Python module's tests and examples: pytest, dask.distributed for the
 # sweep across workers, matplotlib for the examples' plots.
 [[ "$what" == test ]] && packages+=(python3-pytest python3-distributed python3-matplotlib)

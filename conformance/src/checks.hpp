@@ -44,6 +44,10 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
 /// finite_on_degenerate and the collider.* checks.
 void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);
 
+/// writers.cpp: construct.defaults and the writer.* checks: frames written
+/// in a scratch folder, complete only after commit, read back, resumed.
+void writer_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);
+
 // ---- checks of every kind ----
 
 /// threads.cpp: "threads.two_systems": two systems, each with its own plugin

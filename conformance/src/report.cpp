@@ -93,6 +93,11 @@ void check_sequence(const PluginDescriptor& d, const Options& o, std::vector<Che
       case PluginKind::Collider:
         detail::collider_checks(d, o, out);
         break;
+      case PluginKind::Writer:
+        // Files, not physics: neither a scene of bad values nor two
+        // systems apply (writers.cpp checks their own).
+        detail::writer_checks(d, o, out);
+        return;
     }
     // Only for a plugin that can be built at all: the rest would fail for
     // the same reason as construct.defaults.

@@ -89,6 +89,9 @@ Run separate_run(const PluginDescriptor& d, const Params& params, std::uint64_t 
       sys->add_collider(std::shared_ptr<Collider>(d.create_collider(params, ctx)), kUnderTest);
       solver = std::make_unique<SymplecticEuler>();
       break;
+    case PluginKind::Writer:  // writers are not stepped (report.cpp never asks)
+      solver = std::make_unique<SymplecticEuler>();
+      break;
   }
   Stepper stepper(*sys, *solver, d.kind == PluginKind::Solver ? kUnderTest : kKitSolver);
   const double t0 = sys->time();

@@ -1,4 +1,4 @@
-// The checkpoint file format, version 3 (native byte order, x86-64):
+// The checkpoint file format, version 4 (native byte order, x86-64):
 //
 //   "PDYNCKPT"                8 bytes magic
 //   u32 format version        Checkpoint::kFormatVersion
@@ -9,9 +9,13 @@
 // Payload: string scene_file, string scene_text, i64 step, f64 time,
 // i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
 // i32[3N] images (x, y, z per particle), u64 count, count x (string label,
-// bytes state), 2 x (string path, u64 bytes, u32 crc). A string or byte
-// block is a u64 length and its bytes.
+// bytes state), u64 writers, writers x (string path, bytes mark, i8
+// wrote_state). A string
+// or byte block is a u64 length and its bytes.
 //
+// Version 3 ended with 2 x (string path, u64 bytes, u32 crc) instead of the
+// writers: the frames CSV and the energy CSV, which are today's csv and
+// energy writers, whose mark is that (bytes, crc) pair (pdyn::FileMark).
 // Version 2 is version 3 without `images`; it is still read, with every
 // image count 0 (no scene had a periodic box then).
 //
@@ -27,6 +31,7 @@
 #include <boost/crc.hpp>
 #include <cstring>
 #include <fstream>
+#include <pdyn/output_file.hpp>
 #include <sstream>
 
 namespace pdyn {
@@ -104,6 +109,13 @@ std::uint32_t crc32(const std::string& s) {
 
 }  // namespace
 
+const WriterMark* Checkpoint::output(const std::string& path) const {
+  for (const auto& m : outputs) {
+    if (m.path == path) return &m;
+  }
+  return nullptr;
+}
+
 std::uint64_t fnv1a(const std::string& text) {
   std::uint64_t h = 14695981039346656037ull;
   for (unsigned char c : text) {
@@ -138,10 +150,11 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
     tail.string(label);
     tail.bytes(bytes.data(), bytes.size());
   }
-  for (const OutputMark* m : {&c.frames, &c.energy}) {
-    tail.string(m->path);
-    tail.pod(m->bytes);
-    tail.pod(m->crc);
+  tail.pod<std::uint64_t>(c.outputs.size());
+  for (const auto& m : c.outputs) {
+    tail.string(m.path);
+    tail.bytes(m.mark.data(), m.mark.size());
+    tail.pod(m.wrote_state);
   }
   payload += tail.data();
 
@@ -292,10 +305,25 @@ Checkpoint read_checkpoint(const fs::path& path) {
     c.plugin_states.emplace_back(std::move(label),
                                  std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
   }
-  for (OutputMark* m : {&c.frames, &c.energy}) {
-    m->path = r.bytes();
-    m->bytes = r.pod<std::uint64_t>();
-    m->crc = r.pod<std::uint32_t>();
+  if (version >= 4) {
+    const auto writers = r.pod<std::uint64_t>();
+    if (writers > payload.size()) r.fail("writer count larger than the file");
+    for (std::uint64_t i = 0; i < writers; ++i) {
+      std::string written = r.bytes();
+      std::string mark = r.bytes();
+      const auto wrote = r.pod<std::int8_t>();
+      if (wrote < -1 || wrote > 1) r.fail("a flag is neither -1, 0 nor 1");
+      c.outputs.push_back(
+          {std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end()), wrote});
+    }
+  } else {
+    for (int k = 0; k < 2; ++k) {  // frames, energy
+      std::string written = r.bytes();
+      FileMark m;
+      m.bytes = r.pod<std::uint64_t>();
+      m.crc = r.pod<std::uint32_t>();
+      if (!written.empty()) c.outputs.push_back({std::move(written), m.encode()});
+    }
   }
   if (!r.done()) r.fail("unexpected bytes after the last field");
   return c;

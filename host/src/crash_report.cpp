@@ -221,6 +221,9 @@ FatalSignalReport::FatalSignalReport(const Scene& scene, const std::vector<fs::p
     r->entries.push_back({&c.label, describe("collider", c.label, scene)});
   }
   r->entries.push_back({&scene.solver_label, describe("solver", scene.solver_label, scene)});
+  for (const auto& w : scene.output.writers) {
+    r->entries.push_back({&w.label, describe("writer", w.label, scene)});
+  }
   for (const auto& p : temp_files) r->temp_files.push_back(p.string());
   r->removed_note =
       fmt::format("; its unfinished output was removed ({})", file_list(r->temp_files));

@@ -150,8 +150,15 @@ class Loader final : public BuilderHost {
   std::optional<Params> read_plugin_params(const YAML::Node& item, const std::string& path,
                                            const PluginRecord& rec,
                                            const std::vector<std::string>& generated);
-  void read_output(const YAML::Node& n, Scene& scene);
-  void check_written_files(const YAML::Node& n, const Scene& scene);
+  void read_output(const YAML::Node& n, const YAML::Node& top_checkpoint, Scene& scene);
+  void read_output_map(const YAML::Node& n, Scene& scene);
+  void read_writer_list(const YAML::Node& n, Scene& scene);
+  void read_checkpoint(const YAML::Node& c, const std::string& path, Scene& scene);
+  void implied_writer(const YAML::Node& at, const std::string& key_path, const std::string& plugin,
+                      const std::string& file, std::int64_t every, const Params& params,
+                      Scene& scene);
+  bool output_file_name(const YAML::Node& at, const std::string& key_path, const std::string& v);
+  void check_written_files(const Scene& scene);
   template <class Create>
   auto create(const PendingPlugin& p, Create&& create_fn) -> decltype(create_fn());
 
@@ -176,6 +183,11 @@ class Loader final : public BuilderHost {
   std::vector<PendingPlugin> builder_forces_;  // springs made by builders
   bool particles_ok_ = true;
   std::vector<NamedPath> read_files_;  // side files: no output may overwrite them
+  // Where each writer's path and the checkpoint path were given (node, key).
+  std::vector<std::pair<YAML::Node, std::string>> writer_nodes_;
+  std::size_t beside_ = 0;  // the writer whose path gives the default checkpoint's
+  YAML::Node checkpoint_node_;
+  std::string checkpoint_key_;
 };
 
 }  // namespace pdyn::loading

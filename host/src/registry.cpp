@@ -16,6 +16,8 @@
 #include <cstdlib>
 #include <set>
 
+#include "pdyn/host/scene_specs.hpp"
+
 namespace pdyn {
 
 namespace fs = std::filesystem;
@@ -44,7 +46,7 @@ std::string name_from_file(const fs::path& file) {
       break;
     }
   }
-  for (const char* kind : {"force_", "solver_", "collider_"}) {
+  for (const char* kind : {"force_", "solver_", "collider_", "writer_"}) {
     if (stem.rfind(kind, 0) == 0) return stem.substr(std::char_traits<char>::length(kind));
   }
   return stem;
@@ -75,7 +77,8 @@ std::string descriptor_problem(const PluginDescriptor& d) {
   }
   const bool has_factory = (d.kind == PluginKind::Force && d.create_force) ||
                            (d.kind == PluginKind::Solver && d.create_solver) ||
-                           (d.kind == PluginKind::Collider && d.create_collider);
+                           (d.kind == PluginKind::Collider && d.create_collider) ||
+                           (d.kind == PluginKind::Writer && d.create_writer);
   if (!has_factory) return fmt::format("descriptor has no {} factory", kind_name(d.kind));
   std::set<std::string> seen;
   for (const auto& p : d.params) {
@@ -87,6 +90,16 @@ std::string descriptor_problem(const PluginDescriptor& d) {
           p.name);
     }
     if (!seen.insert(p.name).second) return fmt::format("parameter '{}' declared twice", p.name);
+    if (d.kind == PluginKind::Writer) {
+      for (const auto& own : writer_entry_keys()) {
+        if (p.name == own.name) {
+          return fmt::format(
+              "parameter name '{}' is not allowed for a writer (expected a name other than "
+              "path, every and fields, which the host reads for every writer)",
+              p.name);
+        }
+      }
+    }
     // ParamType's enumerators are in the order of ParamValue's alternatives,
     // so a default of the parameter's own type has the type's index.
     if (p.fallback && p.fallback->index() != static_cast<std::size_t>(p.type)) {
@@ -106,6 +119,8 @@ const char* kind_name(PluginKind kind) {
       return "solver";
     case PluginKind::Collider:
       return "collider";
+    case PluginKind::Writer:
+      return "writer";
   }
   return "?";
 }
@@ -280,6 +295,11 @@ std::shared_ptr<Solver> PluginRegistry::create_solver(const PluginRecord& r, con
 std::shared_ptr<Collider> PluginRegistry::create_collider(const PluginRecord& r, const Params& p,
                                                           const SceneContext& ctx) const {
   return keep_loaded(r.descriptor->create_collider(p, ctx), r);
+}
+
+std::shared_ptr<Writer> create_writer(const PluginRecord& r, const Params& p,
+                                      const WriterContext& ctx) {
+  return keep_loaded(r.descriptor->create_writer(p, ctx), r);
 }
 
 }  // namespace pdyn

@@ -11,12 +11,19 @@
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <exception>
+#include <functional>
+#include <numeric>
 #include <ostream>
 #include <pdyn/parallel.hpp>
 #include <tuple>
+#include <utility>
 
 #include "pdyn/host/crash_report.hpp"
+#include "pdyn/host/scene_drawables.hpp"
+#include "pdyn/output_file.hpp"
 #include "pdyn/stepper.hpp"
+#include "pdyn/text.hpp"
 
 namespace pdyn {
 
@@ -77,7 +84,9 @@ std::string step_fault_message(const StepFault& f, const Scene& scene, std::int6
 
 fs::path checkpoint_path(const Scene& scene) {
   if (!scene.output.checkpoint.empty()) return scene.output.checkpoint;
-  if (!scene.output.path.empty()) return fs::path(scene.output.path).replace_extension(".ckpt");
+  if (!scene.output.checkpoint_beside.empty()) {
+    return fs::path(scene.output.checkpoint_beside).replace_extension(".ckpt");
+  }
   return fs::path(scene.file).stem().string() + ".ckpt";
 }
 
@@ -121,43 +130,6 @@ class SignalGuard {
 // ---------------------------------------------------------------------------
 // Output
 
-// Frames: t,id,x,y,z,vx,vy,vz with 17 significant digits, enough to
-// round-trip a double exactly; with `unwrapped`, also xu,yu,zu: the
-// position x + images L followed continuously across periodic faces of the
-// box (images are 0 along open axes, where xu is x).
-void write_frame(AtomicFile& f, const System& sys, bool unwrapped) {
-  const auto x = sys.positions();
-  const auto v = sys.velocities();
-  const double t = sys.time();
-  const Domain& box = sys.domain();
-  const Vec3 length = box.length();
-  const auto& images = sys.images();
-  fmt::memory_buffer buf;
-  for (Index i = 0; i < sys.size(); ++i) {
-    fmt::format_to(std::back_inserter(buf),
-                   "{:.17g},{},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", t, i, x(0, i),
-                   x(1, i), x(2, i), v(0, i), v(1, i), v(2, i));
-    if (unwrapped) {
-      Vec3 u = x.col(i);
-      for (int k = 0; k < 3; ++k) {
-        if (box.periodic[k]) u[k] += images[static_cast<std::size_t>(i)][k] * length[k];
-      }
-      fmt::format_to(std::back_inserter(buf), ",{:.17g},{:.17g},{:.17g}", u.x(), u.y(), u.z());
-    }
-    buf.push_back('\n');
-    if (buf.size() > (1 << 16)) {
-      f.write(buf.data(), buf.size());
-      buf.clear();
-    }
-  }
-  f.write(buf.data(), buf.size());
-}
-
-void write_energy(AtomicFile& f, const System& sys) {
-  const double k = sys.kinetic_energy(), u = sys.potential_energy();
-  f.write(fmt::format("{:.17g},{:.17g},{:.17g},{:.17g}\n", sys.time(), k, u, k + u));
-}
-
 class Progress {
  public:
   Progress(std::ostream* out, std::int64_t total, double end_time)
@@ -193,68 +165,236 @@ class Progress {
   Clock::time_point start_, last_;
 };
 
-// Everything a run writes: frames, energy rows, checkpoints.
+// Everything a run writes: each writer's frames on its own schedule, and
+// checkpoints with every writer's mark.
+//
+// Schedules: writer w writes the frame of step n when n % every_w == 0. The
+// loops step through frames of the base period, the greatest common divisor
+// of the writers' `every` (one writer: its own), and call emit(n) there.
+// Each writer knows whether it holds the current state (`current`): an
+// extra frame (end of run, interrupt, fault) goes only to writers that do
+// not, and a checkpoint after it records their marks from before it, so a
+// resumed run continues every file as an uninterrupted run would have.
 class Output {
+  struct Slot {
+    const WriterSpec* spec = nullptr;
+    std::shared_ptr<Writer> writer;
+    bool force = false, energy = false;             // the frames need forces, energies
+    bool current = false;                           // has written the current state
+    bool failed = false;                            // write() threw: no more frames, no commit
+    std::optional<std::vector<std::uint8_t>> held;  // mark before an extra frame
+  };
+
  public:
   Output(const Scene& scene, const Checkpoint* resume)
       : scene_(scene), sys_(*scene.system), checkpoint_(checkpoint_path(scene)) {
-    if (!scene.output.path.empty()) {
-      frames_.emplace(scene.output.path, resume ? &resume->frames : nullptr);
-      if (!resume) {
-        frames_->write(scene.output.unwrapped ? "t,id,x,y,z,vx,vy,vz,xu,yu,zu\n"
-                                              : "t,id,x,y,z,vx,vy,vz\n");
+    const auto& specs = scene.output.writers;
+    if (specs.empty()) return;
+    WriterContext base(sys_.view());
+    base.dt = scene.dt;
+    for (const auto& use : scene.uses) {
+      if (use.kind != PluginKind::Force) continue;
+      for (const auto& entry : use.params.values()) {
+        if (const auto* p = std::get_if<std::vector<IndexPair>>(&entry.second)) {
+          base.pairs.insert(base.pairs.end(), p->begin(), p->end());
+        } else if (const auto* t = std::get_if<std::vector<IndexTriple>>(&entry.second)) {
+          base.triples.insert(base.triples.end(), t->begin(), t->end());
+        }
       }
     }
-    if (!scene.output.energy.empty()) {
-      energy_.emplace(scene.output.energy, resume ? &resume->energy : nullptr);
-      if (!resume) energy_->write("t,kinetic,potential,total\n");
+    const Drawables d = drawables(scene);
+    for (const auto& x : d.planes) base.obstacles.emplace_back(x);
+    for (const auto& x : d.spheres) base.obstacles.emplace_back(x);
+    for (const auto& x : d.boxes) base.obstacles.emplace_back(x);
+    for (const auto& x : d.meshes) base.obstacles.emplace_back(x);
+    for (const auto& spec : specs) {
+      WriterContext ctx = base;
+      ctx.path = spec.path;
+      ctx.fields = spec.fields;
+      ctx.every = spec.every;
+      if (resume) {
+        const WriterMark* m = resume->output(spec.path.string());
+        if (!m) {
+          throw CheckpointError(fmt::format(
+              "{}: the checkpoint has no mark for this output (expected a checkpoint of a run "
+              "that wrote it)",
+              spec.path.string()));
+        }
+        ctx.resume = m->mark;
+        ctx.resuming = true;
+      }
+      Slot slot;
+      slot.spec = &spec;
+      const auto& fields = spec.fields;
+      slot.force = std::find(fields.begin(), fields.end(), field::kForce) != fields.end();
+      slot.energy = spec.record.descriptor->writer_traits.energy;
+      try {
+        const crash::CallScope call(spec.label, "create");
+        slot.writer = create_writer(spec.record, spec.params, ctx);
+      } catch (const ResumeError& e) {
+        throw CheckpointError(e.what());
+      } catch (const PluginError&) {
+        throw;
+      } catch (const std::exception& e) {
+        throw PluginRuntimeError(
+            spec.label, fmt::format("cannot start its output: {}{}", e.what(), library_of(spec)));
+      }
+      slots_.push_back(std::move(slot));
     }
   }
-  void emit() {
-    if (frames_) write_frame(*frames_, sys_, scene_.output.unwrapped);
-    if (energy_) write_energy(*energy_, sys_);
+
+  /// The base period in steps (gcd of the writers' `every`); 0: no writer
+  /// writes between the first and the final frame.
+  std::int64_t period() const { return scene_.output.period(); }
+  /// Whether the writer's schedule includes step n.
+  static bool due(const Slot& s, std::int64_t n) {
+    return s.spec->every > 0 && n % s.spec->every == 0;
+  }
+
+  /// Every writer writes the first frame.
+  void emit_first(std::int64_t step) {
+    for (auto& s : slots_) {
+      write(s, step);
+      s.current = true;
+    }
+  }
+  /// The state has changed (a step was taken): no writer holds it yet.
+  void new_state() {
+    for (auto& s : slots_) s.current = false;
+  }
+  /// The frame of step n on the schedule: written by the writers it is due
+  /// for. `current`: the state is the run's current one (not a frame
+  /// interpolated inside a step).
+  void emit(std::int64_t n, bool current = true) {
+    for (auto& s : slots_) {
+      if (!due(s, n)) continue;
+      write(s, n);
+      if (current) s.current = true;
+    }
   }
   // A frame off the run's schedule: the end of a run that a longer run
   // would pass through without a frame, the step an interrupt stopped at,
-  // the last good state before a fault. It is written, but a checkpoint
-  // taken after it records the output without it, so that a resumed run
-  // continues the files exactly as an uninterrupted run would have.
-  void emit_extra() {
-    if (!held_)
-      held_.emplace(frames_ ? frames_->mark() : OutputMark{},
-                    energy_ ? energy_->mark() : OutputMark{});
-    emit();
+  // the last good state before a fault. Written by every writer that does
+  // not hold the current state yet, but a checkpoint taken after it records
+  // the output without it.
+  void emit_extra(std::int64_t step) {
+    for (auto& s : slots_) {
+      if (s.current || s.failed) continue;
+      if (!s.held) s.held = mark(s);
+      write(s, step);
+      s.current = true;
+    }
   }
+  /// After a resume: which writers wrote the checkpoint's state (it is in
+  /// the output they continue): as the checkpoint says, else (older
+  /// checkpoints) as `wrote` says from the writer's schedule. A writer that
+  /// did not, although the state is on its schedule (`n`, -1: off the base
+  /// schedule), writes it now.
+  void resume_at(const Checkpoint& c, std::int64_t n,
+                 const std::function<bool(std::int64_t every)>& wrote) {
+    for (auto& s : slots_) {
+      const WriterMark* m = c.output(s.spec->path.string());
+      s.current = m && m->wrote_state >= 0 ? m->wrote_state == 1 : wrote(s.spec->every);
+      if (!s.current && n >= 0 && due(s, n)) {
+        write(s, n);
+        s.current = true;
+      }
+    }
+  }
+  /// The first writer failure since the last call, as a message, or empty.
+  std::string take_failure() { return std::exchange(failure_, {}); }
+
   fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame, bool has_dense) {
+    step_ = step;
     Checkpoint c = capture_checkpoint(scene_, step);
     c.next_frame = next_frame;
     c.has_dense = has_dense;
-    if (frames_) c.frames = frames_->mark();
-    if (energy_) c.energy = energy_->mark();
-    if (held_) std::tie(c.frames, c.energy) = *held_;
+    for (auto& s : slots_) {
+      auto m = s.held ? *s.held : mark(s);
+      const bool wrote = s.current && !s.held && !s.failed;
+      c.outputs.push_back({s.spec->path.string(), std::move(m), static_cast<std::int8_t>(wrote)});
+    }
     write_checkpoint(checkpoint_, c);
     // From now on the temporary files are what a resume continues.
     if (crash_report_) crash_report_->keep_temp_files(checkpoint_);
     return checkpoint_;
   }
+  /// Completes every output (a writer that failed keeps its complete
+  /// frames); throws the first failure after trying them all.
   void commit() {
-    if (frames_) frames_->commit();
-    if (energy_) energy_->commit();
+    std::exception_ptr first;
+    for (auto& s : slots_) {
+      try {
+        const crash::CallScope call(s.spec->label, "commit");
+        s.writer->commit();
+      } catch (...) {
+        // A writer that failed during the run has been reported already.
+        if (!first && !s.failed) first = std::current_exception();
+      }
+    }
+    if (first) std::rethrow_exception(first);
   }
   std::vector<fs::path> temp_files() const {
     std::vector<fs::path> files;
-    if (frames_) files.push_back(frames_->temp_path());
-    if (energy_) files.push_back(energy_->temp_path());
+    for (const auto& s : slots_) {
+      for (auto& f : s.writer->temp_files()) files.push_back(std::move(f));
+    }
     return files;
   }
   void set_crash_report(crash::FatalSignalReport* report) { crash_report_ = report; }
 
  private:
+  std::string library_of(const WriterSpec& spec) const {
+    return fmt::format(" (library {})", spec.record.library.string());
+  }
+  // A writer whose mark() fails (its flush met a full disk) has failed:
+  // asked again, it gives the mark of its last complete output.
+  std::vector<std::uint8_t> mark(Slot& s) {
+    const crash::CallScope call(s.spec->label, "mark");
+    try {
+      return s.writer->mark();
+    } catch (const std::exception& e) {
+      s.failed = true;
+      if (failure_.empty()) {
+        failure_ = fmt::format(
+            "writer {} failed at step {}: {}{}; its output keeps the frames it completed",
+            s.spec->label, step_, e.what(), library_of(*s.spec));
+      }
+      return s.writer->mark();
+    }
+  }
+  void write(Slot& s, std::int64_t step) {
+    if (s.failed) return;
+    Frame f(sys_.view());
+    f.step = step;
+    f.images = sys_.images();
+    if (s.force) {
+      scene_.system->compute_accelerations();
+      f.force = &sys_.forces();
+    }
+    if (s.energy) {
+      f.kinetic_energy = sys_.kinetic_energy();
+      f.potential_energy = sys_.potential_energy();
+    }
+    try {
+      const crash::CallScope call(s.spec->label, "write");
+      s.writer->write(f);
+    } catch (const std::exception& e) {
+      s.failed = true;
+      if (failure_.empty()) {
+        failure_ = fmt::format(
+            "writer {} failed at step {}: {}{}; its output keeps the frames before this one",
+            s.spec->label, step, e.what(), library_of(*s.spec));
+      }
+    }
+  }
+
   const Scene& scene_;
   const System& sys_;
   fs::path checkpoint_;
-  std::optional<AtomicFile> frames_, energy_;
-  std::optional<std::pair<OutputMark, OutputMark>> held_;  // marks before an extra frame
+  std::vector<Slot> slots_;
+  std::string failure_;
+  std::int64_t step_ = 0;  // of the checkpoint being written, for messages
   crash::FatalSignalReport* crash_report_ = nullptr;
 };
 
@@ -356,7 +496,6 @@ struct Loop {
   SignalGuard& signals;
   RunResult& result;
   Stepper& stepper;
-  bool last_written = true;     // the current state's frame has been written
   std::int64_t next_frame = 1;  // adaptive runs: index m of the next frame, due at m every dt
   // Adaptive runs: a step has shown that the solver interpolates (dense
   // output). Until then each step stops on the next frame time. Carried by
@@ -380,8 +519,19 @@ struct Loop {
     result.message = message +
                      " (--strict: stopped here; this state was written as the final "
                      "frame)";
-    if (!last_written) out.emit_extra();
-    last_written = true;
+    out.emit_extra(result.steps_done);
+    return false;
+  }
+
+  // After a frame: false if a writer failed (a full disk). The run stops
+  // with exit code 3; the other writers get the current state, a checkpoint
+  // records every writer's last complete frame.
+  bool writes_ok() {
+    std::string failure = out.take_failure();
+    if (failure.empty()) return true;
+    result.exit_code = 3;
+    result.message = std::move(failure);
+    out.emit_extra(result.steps_done);
     return false;
   }
 
@@ -401,7 +551,7 @@ struct Loop {
   std::nullopt_t stop(const StepFault& f, std::string message) {
     result.exit_code = f.exit_code();
     result.message = std::move(message);
-    if (!last_written) out.emit_extra();
+    out.emit_extra(result.steps_done);
     return std::nullopt;
   }
 };
@@ -412,7 +562,7 @@ struct Loop {
 // to end exactly on it.
 void run_fixed(Loop& loop, std::int64_t k0) {
   const Scene& scene = loop.scene;
-  const std::int64_t n_steps = scene.steps, every = scene.output.every;
+  const std::int64_t n_steps = scene.steps, every = loop.out.period();
   const std::int64_t ckpt_every = scene.output.checkpoint_every;
   for (std::int64_t k = k0 + 1; k <= n_steps; ++k) {
     const double t_end = k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
@@ -420,17 +570,19 @@ void run_fixed(Loop& loop, std::int64_t k0) {
     loop.result.steps_done = k;
     // The final frame is extra unless it falls on the schedule: a longer
     // run resumed from this one's checkpoint does not write it.
-    loop.last_written = every > 0 && k % every == 0;
-    if (loop.last_written) loop.out.emit();
+    loop.out.new_state();
+    if (every > 0 && k % every == 0) loop.out.emit(k);
+    if (!loop.writes_ok()) return;
     if (!loop.energy_ok(k, k == n_steps)) return;
     if (ckpt_every > 0 && k % ckpt_every == 0 && k != n_steps) {
       loop.result.checkpoint = loop.out.write_checkpoint_now(k, 0, false);
+      if (!loop.writes_ok()) return;
     }
     loop.progress.update(k, t_end);
     if (k == n_steps || loop.signals.raised()) {
       if (k != n_steps) loop.result.exit_code = 130;
-      if (!loop.last_written) loop.out.emit_extra();
-      loop.last_written = true;
+      loop.out.emit_extra(k);
+      loop.writes_ok();
       return;
     }
   }
@@ -446,7 +598,8 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
   System& sys = *scene.system;
   Solver& solver = *scene.solver;
   const double t_end = scene.end_time;
-  const double frame_dt = static_cast<double>(scene.output.every) * scene.dt;
+  const std::int64_t every = loop.out.period();
+  const double frame_dt = static_cast<double>(every) * scene.dt;
   const std::int64_t ckpt_every = scene.output.checkpoint_every;
   std::int64_t& next_frame = loop.next_frame;
   auto frame_time = [&](std::int64_t m) {
@@ -484,7 +637,7 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
         sys.set_images(images_before);
         sys.wrap_positions();
       }
-      loop.out.emit();
+      loop.out.emit(next_frame * every, /*current=*/false);
       sys.state() = current;
       sys.set_time(t_new);
       if (periodic) sys.set_images(std::move(images_after));
@@ -498,25 +651,27 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
     if (periodic) images_before = sys.images();
     if (!loop.guarded_step(take, k)) break;
     const double t_new = sys.time();
+    loop.out.new_state();
     dense_frames(t_new);
     loop.result.steps_done = k;
-    loop.last_written = on_schedule(next_frame) && frame_time(next_frame) <= t_new;
-    if (loop.last_written) {
-      loop.out.emit();
+    if (on_schedule(next_frame) && frame_time(next_frame) <= t_new) {
+      loop.out.emit(next_frame * every);
       ++next_frame;
     }
+    if (!loop.writes_ok()) break;
     const bool done = t_new >= t_end;
     if (!loop.energy_ok(k, done)) break;
     if (ckpt_every > 0 && k % ckpt_every == 0 && !done) {
       loop.result.checkpoint = loop.out.write_checkpoint_now(k, next_frame, has_dense);
+      if (!loop.writes_ok()) break;
     }
     loop.progress.update(k, t_new);
     if (done || loop.signals.raised()) {
       if (!done) loop.result.exit_code = 130;
       // The end of a run whose length is not a whole number of frame
       // intervals, or an interrupt: not a frame a longer run writes.
-      if (!loop.last_written) loop.out.emit_extra();
-      loop.last_written = true;
+      loop.out.emit_extra(k);
+      loop.writes_ok();
       break;
     }
   }
@@ -541,7 +696,13 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   Progress progress(options.progress ? options.log : nullptr, scene.steps, scene.end_time);
   const std::int64_t k0 = options.resume ? options.resume->step : 0;
   progress.start_at(k0);
-  if (!options.resume) out.emit();
+  if (!options.resume) {
+    out.emit_first(0);
+    if (const std::string failure = out.take_failure(); !failure.empty()) {
+      result.exit_code = 3;
+      result.message = failure;
+    }
+  }
   Stepper stepper(sys, *scene.solver, scene.solver_label);
   Loop loop{scene, out, progress, signals, result, stepper};
   EnergyWatch energy(scene);
@@ -551,22 +712,33 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   if (options.resume) {
     loop.next_frame = options.resume->next_frame;
     loop.has_dense = options.resume->has_dense;
-    // Whether the checkpoint's state is a frame on the schedule, and so in
-    // the output it recorded (an extra final frame is left out of it).
-    const std::int64_t every = scene.output.every;
+    // Which writers wrote the checkpoint's state: those whose schedule has
+    // it (an extra final frame is left out of the output it recorded).
+    const std::int64_t every = out.period();
     const double frame_dt = static_cast<double>(every) * scene.dt;
-    loop.last_written =
-        adaptive ? frame_dt > 0 && static_cast<double>(loop.next_frame - 1) * frame_dt == sys.time()
-                 : every > 0 && k0 % every == 0;
+    const std::int64_t m = loop.next_frame - 1;
+    const bool on_base = frame_dt > 0 && static_cast<double>(m) * frame_dt == sys.time();
+    out.resume_at(*options.resume, adaptive ? (on_base ? m * every : -1) : k0, [&](std::int64_t e) {
+      return adaptive ? on_base && e > 0 && (m * every) % e == 0 : e > 0 && k0 % e == 0;
+    });
+    if (const std::string failure = out.take_failure(); !failure.empty()) {
+      result.exit_code = 3;
+      result.message = failure;
+    }
   }
   result.steps_done = k0;
-  if (adaptive) {
-    run_adaptive(loop, k0);
-  } else {
-    run_fixed(loop, k0);
+  if (result.exit_code == 0) {
+    if (adaptive) {
+      run_adaptive(loop, k0);
+    } else {
+      run_fixed(loop, k0);
+    }
   }
   // A run resumed at its very end takes no step; its final frame is due.
-  if (result.exit_code == 0 && !loop.last_written) out.emit_extra();
+  if (result.exit_code == 0) {
+    out.emit_extra(result.steps_done);
+    loop.writes_ok();
+  }
   progress.update(result.steps_done, sys.time(), true);
   progress.finish();
   result.time = sys.time();

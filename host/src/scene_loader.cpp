@@ -15,9 +15,11 @@
 // particles' radii and types scene_box.cpp (all declared in loader.hpp and
 // scene_builders.hpp).
 #include <fmt/format.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -335,63 +337,193 @@ void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKi
   }
 }
 
-void Loader::read_output(const YAML::Node& n, Scene& scene) {
-  if (!n.IsDefined() || n.IsNull()) return;
-  if (!check_map(n, "output", "output: { path: FILE.csv, every: N, energy: FILE.csv }")) return;
+// A file name, not a folder, in a place this user can write: found now
+// rather than after the whole run.
+bool Loader::output_file_name(const YAML::Node& at, const std::string& key_path,
+                              const std::string& v) {
+  std::error_code ec;
+  if (v.empty() || v.back() == '/' || fs::is_directory(v, ec)) {
+    error(at, key_path,
+          fmt::format("{}: '{}' is a folder, not a file (expected a file name, "
+                      "e.g. out/run.csv)",
+                      key_path, v));
+    return false;
+  }
+  // The nearest folder that exists must be writable: the run creates the
+  // rest. (A file on the way is reported by check_written_files.)
+  for (fs::path dir = fs::absolute(v, ec).parent_path(); !dir.empty(); dir = dir.parent_path()) {
+    if (fs::is_directory(dir, ec)) {
+      if (::access(dir.c_str(), W_OK) != 0) {
+        error(at, key_path,
+              fmt::format("{}: cannot write '{}': the folder '{}' is not writable ({}) (expected "
+                          "a folder this user can write)",
+                          key_path, v, dir.string(), std::strerror(errno)));
+        return false;
+      }
+      break;
+    }
+    if (dir == dir.root_path()) break;
+  }
+  return true;
+}
+
+// The checkpoint keys: output.checkpoint (mapping form) or checkpoint (top
+// level, any form).
+void Loader::read_checkpoint(const YAML::Node& c, const std::string& path, Scene& scene) {
+  if (!c.IsDefined() || c.IsNull()) return;
+  if (!check_map(c, path, "checkpoint: { path: FILE.ckpt, every: N }")) return;
+  if (auto cp = read_params(c, path, checkpoint_specs(), {}, -1)) {
+    if (output_file_name(c["path"], path + ".path", cp->string("path"))) {
+      scene.output.checkpoint = cp->string("path");
+      checkpoint_node_ = c["path"];
+      checkpoint_key_ = path + ".path";
+    }
+    scene.output.checkpoint_every = cp->integer("every");
+  }
+}
+
+// A writer the mapping form implies (csv for `path`, energy for `energy`),
+// with its plugin's defaults and `params` over them.
+void Loader::implied_writer(const YAML::Node& at, const std::string& key_path,
+                            const std::string& plugin, const std::string& file, std::int64_t every,
+                            const Params& params, Scene& scene) {
+  registry_.require_healthy(plugin);
+  const PluginRecord* rec = registry_.find(PluginKind::Writer, plugin);
+  if (!rec) {
+    error(at, key_path,
+          fmt::format("{}: needs the '{}' writer plugin, which was not found (expected it on the "
+                      "plugin path)",
+                      key_path, plugin));
+    return;
+  }
+  const Resolved r = resolve(rec->descriptor->params, params);
+  for (const auto& problem : r.problems) {
+    error(at, key_path, fmt::format("{}: the '{}' writer: {}", key_path, plugin, problem.message));
+  }
+  WriterSpec w{*rec,  fmt::format("{} ({})", plugin, where(at, key_path)), file,
+               every, rec->descriptor->writer_traits.default_fields,       r.params};
+  scene.output.writers.push_back(std::move(w));
+  writer_nodes_.push_back({at, key_path});
+}
+
+void Loader::read_output(const YAML::Node& n, const YAML::Node& top_checkpoint, Scene& scene) {
+  if (n.IsDefined() && n.IsSequence()) {
+    read_writer_list(n, scene);
+  } else if (n.IsDefined() && !n.IsNull() &&
+             check_map(n, "output",
+                       "output: a list of writers, e.g. - { type: csv, path: FILE.csv, every: N }, "
+                       "or { path: FILE.csv, every: N, energy: FILE.csv }")) {
+    read_output_map(n, scene);
+  }
+  if (top_checkpoint.IsDefined() && !top_checkpoint.IsNull()) {
+    if (!scene.output.checkpoint.empty()) {
+      error(top_checkpoint, "checkpoint",
+            fmt::format("checkpoint: the checkpoint is also given as {} (expected one of them)",
+                        checkpoint_key_));
+    } else {
+      read_checkpoint(top_checkpoint, "checkpoint", scene);
+    }
+  }
+  check_written_files(scene);
+}
+
+// Today's single mapping: one csv writer and one energy writer.
+void Loader::read_output_map(const YAML::Node& n, Scene& scene) {
   auto p = read_params(n, "output", output_specs(), {"checkpoint"}, -1);
   if (!p) return;
-  // A file name, not a folder: found now rather than after the whole run.
-  auto file_name = [&](const YAML::Node& at, const std::string& key_path, const std::string& v) {
-    std::error_code ec;
-    if (v.empty() || v.back() == '/' || fs::is_directory(v, ec)) {
-      error(at, key_path,
-            fmt::format("{}: '{}' is a folder, not a file (expected a file name, "
-                        "e.g. out/run.csv)",
-                        key_path, v));
-      return false;
+  read_checkpoint(n["checkpoint"], "output.checkpoint", scene);
+  const std::int64_t every = p->integer("every");
+  scene.output.every = every;
+  if (p->has("path") && output_file_name(n["path"], "output.path", p->string("path"))) {
+    Params csv;
+    csv.set("unwrapped", p->boolean("unwrapped"));
+    implied_writer(n["path"], "output.path", "csv", p->string("path"), every, csv, scene);
+    if (!scene.output.writers.empty()) {
+      beside_ = scene.output.writers.size() - 1;
+      scene.output.checkpoint_beside = p->string("path");
     }
-    return true;
-  };
-  const YAML::Node c = n["checkpoint"];
-  if (c.IsDefined() && !c.IsNull() &&
-      check_map(c, "output.checkpoint", "checkpoint: { path: FILE.ckpt, every: N }")) {
-    if (auto cp = read_params(c, "output.checkpoint", checkpoint_specs(), {}, -1)) {
-      if (file_name(c["path"], "output.checkpoint.path", cp->string("path"))) {
-        scene.output.checkpoint = cp->string("path");
+  }
+  if (p->has("energy") && output_file_name(n["energy"], "output.energy", p->string("energy"))) {
+    implied_writer(n["energy"], "output.energy", "energy", p->string("energy"), every, Params{},
+                   scene);
+  }
+}
+
+// `output: [ { type: NAME, path: FILE, every: N, fields: [...], params... } ]`
+void Loader::read_writer_list(const YAML::Node& n, Scene& scene) {
+  const auto common = writer_entry_keys();
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const YAML::Node item = n[i];
+    const std::string path = fmt::format("output[{}]", i);
+    if (!check_plugin_map(item, path, PluginKind::Writer)) continue;
+    const PluginRecord* rec = find_plugin(item, path, PluginKind::Writer);
+    if (!rec) continue;
+    std::vector<ParamSpec> specs = common;
+    for (const auto& s : rec->descriptor->params) specs.push_back(s);
+    auto all = read_params(item, path, specs, {"type"}, -1);
+    if (!all) continue;
+    WriterSpec w{*rec,
+                 fmt::format("{} ({})", rec->descriptor->name, where(item, path)),
+                 all->string("path"),
+                 all->integer("every"),
+                 rec->descriptor->writer_traits.default_fields,
+                 Params{}};
+    for (const auto& s : rec->descriptor->params) {
+      if (all->has(s.name)) w.params.set(s.name, all->values().find(s.name)->second);
+    }
+    bool ok = output_file_name(item["path"], path + ".path", all->string("path"));
+    if (all->has("fields")) {
+      const auto& allowed = rec->descriptor->writer_traits.fields;
+      const auto& asked = all->strings("fields");
+      for (std::size_t k = 0; k < asked.size(); ++k) {
+        if (std::find(allowed.begin(), allowed.end(), asked[k]) != allowed.end()) continue;
+        const std::string at = fmt::format("{}.fields[{}]", path, k);
+        const bool known = std::find(known_fields().begin(), known_fields().end(), asked[k]) !=
+                           known_fields().end();
+        error(item["fields"][k], at,
+              fmt::format("{}: {} field '{}' for the '{}' writer (expected {})", at,
+                          known ? "unsupported" : "unknown", asked[k], rec->descriptor->name,
+                          allowed.empty() ? std::string("no fields: its columns are fixed")
+                                          : "one of: " + join(allowed)));
+        ok = false;
       }
-      scene.output.checkpoint_every = cp->integer("every");
+      w.fields = asked;
     }
+    if (!ok) continue;
+    if (scene.output.writers.empty()) {
+      beside_ = 0;
+      scene.output.checkpoint_beside = w.path;
+    }
+    scene.output.writers.push_back(std::move(w));
+    writer_nodes_.push_back({item["path"], path + ".path"});
   }
-  if (p->has("path") && file_name(n["path"], "output.path", p->string("path"))) {
-    scene.output.path = p->string("path");
-  }
-  if (p->has("energy") && file_name(n["energy"], "output.energy", p->string("energy"))) {
-    scene.output.energy = p->string("energy");
-  }
-  scene.output.every = p->integer("every");
-  scene.output.unwrapped = p->boolean("unwrapped");
-  check_written_files(n, scene);
 }
 
 // Every file the run may write (written_paths.hpp), including the checkpoint
 // an interrupted run writes when the scene names none, against each other,
 // the scene file and the side files read so far.
-void Loader::check_written_files(const YAML::Node& n, const Scene& scene) {
+void Loader::check_written_files(const Scene& scene) {
   std::vector<NamedPath> written;
   auto add = [&](const YAML::Node& at, const std::string& key, const fs::path& file,
                  bool beside_output = false) {
     if (!file.empty()) written.push_back({key, where(at, key), file, beside_output});
   };
-  add(n["path"], "output.path", scene.output.path);
-  add(n["energy"], "output.energy", scene.output.energy);
+  for (std::size_t k = 0; k < scene.output.writers.size(); ++k) {
+    add(writer_nodes_[k].first, writer_nodes_[k].second, scene.output.writers[k].path);
+  }
   if (!scene.output.checkpoint.empty()) {
-    add(n["checkpoint"]["path"], "output.checkpoint.path", scene.output.checkpoint);
-  } else if (!scene.output.path.empty()) {
+    add(checkpoint_node_, checkpoint_key_, scene.output.checkpoint);
+  } else if (!scene.output.checkpoint_beside.empty()) {
     // Written only on an interrupt or a plugin fault: named so that the
     // user sees why, and how to choose another.
-    add(n["path"],
-        "the checkpoint of an interrupted run (output.path with .ckpt; set "
-        "output.checkpoint.path to choose)",
+    const auto& [node, first] = writer_nodes_[beside_];
+    add(node,
+        first == "output.path"
+            ? "the checkpoint of an interrupted run (output.path with .ckpt; set "
+              "output.checkpoint.path to choose)"
+            : fmt::format("the checkpoint of an interrupted run ({} with .ckpt; set "
+                          "checkpoint.path to choose)",
+                          first),
         checkpoint_path(scene), /*beside_output=*/true);
   }
   std::vector<NamedPath> read = read_files_;
@@ -474,7 +606,7 @@ Scene Loader::load(const std::string& text) {
     scene.canonical_text = emitter.c_str();
   }
 
-  check_keys(root, "", {"simulation", "output", "particles", "forces", "colliders"});
+  check_keys(root, "", {"simulation", "output", "checkpoint", "particles", "forces", "colliders"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
   check_inside_box();
@@ -508,7 +640,7 @@ Scene Loader::load(const std::string& text) {
             "simulation.solver: { type: NAME })");
     }
   }
-  read_output(root["output"], scene);
+  read_output(root["output"], root["checkpoint"], scene);
   if (!diags_.empty()) fail();
 
   // Assemble. Everything is valid as far as the descriptors can tell; the
@@ -570,6 +702,7 @@ Scene Loader::load(const std::string& text) {
     scene.solver_params = p.params;
     scene.libraries[label(p)] = p.record->library;
   }
+  for (const auto& w : scene.output.writers) scene.libraries[w.label] = w.record.library;
   if (!diags_.empty()) fail();
   return scene;
 }
@@ -621,6 +754,11 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
       scene.libraries[label] = rec->library;
       return label;
     }
+    case PluginKind::Writer:  // writers belong to a scene's output list, not to its system
+      diags_.push_back({file_, fmt::format("{}: '{}' is a writer (expected a force, collider or "
+                                           "solver)",
+                                           path, name)});
+      fail();
   }
   scene.libraries[label] = rec->library;
   scene.uses.push_back({kind, name, label, std::move(p.params)});

@@ -78,6 +78,20 @@ std::vector<ParamSpec> output_specs() {
   };
 }
 
+std::vector<ParamSpec> writer_entry_keys() {
+  ParamSpec every = param::integer("every", 1, "a frame every N steps");
+  every.at_least(1);
+  return {
+      param::required("path", ParamType::String, "",
+                      "the output file (for vtk the .pvd collection; its frames go beside it)"),
+      every,
+      param::optional("fields", ParamType::StringList, "",
+                      "what to write besides positions (velocity, mass, fixed, radius, type, "
+                      "force, image, id: those the writer supports); default: the writer's own "
+                      "choice"),
+  };
+}
+
 std::vector<ParamSpec> checkpoint_specs() {
   ParamSpec every = param::integer("every", 0, "a checkpoint every N steps; 0: at the end only");
   every.at_least(0);

@@ -102,7 +102,7 @@ void Simulation::step_once(double limit) {
   // Until the solver shows dense output, each step stops on the next frame
   // time of the scene's output, as in pdyn run; past the scene's end only
   // `limit` bounds it.
-  const double frame_dt = static_cast<double>(scene_.output.every) * dt;
+  const double frame_dt = static_cast<double>(scene_.output.period()) * dt;
   auto frame_time = [&](std::int64_t m) {
     return frame_dt > 0 ? std::min(static_cast<double>(m) * frame_dt, end) : end;
   };

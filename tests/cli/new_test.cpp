@@ -25,7 +25,7 @@ std::size_t entries(const fs::path& dir) {
 
 TEST(New, WritesAProjectForEachKind) {
   const fs::path root = test::temp_dir("new-kinds");
-  for (const std::string kind : {"force", "solver", "collider"}) {
+  for (const std::string kind : {"force", "solver", "collider", "writer"}) {
     const std::string name = "my_" + kind;
     const fs::path dir = root / name;
     const auto r = test::pdyn({"new", kind, name, dir.string()});
@@ -47,7 +47,7 @@ TEST(New, WritesAProjectForEachKind) {
       EXPECT_EQ(read(e.path()).find('@'), std::string::npos) << e.path();
     }
   }
-  EXPECT_EQ(entries(root), 3u) << "no temporary folder left behind";
+  EXPECT_EQ(entries(root), 4u) << "no temporary folder left behind";
 }
 
 TEST(New, DefaultFolderIsTheNameAndAnEmptyFolderIsFine) {

@@ -38,9 +38,15 @@ TEST(Schema, BuiltInSectionsComeFromTheLoadersTables) {
   EXPECT_EQ(sim["properties"]["steps"]["minimum"], 0);
   EXPECT_EQ(sim["required"], json({"dt"}));
   EXPECT_EQ(sim["properties"]["solver"]["$ref"], "#/$defs/solver");
-  const json& output = s["properties"]["output"];
+  // output: the mapping form, or a list of writers.
+  const json& output = s["properties"]["output"]["anyOf"][0];
   EXPECT_EQ(output["properties"]["checkpoint"]["required"], json({"path"}));
   EXPECT_EQ(output["properties"]["every"]["default"], 1);
+  const json& list = s["properties"]["output"]["anyOf"][1];
+  EXPECT_EQ(list["items"]["$ref"], "#/$defs/writer");
+  EXPECT_EQ(s["$defs"]["writer.csv"]["properties"]["every"]["minimum"], 1);
+  EXPECT_EQ(s["$defs"]["writer.csv"]["required"], json({"path"}));
+  EXPECT_EQ(s["properties"]["checkpoint"]["required"], json({"path"}));
 
   // One particle, then one alternative per builder the loader lists, then a
   // CSV side file.
@@ -87,7 +93,7 @@ TEST(Schema, HasTheBoxRadiiTypesAndUnwrappedOutput) {
     EXPECT_EQ(builder["properties"]["particle_radius"]["minimum"], 0) << items[i];
     EXPECT_EQ(builder["properties"]["particle_type"]["minimum"], 0) << items[i];
   }
-  EXPECT_EQ(s["properties"]["output"]["properties"]["unwrapped"]["default"], false);
+  EXPECT_EQ(s["properties"]["output"]["anyOf"][0]["properties"]["unwrapped"]["default"], false);
 }
 
 TEST(Schema, EveryPluginIsABranchWithItsParameters) {
@@ -101,10 +107,17 @@ TEST(Schema, EveryPluginIsABranchWithItsParameters) {
     EXPECT_EQ(defs[def]["additionalProperties"], false);
     EXPECT_EQ(defs[def]["properties"]["type"]["const"], d.name);
     for (const auto& p : d.params) EXPECT_TRUE(defs[def]["properties"].contains(p.name)) << def;
+    if (d.kind == PluginKind::Writer) {
+      for (const char* key : {"path", "every", "fields"}) {
+        EXPECT_TRUE(defs[def]["properties"].contains(key)) << def;
+      }
+    }
     ++plugins;
   }
   std::size_t branches = 0;
-  for (const char* kind : {"force", "solver", "collider"}) branches += defs[kind]["allOf"].size();
+  for (const char* kind : {"force", "solver", "collider", "writer"}) {
+    branches += defs[kind]["allOf"].size();
+  }
   EXPECT_EQ(branches, plugins);
 
   const json& spring = defs["force.spring"];

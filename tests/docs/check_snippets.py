@@ -86,7 +86,7 @@ BASE_SCENE = {
     ],
     "forces": [{"type": "gravity"}],
 }
-SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders"}
+SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "checkpoint"}
 
 CPP_PRELUDE = ["<pdyn/plugin.hpp>", "<pdyn/contact.hpp>", "<pdyn/targets.hpp>",
                "<pdyn/shape.hpp>", "<pdyn/pair.hpp>", "<pdyn/conformance.hpp>", "<cmath>"]
@@ -172,6 +172,8 @@ class Checker:
                 return False
             if kind == "solver":
                 scene["simulation"]["solver"] = entry
+            elif kind == "writer":                               # an output list entry
+                placed.setdefault("output", []).append(entry)
             else:
                 placed.setdefault(kind + "s", []).append(entry)
             return True
@@ -633,7 +635,8 @@ class Checker:
 # The columns of a README's parameter table, as `pdyn plugins describe` prints them.
 TABLE_COLUMNS = ["key", "type", "default", "unit", "range", "meaning"]
 COMPARED_COLUMNS = ["type", "default", "unit", "range"]
-KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider"}
+KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider",
+                "writers": "writer"}
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|pi"
 
 

@@ -18,6 +18,7 @@
 
 #include "host/resume_support.hpp"
 #include "pdyn/host/runner.hpp"
+#include "pdyn/output_file.hpp"
 
 namespace pdyn {
 namespace {
@@ -159,46 +160,83 @@ TEST_F(CheckpointCorruption, WrongVersion) {
   const std::uint32_t oldest = Checkpoint::kOldestReadableVersion;
   for (std::uint32_t v : {current + 1, oldest - 1, 0u, 0xffffffffu}) {
     SCOPED_TRACE("version " + std::to_string(v));
-    expect_refused(patch(good_, 8, v),
-                   {"bad.ckpt", "format version " + std::to_string(v) + " is not supported",
-                    "expected version " + std::to_string(current) + ", or version " +
-                        std::to_string(oldest) + " from an earlier pdyn)"});
+    expect_refused(
+        patch(good_, 8, v),
+        {"bad.ckpt", "format version " + std::to_string(v) + " is not supported",
+         "expected version " + std::to_string(current) + ", or versions " + std::to_string(oldest) +
+             " to " + std::to_string(current - 1) + " from an earlier pdyn)"});
   }
 }
 
-// Version 2, written before the simulation box, is version 3 without the
-// image counts: it is still read, as images 0, and resumes the run to the
-// same end as the version 3 checkpoint of the same state.
-TEST_F(CheckpointCorruption, Version2IsReadWithNoImages) {
-  ASSERT_EQ(Checkpoint::kFormatVersion, 3u);
+// The payload of version 4 checkpoint `now` (bytes `payload`) with its
+// writer marks in the layout of version 3: frames and energy, each a path,
+// u64 bytes and u32 CRC (the csv and energy writers' marks).
+std::string with_v3_marks(const std::string& payload, const Checkpoint& now) {
+  std::size_t tail = 8;
+  for (const auto& m : now.outputs) tail += 8 + m.path.size() + 8 + m.mark.size() + 1;
+  std::string old = payload.substr(0, payload.size() - tail);
+  for (std::size_t k = 0; k < 2; ++k) {
+    std::string path;
+    FileMark mark;
+    if (k < now.outputs.size()) {
+      path = now.outputs[k].path;
+      mark = FileMark::decode(now.outputs[k].mark);
+    }
+    const std::uint64_t n = path.size();
+    old.append(reinterpret_cast<const char*>(&n), 8);
+    old += path;
+    old.append(reinterpret_cast<const char*>(&mark.bytes), 8);
+    old.append(reinterpret_cast<const char*>(&mark.crc), 4);
+  }
+  return old;
+}
+
+// Version 3 held the marks of the frames and energy CSV files, which are
+// today's csv and energy writers; version 2, written before the simulation
+// box, is version 3 without the image counts. Both are still read (version
+// 2 as images 0) and resume the run to the same end, byte for byte, as the
+// version 4 checkpoint of the same state.
+TEST_F(CheckpointCorruption, Versions3And2AreRead) {
+  ASSERT_EQ(Checkpoint::kFormatVersion, 4u);
   const Checkpoint now = read_checkpoint(dir_ / "out/run.ckpt");
+  ASSERT_EQ(now.outputs.size(), 2u);  // frames.csv, energy.csv
   const std::size_t n = static_cast<std::size_t>(now.mass.size());
+  const std::string payload = good_.substr(kHeader, good_.size() - kHeader - 4);
+  const std::string v3_payload = with_v3_marks(payload, now);
   // The payload's fields before the images: two strings, i64, f64, i64,
   // u8, u64 N, then 6N + N doubles and N flags.
-  const std::string payload = good_.substr(kHeader, good_.size() - kHeader - 4);
   const std::size_t images =
       8 + now.scene_file.size() + 8 + now.scene_text.size() + 8 + 8 + 8 + 1 + 8 + 7 * n * 8 + n;
-  std::string old_payload = payload;
-  old_payload.erase(images, 3 * n * sizeof(std::int32_t));
-  const std::string v2 = patch(reseal(good_, old_payload), 8, std::uint32_t{2});
+  std::string v2_payload = v3_payload;
+  v2_payload.erase(images, 3 * n * sizeof(std::int32_t));
+  const std::string v3 = patch(reseal(good_, v3_payload), 8, std::uint32_t{3});
+  const std::string v2 = patch(reseal(good_, v2_payload), 8, std::uint32_t{2});
+  write_bytes(dir_ / "v3.ckpt", v3);
   write_bytes(dir_ / "v2.ckpt", v2);
-  const Checkpoint c = read_checkpoint(dir_ / "v2.ckpt");
-  EXPECT_TRUE(same_bits(c.state, now.state));
-  EXPECT_EQ(c.plugin_states, now.plugin_states);
-  EXPECT_EQ(c.frames.crc, now.frames.crc);
-  EXPECT_EQ(c.images, (std::vector<std::array<std::int32_t, 3>>(n, {0, 0, 0})));
+  for (const char* name : {"v3.ckpt", "v2.ckpt"}) {
+    SCOPED_TRACE(name);
+    const Checkpoint c = read_checkpoint(dir_ / name);
+    EXPECT_TRUE(same_bits(c.state, now.state));
+    EXPECT_EQ(c.plugin_states, now.plugin_states);
+    ASSERT_EQ(c.outputs.size(), 2u);
+    for (std::size_t k = 0; k < 2; ++k) {
+      EXPECT_EQ(c.outputs[k].path, now.outputs[k].path);
+      EXPECT_EQ(c.outputs[k].mark, now.outputs[k].mark);
+    }
+  }
+  EXPECT_EQ(read_checkpoint(dir_ / "v2.ckpt").images,
+            (std::vector<std::array<std::int32_t, 3>>(n, {0, 0, 0})));
 
-  const fs::path copy = temp_dir("corruption-v2-copy");
-  fs::copy(dir_, copy, fs::copy_options::recursive);
-  auto a = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", "v2.ckpt"});
-  ASSERT_EQ(a.status, 0) << a.err;
-  const std::string from_v2 = read_bytes(copy / "out/frames.csv");
-  const std::string end_v2 = read_bytes(copy / "out/run.ckpt");
-  write_bytes(copy / "v3.ckpt", good_);
-  auto c3 = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", "v3.ckpt"});
-  ASSERT_EQ(c3.status, 0) << c3.err;
-  EXPECT_EQ(read_bytes(copy / "out/frames.csv"), from_v2);
-  EXPECT_EQ(read_bytes(copy / "out/run.ckpt"), end_v2);
+  std::map<std::string, std::pair<std::string, std::string>> ends;  // frames, energy
+  for (const char* name : {"v2.ckpt", "v3.ckpt", "out/run.ckpt"}) {
+    const fs::path copy = temp_dir(std::string("corruption-resume-") + name[1]);
+    fs::copy(dir_, copy, fs::copy_options::recursive);
+    auto a = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", name});
+    ASSERT_EQ(a.status, 0) << a.err;
+    ends[name] = {read_bytes(copy / "out/frames.csv"), read_bytes(copy / "out/energy.csv")};
+  }
+  EXPECT_EQ(ends["v2.ckpt"], ends["out/run.ckpt"]);
+  EXPECT_EQ(ends["v3.ckpt"], ends["out/run.ckpt"]);
 }
 
 TEST_F(CheckpointCorruption, TrailingGarbage) {

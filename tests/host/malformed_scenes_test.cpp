@@ -309,8 +309,9 @@ TEST(MalformedScenes, SetValueThatIsTheExpandedHomeFolderSuggestsNull) {
             "not a whole number (did you mean null? the shell expands ~ to your home folder; "
             "expected a whole number >= 0)\n"
             "--set output=/home/pdyn-tester/x: output: '/home/pdyn-tester/x' is not a mapping "
-            "(did you mean null? the shell expands ~ to your home folder; expected output: { "
-            "path: FILE.csv, every: N, energy: FILE.csv })\n");
+            "(did you mean null? the shell expands ~ to your home folder; expected output: a "
+            "list of writers, e.g. - { type: csv, path: FILE.csv, every: N }, or { path: "
+            "FILE.csv, every: N, energy: FILE.csv })\n");
   // A path key takes a path in the home folder without comment.
   EXPECT_EQ(fine.status, 0) << fine.err;
 }

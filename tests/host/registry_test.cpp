@@ -41,9 +41,10 @@ fs::path shipped_dir() { return real_path(PDYN_PLUGIN_DIR); }
 
 // The seven plugins pdyn has shipped from the start (more may be added).
 const std::vector<std::pair<PluginKind, std::string>> kSeedPlugins = {
-    {PluginKind::Force, "gravity"}, {PluginKind::Force, "drag"},      {PluginKind::Force, "spring"},
-    {PluginKind::Solver, "euler"},  {PluginKind::Solver, "midpoint"}, {PluginKind::Solver, "rk4"},
-    {PluginKind::Collider, "plane"}};
+    {PluginKind::Force, "gravity"},   {PluginKind::Force, "drag"},
+    {PluginKind::Force, "spring"},    {PluginKind::Solver, "euler"},
+    {PluginKind::Solver, "midpoint"}, {PluginKind::Solver, "rk4"},
+    {PluginKind::Collider, "plane"},  {PluginKind::Writer, "csv"}};
 
 // Sets (or unsets, for nullopt) an environment variable for one scope.
 class ScopedEnv {
@@ -122,7 +123,7 @@ TEST(Registry, ShippedPluginsAreDiscoveredFromTheBuildTree) {
               std::string("pdyn_") + kind_name(kind) + "_" + name + ".so");
   }
   EXPECT_EQ(r.names(PluginKind::Force).size() + r.names(PluginKind::Solver).size() +
-                r.names(PluginKind::Collider).size(),
+                r.names(PluginKind::Collider).size() + r.names(PluginKind::Writer).size(),
             r.plugins().size());
   EXPECT_EQ(r.searched(), std::vector<fs::path>{PDYN_PLUGIN_DIR});
 }

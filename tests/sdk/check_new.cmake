@@ -1,5 +1,5 @@
 # `pdyn new` from the outside: the installed pdyn (prefix made by
-# install_sdk.cmake) writes a force, a solver, a collider and a pair project; each is
+# install_sdk.cmake) writes a force, a solver, a collider, a pair and a writer project; each is
 # configured and built against the prefix, runs its scene with the installed
 # pdyn, passes its own CTest tests (the conformance kit and the scene) and
 # `pdyn check`. Refusals are checked first: they are fast.
@@ -25,7 +25,7 @@ foreach(leftover bad gravity thing)
   endif()
 endforeach()
 
-foreach(kind force solver collider pair)
+foreach(kind force solver collider pair writer)
   set(name "my_${kind}")
   set(project "${WORK}/${name}")
   # The default folder is ./NAME.
@@ -90,4 +90,4 @@ foreach(kind force solver collider pair)
                         "optimisation:\n${last_output}")
   endif()
 endforeach()
-message(STATUS "pdyn new force, solver, collider and pair: built against ${PREFIX}, ran, passed pdyn check")
+message(STATUS "pdyn new force, solver, collider, pair and writer: built against ${PREFIX}, ran, passed pdyn check")

@@ -35,12 +35,14 @@
 #include "pdyn/particles.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/version.hpp"
+#include "pdyn/writer.hpp"
 
 namespace pdyn {
 
-enum class PluginKind { Force, Solver, Collider };
+/// Writer since ABI 5 (pdyn/writer.hpp).
+enum class PluginKind { Force, Solver, Collider, Writer };
 
-/// "force", "solver" or "collider".
+/// "force", "solver", "collider" or "writer".
 const char* kind_name(PluginKind kind);
 
 /// What a factory may look at besides its parameters: the scene's initial
@@ -74,6 +76,9 @@ using ForceFactory = std::function<std::unique_ptr<Force>(const Params&, const S
 using SolverFactory = std::function<std::unique_ptr<Solver>(const Params&, const SceneContext&)>;
 using ColliderFactory =
     std::function<std::unique_ptr<Collider>(const Params&, const SceneContext&)>;
+/// Creates a writer: opens (or, resuming, continues) its output. May throw
+/// pdyn::Error naming the file, or pdyn::ResumeError.
+using WriterFactory = std::function<std::unique_ptr<Writer>(const Params&, const WriterContext&)>;
 
 /// Everything the host knows about a plugin before creating one.
 struct PluginDescriptor {
@@ -87,6 +92,10 @@ struct PluginDescriptor {
   ForceFactory create_force;        ///< set for kind Force
   SolverFactory create_solver;      ///< set for kind Solver
   ColliderFactory create_collider;  ///< set for kind Collider
+  // Since ABI 5.
+  WriterTraits writer_traits;   ///< kind Writer: fields it writes, whether it needs energy
+  WriterFactory create_writer;  ///< set for kind Writer
+  WriterReader read_back;       ///< kind Writer, optional: reads its output back (pdyn check)
 };
 
 }  // namespace pdyn

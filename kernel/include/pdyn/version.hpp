@@ -7,10 +7,13 @@
 /// built against another version is refused before any of its code runs
 /// beyond the version query. Bump it whenever a public header changes a type
 /// layout or a virtual function.
-#define PDYN_ABI_VERSION 4u
+#define PDYN_ABI_VERSION 5u
 // 4 (pdyn 0.2): ParticleView and MutableParticleView gained domain, radius
 //   and type at their ends (the simulation box, per-particle radii and
 //   types). Rebuild plugins; no source change (docs/plugins.md, "ABI").
+// 5 (pdyn 0.3): PluginKind gained Writer and PluginDescriptor gained
+//   writer_traits and create_writer at its end (output writers,
+//   pdyn/writer.hpp). Rebuild plugins; no source change (docs/plugins.md, "ABI").
 
 namespace pdyn {
 inline constexpr std::uint32_t kAbiVersion = PDYN_ABI_VERSION;

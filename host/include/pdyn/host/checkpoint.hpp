@@ -18,18 +18,22 @@ class CheckpointError : public Error {
   using Error::Error;
 };
 
-/// How much of an output file belonged to the run at the checkpoint, so a
-/// resumed run can check the file is the same and continue it.
-struct OutputMark {
-  std::string path;         ///< as the scene names it; empty: no such output
-  std::uint64_t bytes = 0;  ///< length written up to the checkpoint
-  std::uint32_t crc = 0;    ///< CRC-32 of those bytes
+/// How far one writer's output had gone at the checkpoint (Writer::mark()),
+/// so a resumed run can check the output is the same and continue it.
+struct WriterMark {
+  std::string path;                ///< the writer's path as the scene names it
+  std::vector<std::uint8_t> mark;  ///< the writer's own bytes (csv: pdyn::FileMark)
+  /// Whether the output holds the checkpoint's state as a frame: 1 yes, 0
+  /// no (a resumed run writes it first if it is on the writer's schedule),
+  /// -1 unknown (versions 2 and 3: the writer's schedule says).
+  std::int8_t wrote_state = -1;
 };
 
 struct Checkpoint {
-  /// Version 3 added the image counts; version 2 files are still read (as
-  /// images 0: they were written before the simulation box existed).
-  static constexpr std::uint32_t kFormatVersion = 3;
+  /// Version 4 holds one mark per writer (output list); versions 3 (image
+  /// counts, frames and energy marks) and 2 (no image counts: read as 0)
+  /// are still read, their two marks as the csv and energy writers' marks.
+  static constexpr std::uint32_t kFormatVersion = 4;
   static constexpr std::uint32_t kOldestReadableVersion = 2;
 
   std::string scene_file;           ///< where the scene came from (for messages)
@@ -47,7 +51,11 @@ struct Checkpoint {
   /// save_state() of the solver, then each force, then each collider, in
   /// scene order, each with a label naming the plugin.
   std::vector<std::pair<std::string, std::vector<std::uint8_t>>> plugin_states;
-  OutputMark frames, energy;
+  /// One per writer of the scene's output, in scene order.
+  std::vector<WriterMark> outputs;
+
+  /// The mark of the writer whose path is `path`, or nullptr.
+  const WriterMark* output(const std::string& path) const;
 };
 
 /// Writes `c` to `path` atomically: a temporary file in the same folder,

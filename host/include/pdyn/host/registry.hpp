@@ -83,6 +83,11 @@ class PluginRegistry {
   std::vector<std::filesystem::path> searched_;
 };
 
+/// Creates a writer of a scene's output list (the runner does, when a run
+/// starts). It keeps its library loaded for as long as it lives.
+std::shared_ptr<Writer> create_writer(const PluginRecord& r, const Params& p,
+                                      const WriterContext& ctx);
+
 /// True for names of the form [a-z0-9_]+.
 bool is_valid_plugin_name(std::string_view name);
 /// True for parameter names: [A-Za-z_][A-Za-z0-9_]*, except "type" (see ParamSpec::name).

@@ -1,7 +1,6 @@
 // The simulation runner: steps a loaded scene and writes its output.
 #pragma once
 
-#include <boost/crc.hpp>
 #include <cstdint>
 #include <cstdio>
 #include <iosfwd>
@@ -36,7 +35,8 @@ struct RunOptions {
 };
 
 struct RunResult {
-  /// 0 done; 3 a plugin threw; 4 the state became non-finite; 130 interrupted.
+  /// 0 done; 3 a plugin threw or a writer failed (a full disk); 4 the state
+  /// became non-finite; 130 interrupted.
   int exit_code = 0;
   std::int64_t steps_done = 0;
   double time = 0.0;
@@ -75,40 +75,9 @@ Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step);
 void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
                         std::vector<std::string>* differences = nullptr);
 
-/// Where a run's checkpoint goes: output.checkpoint.path, else beside the
-/// frames file (.ckpt), else `<scene name>.ckpt` in the working directory.
+/// Where a run's checkpoint goes: output.checkpoint.path (or checkpoint.path),
+/// else beside output.path or the first writer's file (.ckpt), else
+/// `<scene name>.ckpt` in the working directory.
 std::filesystem::path checkpoint_path(const Scene& scene);
-
-/// Writes a file under a temporary name in the same folder and renames it to
-/// its final name on commit(), so an interrupted run never leaves a file that
-/// looks finished. Abandoned (not committed) files are removed. Keeps a CRC
-/// of what was written so that a checkpoint can record it.
-class AtomicFile {
- public:
-  /// Starts a new file, or, with `resume`, continues the one a checkpoint
-  /// recorded: its first resume->bytes bytes are copied from the final file
-  /// or from a temporary file an interrupted run left behind, after checking
-  /// their CRC. Throws CheckpointError if no such file matches.
-  explicit AtomicFile(std::filesystem::path path, const OutputMark* resume = nullptr);
-  ~AtomicFile();
-  AtomicFile(const AtomicFile&) = delete;
-  AtomicFile& operator=(const AtomicFile&) = delete;
-  void write(const char* data, std::size_t n);
-  void write(std::string_view s) { write(s.data(), s.size()); }
-  /// Flushes and returns what has been written so far.
-  OutputMark mark();
-  /// Flushes, fsyncs, closes and renames to the final name. Throws Error on failure.
-  void commit();
-  /// The temporary name written to until commit().
-  const std::filesystem::path& temp_path() const noexcept { return temp_; }
-
- private:
-  void resume_from(const OutputMark& mark);
-
-  std::filesystem::path path_, temp_;
-  std::FILE* file_ = nullptr;
-  std::uint64_t bytes_ = 0;
-  boost::crc_32_type crc_;
-};
 
 }  // namespace pdyn

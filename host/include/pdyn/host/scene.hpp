@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -39,15 +40,41 @@ struct Override {
 /// Parses "key.path=value"; throws SceneError if there is no '='.
 Override parse_override(const std::string& text);
 
+/// One writer of `output:` (a writer plugin, pdyn/writer.hpp), checked: the
+/// runner creates it when the run starts.
+struct WriterSpec {
+  PluginRecord record;              ///< the writer plugin (keeps its library loaded)
+  std::string label;                ///< "vtk (scene.yaml:9:5)", as in messages
+  std::filesystem::path path;       ///< the scene's `path:`
+  std::int64_t every = 1;           ///< a frame every `every` steps; 0: first and final only
+  std::vector<std::string> fields;  ///< the fields asked for (or the writer's defaults)
+  Params params;                    ///< the plugin's own checked parameters
+};
+
 struct OutputSpec {
-  std::filesystem::path path;         ///< frames CSV; empty: no frames
-  std::filesystem::path energy;       ///< energy CSV; empty: none
-  std::int64_t every = 1;             ///< a frame every `every` steps; 0: first and final only
+  /// In scene order. The mapping form `output: { path, every, energy,
+  /// unwrapped }` gives a `csv` writer (path, unwrapped) and an `energy`
+  /// writer, both every `every` steps.
+  std::vector<WriterSpec> writers;
   std::filesystem::path checkpoint;   ///< checkpoint file; empty: none unless interrupted
   std::int64_t checkpoint_every = 0;  ///< a checkpoint every N steps (and at the end); 0: end only
-  /// Frames also hold xu,yu,zu: positions unwrapped across periodic box
-  /// faces, x + images * L (m).
-  bool unwrapped = false;
+  /// The frame schedule when there is no writer: 1 (a scene without
+  /// output), or the mapping form's `every`. Adaptive solvers without dense
+  /// output stop on its frame times, so it still shapes their steps.
+  std::int64_t every = 1;
+  /// The frame schedule the run steps through, in steps: the greatest
+  /// common divisor of the writers' `every` (0: first and final frames
+  /// only), or `every` when there is no writer.
+  std::int64_t period() const {
+    if (writers.empty()) return every;
+    std::int64_t g = 0;
+    for (const auto& w : writers) g = std::gcd(g, w.every);
+    return g;
+  }
+  /// Without `checkpoint`, an interrupted run checkpoints to this path with
+  /// .ckpt: output.path in the mapping form, the first writer's path in the
+  /// list form; empty: `<scene name>.ckpt`.
+  std::filesystem::path checkpoint_beside;
 };
 
 /// One plugin object as the scene declared it, with its checked parameters:

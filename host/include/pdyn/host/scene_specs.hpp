@@ -20,7 +20,12 @@ std::vector<ParamSpec> box_specs();
 std::vector<ParamSpec> particle_specs();
 /// `output:` (besides `checkpoint:`).
 std::vector<ParamSpec> output_specs();
-/// `output.checkpoint:`.
+/// The keys of one entry of the list form of `output:` besides `type` and
+/// the writer plugin's own parameters: path, every, fields. A writer's
+/// parameters may not take these names (the registry refuses it).
+std::vector<ParamSpec> writer_entry_keys();
+/// `output.checkpoint:`, and the top-level `checkpoint:` of a scene whose
+/// `output:` is a list.
 std::vector<ParamSpec> checkpoint_specs();
 
 /// A key of a builder that holds a mapping: the parameters of a force
