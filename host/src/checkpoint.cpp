@@ -1,4 +1,4 @@
-// The checkpoint file format, version 4 (native byte order, x86-64):
+// The checkpoint file format, version 5 (native byte order, x86-64):
 //
 //   "PDYNCKPT"                8 bytes magic
 //   u32 format version        Checkpoint::kFormatVersion
@@ -10,9 +10,10 @@
 // i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
 // i32[3N] images (x, y, z per particle), u64 count, count x (string label,
 // bytes state), u64 writers, writers x (string path, bytes mark, i8
-// wrote_state). A string
+// wrote_state, u64 pending, pending x bytes frame). A string
 // or byte block is a u64 length and its bytes.
 //
+// Version 4 is version 5 without the pending frames (read as none).
 // Version 3 ended with 2 x (string path, u64 bytes, u32 crc) instead of the
 // writers: the frames CSV and the energy CSV, which are today's csv and
 // energy writers, whose mark is that (bytes, crc) pair (pdyn::FileMark).
@@ -155,6 +156,8 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
     tail.string(m.path);
     tail.bytes(m.mark.data(), m.mark.size());
     tail.pod(m.wrote_state);
+    tail.pod<std::uint64_t>(m.pending.size());
+    for (const auto& frame : m.pending) tail.bytes(frame.data(), frame.size());
   }
   payload += tail.data();
 
@@ -313,8 +316,17 @@ Checkpoint read_checkpoint(const fs::path& path) {
       std::string mark = r.bytes();
       const auto wrote = r.pod<std::int8_t>();
       if (wrote < -1 || wrote > 1) r.fail("a flag is neither -1, 0 nor 1");
-      c.outputs.push_back(
-          {std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end()), wrote});
+      WriterMark w{
+          std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end()), wrote, {}};
+      if (version >= 5) {
+        const auto pending = r.pod<std::uint64_t>();
+        if (pending > payload.size()) r.fail("pending frame count larger than the file");
+        for (std::uint64_t k = 0; k < pending; ++k) {
+          std::string frame = r.bytes();
+          w.pending.emplace_back(frame.begin(), frame.end());
+        }
+      }
+      c.outputs.push_back(std::move(w));
     }
   } else {
     for (int k = 0; k < 2; ++k) {  // frames, energy
@@ -322,7 +334,7 @@ Checkpoint read_checkpoint(const fs::path& path) {
       FileMark m;
       m.bytes = r.pod<std::uint64_t>();
       m.crc = r.pod<std::uint32_t>();
-      if (!written.empty()) c.outputs.push_back({std::move(written), m.encode()});
+      if (!written.empty()) c.outputs.push_back({std::move(written), m.encode(), -1, {}});
     }
   }
   if (!r.done()) r.fail("unexpected bytes after the last field");

@@ -19,6 +19,7 @@
 #include <tuple>
 #include <utility>
 
+#include "output.hpp"
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/scene_drawables.hpp"
 #include "pdyn/output_file.hpp"
@@ -163,239 +164,6 @@ class Progress {
   std::int64_t total_, first_ = 0;
   double end_time_;
   Clock::time_point start_, last_;
-};
-
-// Everything a run writes: each writer's frames on its own schedule, and
-// checkpoints with every writer's mark.
-//
-// Schedules: writer w writes the frame of step n when n % every_w == 0. The
-// loops step through frames of the base period, the greatest common divisor
-// of the writers' `every` (one writer: its own), and call emit(n) there.
-// Each writer knows whether it holds the current state (`current`): an
-// extra frame (end of run, interrupt, fault) goes only to writers that do
-// not, and a checkpoint after it records their marks from before it, so a
-// resumed run continues every file as an uninterrupted run would have.
-class Output {
-  struct Slot {
-    const WriterSpec* spec = nullptr;
-    std::shared_ptr<Writer> writer;
-    bool force = false, energy = false;             // the frames need forces, energies
-    bool current = false;                           // has written the current state
-    bool failed = false;                            // write() threw: no more frames, no commit
-    std::optional<std::vector<std::uint8_t>> held;  // mark before an extra frame
-  };
-
- public:
-  Output(const Scene& scene, const Checkpoint* resume)
-      : scene_(scene), sys_(*scene.system), checkpoint_(checkpoint_path(scene)) {
-    const auto& specs = scene.output.writers;
-    if (specs.empty()) return;
-    WriterContext base(sys_.view());
-    base.dt = scene.dt;
-    for (const auto& use : scene.uses) {
-      if (use.kind != PluginKind::Force) continue;
-      for (const auto& entry : use.params.values()) {
-        if (const auto* p = std::get_if<std::vector<IndexPair>>(&entry.second)) {
-          base.pairs.insert(base.pairs.end(), p->begin(), p->end());
-        } else if (const auto* t = std::get_if<std::vector<IndexTriple>>(&entry.second)) {
-          base.triples.insert(base.triples.end(), t->begin(), t->end());
-        }
-      }
-    }
-    const Drawables d = drawables(scene);
-    for (const auto& x : d.planes) base.obstacles.emplace_back(x);
-    for (const auto& x : d.spheres) base.obstacles.emplace_back(x);
-    for (const auto& x : d.boxes) base.obstacles.emplace_back(x);
-    for (const auto& x : d.meshes) base.obstacles.emplace_back(x);
-    for (const auto& spec : specs) {
-      WriterContext ctx = base;
-      ctx.path = spec.path;
-      ctx.fields = spec.fields;
-      ctx.every = spec.every;
-      if (resume) {
-        const WriterMark* m = resume->output(spec.path.string());
-        if (!m) {
-          throw CheckpointError(fmt::format(
-              "{}: the checkpoint has no mark for this output (expected a checkpoint of a run "
-              "that wrote it)",
-              spec.path.string()));
-        }
-        ctx.resume = m->mark;
-        ctx.resuming = true;
-      }
-      Slot slot;
-      slot.spec = &spec;
-      const auto& fields = spec.fields;
-      slot.force = std::find(fields.begin(), fields.end(), field::kForce) != fields.end();
-      slot.energy = spec.record.descriptor->writer_traits.energy;
-      try {
-        const crash::CallScope call(spec.label, "create");
-        slot.writer = create_writer(spec.record, spec.params, ctx);
-      } catch (const ResumeError& e) {
-        throw CheckpointError(e.what());
-      } catch (const PluginError&) {
-        throw;
-      } catch (const std::exception& e) {
-        throw PluginRuntimeError(
-            spec.label, fmt::format("cannot start its output: {}{}", e.what(), library_of(spec)));
-      }
-      slots_.push_back(std::move(slot));
-    }
-  }
-
-  /// The base period in steps (gcd of the writers' `every`); 0: no writer
-  /// writes between the first and the final frame.
-  std::int64_t period() const { return scene_.output.period(); }
-  /// Whether the writer's schedule includes step n.
-  static bool due(const Slot& s, std::int64_t n) {
-    return s.spec->every > 0 && n % s.spec->every == 0;
-  }
-
-  /// Every writer writes the first frame.
-  void emit_first(std::int64_t step) {
-    for (auto& s : slots_) {
-      write(s, step);
-      s.current = true;
-    }
-  }
-  /// The state has changed (a step was taken): no writer holds it yet.
-  void new_state() {
-    for (auto& s : slots_) s.current = false;
-  }
-  /// The frame of step n on the schedule: written by the writers it is due
-  /// for. `current`: the state is the run's current one (not a frame
-  /// interpolated inside a step).
-  void emit(std::int64_t n, bool current = true) {
-    for (auto& s : slots_) {
-      if (!due(s, n)) continue;
-      write(s, n);
-      if (current) s.current = true;
-    }
-  }
-  // A frame off the run's schedule: the end of a run that a longer run
-  // would pass through without a frame, the step an interrupt stopped at,
-  // the last good state before a fault. Written by every writer that does
-  // not hold the current state yet, but a checkpoint taken after it records
-  // the output without it.
-  void emit_extra(std::int64_t step) {
-    for (auto& s : slots_) {
-      if (s.current || s.failed) continue;
-      if (!s.held) s.held = mark(s);
-      write(s, step);
-      s.current = true;
-    }
-  }
-  /// After a resume: which writers wrote the checkpoint's state (it is in
-  /// the output they continue): as the checkpoint says, else (older
-  /// checkpoints) as `wrote` says from the writer's schedule. A writer that
-  /// did not, although the state is on its schedule (`n`, -1: off the base
-  /// schedule), writes it now.
-  void resume_at(const Checkpoint& c, std::int64_t n,
-                 const std::function<bool(std::int64_t every)>& wrote) {
-    for (auto& s : slots_) {
-      const WriterMark* m = c.output(s.spec->path.string());
-      s.current = m && m->wrote_state >= 0 ? m->wrote_state == 1 : wrote(s.spec->every);
-      if (!s.current && n >= 0 && due(s, n)) {
-        write(s, n);
-        s.current = true;
-      }
-    }
-  }
-  /// The first writer failure since the last call, as a message, or empty.
-  std::string take_failure() { return std::exchange(failure_, {}); }
-
-  fs::path write_checkpoint_now(std::int64_t step, std::int64_t next_frame, bool has_dense) {
-    step_ = step;
-    Checkpoint c = capture_checkpoint(scene_, step);
-    c.next_frame = next_frame;
-    c.has_dense = has_dense;
-    for (auto& s : slots_) {
-      auto m = s.held ? *s.held : mark(s);
-      const bool wrote = s.current && !s.held && !s.failed;
-      c.outputs.push_back({s.spec->path.string(), std::move(m), static_cast<std::int8_t>(wrote)});
-    }
-    write_checkpoint(checkpoint_, c);
-    // From now on the temporary files are what a resume continues.
-    if (crash_report_) crash_report_->keep_temp_files(checkpoint_);
-    return checkpoint_;
-  }
-  /// Completes every output (a writer that failed keeps its complete
-  /// frames); throws the first failure after trying them all.
-  void commit() {
-    std::exception_ptr first;
-    for (auto& s : slots_) {
-      try {
-        const crash::CallScope call(s.spec->label, "commit");
-        s.writer->commit();
-      } catch (...) {
-        // A writer that failed during the run has been reported already.
-        if (!first && !s.failed) first = std::current_exception();
-      }
-    }
-    if (first) std::rethrow_exception(first);
-  }
-  std::vector<fs::path> temp_files() const {
-    std::vector<fs::path> files;
-    for (const auto& s : slots_) {
-      for (auto& f : s.writer->temp_files()) files.push_back(std::move(f));
-    }
-    return files;
-  }
-  void set_crash_report(crash::FatalSignalReport* report) { crash_report_ = report; }
-
- private:
-  std::string library_of(const WriterSpec& spec) const {
-    return fmt::format(" (library {})", spec.record.library.string());
-  }
-  // A writer whose mark() fails (its flush met a full disk) has failed:
-  // asked again, it gives the mark of its last complete output.
-  std::vector<std::uint8_t> mark(Slot& s) {
-    const crash::CallScope call(s.spec->label, "mark");
-    try {
-      return s.writer->mark();
-    } catch (const std::exception& e) {
-      s.failed = true;
-      if (failure_.empty()) {
-        failure_ = fmt::format(
-            "writer {} failed at step {}: {}{}; its output keeps the frames it completed",
-            s.spec->label, step_, e.what(), library_of(*s.spec));
-      }
-      return s.writer->mark();
-    }
-  }
-  void write(Slot& s, std::int64_t step) {
-    if (s.failed) return;
-    Frame f(sys_.view());
-    f.step = step;
-    f.images = sys_.images();
-    if (s.force) {
-      scene_.system->compute_accelerations();
-      f.force = &sys_.forces();
-    }
-    if (s.energy) {
-      f.kinetic_energy = sys_.kinetic_energy();
-      f.potential_energy = sys_.potential_energy();
-    }
-    try {
-      const crash::CallScope call(s.spec->label, "write");
-      s.writer->write(f);
-    } catch (const std::exception& e) {
-      s.failed = true;
-      if (failure_.empty()) {
-        failure_ = fmt::format(
-            "writer {} failed at step {}: {}{}; its output keeps the frames before this one",
-            s.spec->label, step, e.what(), library_of(*s.spec));
-      }
-    }
-  }
-
-  const Scene& scene_;
-  const System& sys_;
-  fs::path checkpoint_;
-  std::vector<Slot> slots_;
-  std::string failure_;
-  std::int64_t step_ = 0;  // of the checkpoint being written, for messages
-  crash::FatalSignalReport* crash_report_ = nullptr;
 };
 
 // ---------------------------------------------------------------------------
@@ -739,6 +507,11 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
     out.emit_extra(result.steps_done);
     loop.writes_ok();
   }
+  // The last frames are written in the background: a failure among them
+  // stops the run as any other (exit 3, a checkpoint) unless it stopped
+  // already.
+  out.finish_frames();
+  if (result.exit_code == 0) loop.writes_ok();
   progress.update(result.steps_done, sys.time(), true);
   progress.finish();
   result.time = sys.time();

@@ -15,6 +15,7 @@
 
 #include <boost/crc.hpp>
 #include <random>
+#include <string_view>
 
 #include "host/resume_support.hpp"
 #include "pdyn/host/runner.hpp"
@@ -168,13 +169,41 @@ TEST_F(CheckpointCorruption, WrongVersion) {
   }
 }
 
-// The payload of version 4 checkpoint `now` (bytes `payload`) with its
-// writer marks in the layout of version 3: frames and energy, each a path,
-// u64 bytes and u32 CRC (the csv and energy writers' marks).
-std::string with_v3_marks(const std::string& payload, const Checkpoint& now) {
+// The length of the writer marks at the end of version 5 checkpoint `now`'s
+// payload: u64 count, then per writer a path, a mark, i8 wrote_state and
+// the pending frames (none here).
+std::size_t marks_length(const Checkpoint& now) {
   std::size_t tail = 8;
-  for (const auto& m : now.outputs) tail += 8 + m.path.size() + 8 + m.mark.size() + 1;
-  std::string old = payload.substr(0, payload.size() - tail);
+  for (const auto& m : now.outputs) {
+    EXPECT_TRUE(m.pending.empty());
+    tail += 8 + m.path.size() + 8 + m.mark.size() + 1 + 8;
+  }
+  return tail;
+}
+
+// The payload of version 5 checkpoint `now` (bytes `payload`) with its
+// writer marks in the layout of version 4: without the pending frames.
+std::string with_v4_marks(const std::string& payload, const Checkpoint& now) {
+  std::string old = payload.substr(0, payload.size() - marks_length(now));
+  const std::uint64_t count = now.outputs.size();
+  old.append(reinterpret_cast<const char*>(&count), 8);
+  for (const auto& m : now.outputs) {
+    for (const std::string_view block :
+         {std::string_view(m.path),
+          std::string_view(reinterpret_cast<const char*>(m.mark.data()), m.mark.size())}) {
+      const std::uint64_t n = block.size();
+      old.append(reinterpret_cast<const char*>(&n), 8);
+      old += block;
+    }
+    old.push_back(static_cast<char>(m.wrote_state));
+  }
+  return old;
+}
+
+// ... and in the layout of version 3: frames and energy, each a path, u64
+// bytes and u32 CRC (the csv and energy writers' marks).
+std::string with_v3_marks(const std::string& payload, const Checkpoint& now) {
+  std::string old = payload.substr(0, payload.size() - marks_length(now));
   for (std::size_t k = 0; k < 2; ++k) {
     std::string path;
     FileMark mark;
@@ -191,13 +220,13 @@ std::string with_v3_marks(const std::string& payload, const Checkpoint& now) {
   return old;
 }
 
-// Version 3 held the marks of the frames and energy CSV files, which are
-// today's csv and energy writers; version 2, written before the simulation
-// box, is version 3 without the image counts. Both are still read (version
-// 2 as images 0) and resume the run to the same end, byte for byte, as the
-// version 4 checkpoint of the same state.
-TEST_F(CheckpointCorruption, Versions3And2AreRead) {
-  ASSERT_EQ(Checkpoint::kFormatVersion, 4u);
+// Version 4 had no pending frames; version 3 held the marks of the frames
+// and energy CSV files, which are today's csv and energy writers; version
+// 2, written before the simulation box, is version 3 without the image
+// counts. All are still read (version 2 as images 0) and resume the run to
+// the same end, byte for byte, as the version 5 checkpoint of the same state.
+TEST_F(CheckpointCorruption, Versions4To2AreRead) {
+  ASSERT_EQ(Checkpoint::kFormatVersion, 5u);
   const Checkpoint now = read_checkpoint(dir_ / "out/run.ckpt");
   ASSERT_EQ(now.outputs.size(), 2u);  // frames.csv, energy.csv
   const std::size_t n = static_cast<std::size_t>(now.mass.size());
@@ -209,11 +238,13 @@ TEST_F(CheckpointCorruption, Versions3And2AreRead) {
       8 + now.scene_file.size() + 8 + now.scene_text.size() + 8 + 8 + 8 + 1 + 8 + 7 * n * 8 + n;
   std::string v2_payload = v3_payload;
   v2_payload.erase(images, 3 * n * sizeof(std::int32_t));
+  const std::string v4 = patch(reseal(good_, with_v4_marks(payload, now)), 8, std::uint32_t{4});
   const std::string v3 = patch(reseal(good_, v3_payload), 8, std::uint32_t{3});
   const std::string v2 = patch(reseal(good_, v2_payload), 8, std::uint32_t{2});
+  write_bytes(dir_ / "v4.ckpt", v4);
   write_bytes(dir_ / "v3.ckpt", v3);
   write_bytes(dir_ / "v2.ckpt", v2);
-  for (const char* name : {"v3.ckpt", "v2.ckpt"}) {
+  for (const char* name : {"v4.ckpt", "v3.ckpt", "v2.ckpt"}) {
     SCOPED_TRACE(name);
     const Checkpoint c = read_checkpoint(dir_ / name);
     EXPECT_TRUE(same_bits(c.state, now.state));
@@ -222,13 +253,15 @@ TEST_F(CheckpointCorruption, Versions3And2AreRead) {
     for (std::size_t k = 0; k < 2; ++k) {
       EXPECT_EQ(c.outputs[k].path, now.outputs[k].path);
       EXPECT_EQ(c.outputs[k].mark, now.outputs[k].mark);
+      EXPECT_TRUE(c.outputs[k].pending.empty());
     }
   }
+  EXPECT_EQ(read_checkpoint(dir_ / "v4.ckpt").outputs[0].wrote_state, now.outputs[0].wrote_state);
   EXPECT_EQ(read_checkpoint(dir_ / "v2.ckpt").images,
             (std::vector<std::array<std::int32_t, 3>>(n, {0, 0, 0})));
 
   std::map<std::string, std::pair<std::string, std::string>> ends;  // frames, energy
-  for (const char* name : {"v2.ckpt", "v3.ckpt", "out/run.ckpt"}) {
+  for (const char* name : {"v2.ckpt", "v3.ckpt", "v4.ckpt", "out/run.ckpt"}) {
     const fs::path copy = temp_dir(std::string("corruption-resume-") + name[1]);
     fs::copy(dir_, copy, fs::copy_options::recursive);
     auto a = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", name});
@@ -237,6 +270,7 @@ TEST_F(CheckpointCorruption, Versions3And2AreRead) {
   }
   EXPECT_EQ(ends["v2.ckpt"], ends["out/run.ckpt"]);
   EXPECT_EQ(ends["v3.ckpt"], ends["out/run.ckpt"]);
+  EXPECT_EQ(ends["v4.ckpt"], ends["out/run.ckpt"]);
 }
 
 TEST_F(CheckpointCorruption, TrailingGarbage) {

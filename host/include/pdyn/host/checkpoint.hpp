@@ -27,13 +27,18 @@ struct WriterMark {
   /// no (a resumed run writes it first if it is on the writer's schedule),
   /// -1 unknown (versions 2 and 3: the writer's schedule says).
   std::int8_t wrote_state = -1;
+  /// Version 5: frames the writer did not write because it had failed (a
+  /// full disk), in order, each as the runner encoded it; a resumed run
+  /// writes them first, so the output ends up as an uninterrupted run's.
+  std::vector<std::vector<std::uint8_t>> pending;
 };
 
 struct Checkpoint {
-  /// Version 4 holds one mark per writer (output list); versions 3 (image
+  /// Version 5 adds each writer's pending frames. Version 4 holds one mark
+  /// per writer (output list); versions 3 (image
   /// counts, frames and energy marks) and 2 (no image counts: read as 0)
   /// are still read, their two marks as the csv and energy writers' marks.
-  static constexpr std::uint32_t kFormatVersion = 4;
+  static constexpr std::uint32_t kFormatVersion = 5;
   static constexpr std::uint32_t kOldestReadableVersion = 2;
 
   std::string scene_file;           ///< where the scene came from (for messages)

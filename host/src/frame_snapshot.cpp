@@ -1,0 +1,177 @@
+#include "frame_snapshot.hpp"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <type_traits>
+
+#include "pdyn/error.hpp"
+
+namespace pdyn {
+
+void FrameSnapshot::capture(const System& sys, std::int64_t frame_step, bool with_force,
+                            bool with_energy) {
+  const ParticleView p = sys.view();
+  step = frame_step;
+  t = p.t;
+  x = p.x;
+  v = p.v;
+  mass = p.mass;
+  fixed.assign(p.fixed.begin(), p.fixed.end());
+  domain = p.domain;
+  radius.assign(p.radius.begin(), p.radius.end());
+  type.assign(p.type.begin(), p.type.end());
+  images.assign(sys.images().begin(), sys.images().end());
+  has_force = with_force;
+  if (with_force) force = sys.forces();
+  kinetic_energy = with_energy ? sys.kinetic_energy() : 0.0;
+  potential_energy = with_energy ? sys.potential_energy() : 0.0;
+}
+
+Frame FrameSnapshot::frame(bool with_force, bool with_energy) const {
+  Frame f(ParticleView{t, Eigen::Map<const Matrix3X>(x.data(), 3, x.cols()),
+                       Eigen::Map<const Matrix3X>(v.data(), 3, v.cols()),
+                       Eigen::Map<const Eigen::VectorXd>(mass.data(), mass.size()),
+                       std::span<const std::uint8_t>(fixed), domain,
+                       std::span<const double>(radius), std::span<const std::int32_t>(type)});
+  f.step = step;
+  f.images = images;
+  if (with_force && has_force) f.force = &force;
+  if (with_energy) {
+    f.kinetic_energy = kinetic_energy;
+    f.potential_energy = potential_energy;
+  }
+  return f;
+}
+
+namespace {
+
+// Version 1: i64 step, f64 t, u64 N, f64[3N] x, f64[3N] v, f64[N] mass,
+// u8[N] fixed, f64[3] min, f64[3] max, u8[3] periodic, u64 n + f64[n]
+// radius, u64 n + i32[n] type, u64 n + i32[3n] images, u8 has_force,
+// f64[3N] force if has_force, f64 kinetic, f64 potential.
+constexpr std::uint32_t kVersion = 1;
+
+struct Out {
+  std::vector<std::uint8_t> bytes;
+  void raw(const void* p, std::size_t n) {
+    const auto* b = static_cast<const std::uint8_t*>(p);
+    bytes.insert(bytes.end(), b, b + n);
+  }
+  template <class T>
+  void pod(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    raw(&value, sizeof(T));
+  }
+  template <class T>
+  void array(const T* p, std::size_t n) {
+    pod<std::uint64_t>(n);
+    raw(p, n * sizeof(T));
+  }
+};
+
+struct In {
+  std::span<const std::uint8_t> data;
+  std::size_t at = 0;
+  void raw(void* p, std::size_t n) {
+    if (n > data.size() - at) {
+      throw Error(
+          fmt::format("a pending output frame is truncated (needs {} more bytes at offset "
+                      "{}, has {})",
+                      n, at, data.size() - at));
+    }
+    if (n) std::memcpy(p, data.data() + at, n);
+    at += n;
+  }
+  template <class T>
+  T pod() {
+    T value{};
+    raw(&value, sizeof(T));
+    return value;
+  }
+  // A count of items of `size` bytes, checked against what is left.
+  std::size_t count(std::size_t size) {
+    const auto n = pod<std::uint64_t>();
+    if (n > (data.size() - at) / size) {
+      throw Error(fmt::format("a pending output frame announces {} items, more than it holds", n));
+    }
+    return static_cast<std::size_t>(n);
+  }
+  template <class T>
+  void array(std::vector<T>& out) {
+    out.resize(count(sizeof(T)));
+    raw(out.data(), out.size() * sizeof(T));
+  }
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> FrameSnapshot::encode() const {
+  Out o;
+  const auto n = static_cast<std::size_t>(x.cols());
+  o.pod(kVersion);
+  o.pod(step);
+  o.pod(t);
+  o.pod<std::uint64_t>(n);
+  o.raw(x.data(), 3 * n * sizeof(double));
+  o.raw(v.data(), 3 * n * sizeof(double));
+  o.raw(mass.data(), n * sizeof(double));
+  o.raw(fixed.data(), n);
+  for (int k = 0; k < 3; ++k) o.pod(domain.min[k]);
+  for (int k = 0; k < 3; ++k) o.pod(domain.max[k]);
+  for (int k = 0; k < 3; ++k) o.pod<std::uint8_t>(domain.periodic[k]);
+  o.array(radius.data(), radius.size());
+  o.array(type.data(), type.size());
+  o.array(images.data(), images.size());
+  o.pod<std::uint8_t>(has_force);
+  if (has_force) o.raw(force.data(), 3 * n * sizeof(double));
+  o.pod(kinetic_energy);
+  o.pod(potential_energy);
+  return std::move(o.bytes);
+}
+
+FrameSnapshot FrameSnapshot::decode(std::span<const std::uint8_t> data) {
+  In in{data};
+  FrameSnapshot s;
+  if (const auto version = in.pod<std::uint32_t>(); version != kVersion) {
+    throw Error(
+        fmt::format("a pending output frame has version {} (expected {})", version, kVersion));
+  }
+  s.step = in.pod<std::int64_t>();
+  s.t = in.pod<double>();
+  const std::size_t n = in.count(7 * sizeof(double) + 1);
+  const auto cols = static_cast<Index>(n);
+  s.x.resize(3, cols);
+  s.v.resize(3, cols);
+  s.mass.resize(cols);
+  s.fixed.resize(n);
+  in.raw(s.x.data(), 3 * n * sizeof(double));
+  in.raw(s.v.data(), 3 * n * sizeof(double));
+  in.raw(s.mass.data(), n * sizeof(double));
+  in.raw(s.fixed.data(), n);
+  for (int k = 0; k < 3; ++k) s.domain.min[k] = in.pod<double>();
+  for (int k = 0; k < 3; ++k) s.domain.max[k] = in.pod<double>();
+  for (int k = 0; k < 3; ++k) s.domain.periodic[k] = in.pod<std::uint8_t>() != 0;
+  in.array(s.radius);
+  in.array(s.type);
+  in.array(s.images);
+  s.has_force = in.pod<std::uint8_t>() != 0;
+  if (s.has_force) {
+    s.force.resize(3, cols);
+    in.raw(s.force.data(), 3 * n * sizeof(double));
+  }
+  s.kinetic_energy = in.pod<double>();
+  s.potential_energy = in.pod<double>();
+  if (in.at != data.size()) {
+    throw Error(fmt::format("a pending output frame has {} unexpected bytes at its end",
+                            data.size() - in.at));
+  }
+  if ((!s.radius.empty() && s.radius.size() != n) || (!s.type.empty() && s.type.size() != n) ||
+      (!s.images.empty() && s.images.size() != n)) {
+    throw Error(
+        fmt::format("a pending output frame's radii, types or images are not {} values", n));
+  }
+  return s;
+}
+
+}  // namespace pdyn
