@@ -2,8 +2,10 @@
 // tests/scenes/shared/cloth.yaml with rk4, a frame every 10th step, run
 // side by side in one process with no writer, csv, vtk and h5md (and csv
 // + vtk + h5md together). For each: wall time, overhead over the run without
-// output, bytes written, bytes per particle-frame and the writer's
-// throughput in MB/s (bytes / (its time - the time without output)).
+// output, the run's own time spent on output (copying frames for the output
+// thread and waiting for it), bytes written, bytes per particle-frame and
+// the writer's throughput in MB/s (bytes / its time in write() on the
+// output thread, which overlaps the steps).
 // Each variant runs `repeats` times, interleaved, and the fastest run of
 // each is reported, so that a slow moment of the machine hits all alike.
 //
@@ -33,6 +35,7 @@ struct Variant {
   std::string name;
   std::string output;  // the value of `output:` (YAML), or "" for none
   double best = std::numeric_limits<double>::infinity();
+  double writing = 0.0, stalled = 0.0;  // of the fastest run, s
   std::uintmax_t bytes = 0;
 };
 
@@ -96,20 +99,23 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "{}: the run failed: {}\n", v.name, result.message);
         return 1;
       }
-      v.best = std::min(v.best, wall);
+      if (wall < v.best) {
+        v.best = wall;
+        v.writing = result.output_writing;
+        v.stalled = result.output_stalled;
+      }
       v.bytes = bytes_under(dir / "out");
     }
   }
   const double base = variants[0].best;
-  fmt::print("{:<14} {:>10} {:>10} {:>12} {:>14} {:>10}\n", "writer", "wall s", "overhead",
-             "MB written", "B/particle-fr", "MB/s");
+  fmt::print("{:<14} {:>8} {:>9} {:>9} {:>10} {:>11} {:>14} {:>8}\n", "writer", "wall s",
+             "overhead", "stalled", "writing s", "MB written", "B/particle-fr", "MB/s");
   for (const auto& v : variants) {
-    const double extra = v.best - base;
-    fmt::print("{:<14} {:>10.3f} {:>9.1f}% {:>12.1f} {:>14.1f} {:>10}\n", v.name, v.best,
-               100 * extra / base, v.bytes / 1e6, v.bytes / particle_frames,
-               v.bytes == 0  ? std::string("-")
-               : extra > 0.0 ? fmt::format("{:.0f}", v.bytes / 1e6 / extra)
-                             : std::string("(no cost)"));
+    fmt::print("{:<14} {:>8.3f} {:>8.1f}% {:>8.1f}% {:>10.3f} {:>11.1f} {:>14.1f} {:>8}\n",
+               v.name, v.best, 100 * (v.best - base) / base, 100 * v.stalled / base, v.writing,
+               v.bytes / 1e6, v.bytes / particle_frames,
+               v.writing > 0.0 ? fmt::format("{:.0f}", v.bytes / 1e6 / v.writing)
+                               : std::string("-"));
   }
   std::error_code ec;
   fs::remove_all(dir / "out", ec);

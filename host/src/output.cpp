@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <exception>
 #include <utility>
 
@@ -15,6 +16,16 @@
 namespace pdyn {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+}  // namespace
 
 // ---------------------------------------------------------------------------
 // OutputThread
@@ -188,7 +199,9 @@ void Output::resume_at(const Checkpoint& c, std::int64_t n,
 
 void Output::finish_frames() {
   if (!writing_) return;
+  const auto t0 = Clock::now();
   thread_->wait();
+  stalled_seconds_ += seconds_since(t0);
   writing_ = false;
   for (auto& s : slots_) {
     if (!s.queued) continue;
@@ -214,7 +227,9 @@ void Output::dispatch(std::int64_t step, bool current, bool extra,
   if (!any) return;
   finish_frames();  // the snapshot is free, and failures so far are known
   if (force) scene_.system->compute_accelerations();
+  const auto t0 = Clock::now();
   snapshot_.capture(sys_, step, force, energy);
+  stalled_seconds_ += seconds_since(t0);
   bool queued = false;
   for (auto& s : slots_) {
     if (!pick(s)) continue;
@@ -233,9 +248,11 @@ void Output::dispatch(std::int64_t step, bool current, bool extra,
 }
 
 void Output::write_queued() {
+  const auto t0 = Clock::now();
   for (auto& s : slots_) {
     if (s.queued) s.error = write_one(s, snapshot_.frame(s.force, s.energy));
   }
+  writing_seconds_ += seconds_since(t0);
 }
 
 std::string Output::write_one(Slot& s, const Frame& frame) {

@@ -108,6 +108,9 @@ class Output {
   void commit();
   std::vector<std::filesystem::path> temp_files() const;
   void set_crash_report(crash::FatalSignalReport* report) { crash_report_ = report; }
+  /// RunResult::output_writing and output_stalled so far, s.
+  double writing_seconds() const { return writing_seconds_; }
+  double stalled_seconds() const { return stalled_seconds_; }
 
  private:
   struct Slot {
@@ -147,6 +150,8 @@ class Output {
   crash::FatalSignalReport* crash_report_ = nullptr;
   FrameSnapshot snapshot_;                // the frame the output thread writes
   bool writing_ = false;                  // the output thread has a job
+  double writing_seconds_ = 0.0;  // updated by the output thread, read after wait()
+  double stalled_seconds_ = 0.0;
   std::unique_ptr<OutputThread> thread_;  // started with the first frame
 };
 

@@ -522,6 +522,8 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
                                                  adaptive && loop.has_dense);
   }
   out.commit();
+  result.output_writing = out.writing_seconds();
+  result.output_stalled = out.stalled_seconds();
   return result;
 }
 

@@ -19,9 +19,11 @@
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <pdyn/output_file.hpp>
@@ -107,19 +109,45 @@ void write_polydata(std::vector<char>& out, std::uint64_t n_points, const Array&
   out.insert(out.end(), tail.begin(), tail.end());
 }
 
-// Cells of k points each: connectivity and end offsets (VTK XML 1.0).
+// Cells of k points each: connectivity and end offsets (VTK XML 1.0),
+// written as Int32 once narrow() has found that every value fits (a third
+// less per frame of a cloth, whose springs are most of its bytes), else as
+// Int64. VTK's reader takes either.
 struct Cells {
   std::vector<std::int64_t> connectivity, offsets;
+  std::vector<std::int32_t> connectivity32, offsets32;  // after narrow(), when they fit
+  bool narrowed = false;
+
   std::array<Array, 2> arrays() const {
-    return {Array{"connectivity", "Int64", 1, connectivity.data(),
-                  connectivity.size() * sizeof(std::int64_t)},
-            Array{"offsets", "Int64", 1, offsets.data(), offsets.size() * sizeof(std::int64_t)}};
+    if (narrowed) {
+      return {Array{"connectivity", "Int32", 1, connectivity32.data(), connectivity32.size() * 4},
+              Array{"offsets", "Int32", 1, offsets32.data(), offsets32.size() * 4}};
+    }
+    return {Array{"connectivity", "Int64", 1, connectivity.data(), connectivity.size() * 8},
+            Array{"offsets", "Int64", 1, offsets.data(), offsets.size() * 8}};
   }
   void add(std::initializer_list<std::int64_t> ids) {
     connectivity.insert(connectivity.end(), ids);
     offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
   }
-  std::uint64_t size() const { return offsets.size(); }
+  // Call once every cell is added. Offsets grow, so the last is the largest.
+  void narrow() {
+    constexpr std::int64_t kMax = std::numeric_limits<std::int32_t>::max();
+    const bool fits = std::all_of(connectivity.begin(), connectivity.end(),
+                                  [](std::int64_t i) { return i >= 0 && i <= kMax; }) &&
+                      (offsets.empty() || offsets.back() <= kMax);
+    if (!fits) return;
+    connectivity32.assign(connectivity.begin(), connectivity.end());
+    offsets32.assign(offsets.begin(), offsets.end());
+    count_ = offsets.size();
+    connectivity = {};
+    offsets = {};
+    narrowed = true;
+  }
+  std::uint64_t size() const { return narrowed ? count_ : offsets.size(); }
+
+ private:
+  std::size_t count_ = 0;
 };
 
 bool has(const std::vector<std::string>& fields, const char* f) {
@@ -195,8 +223,16 @@ class Vtk final : public pdyn::Writer {
     for (std::int64_t i = 0; i < n; ++i) verts_.add({i});
     for (const auto& p : ctx.pairs) lines_.add({p[0], p[1]});
     for (const auto& t : ctx.triples) polys_.add({t[0], t[1], t[2]});
-    ids_.resize(static_cast<std::size_t>(n));
-    for (std::int64_t i = 0; i < n; ++i) ids_[static_cast<std::size_t>(i)] = i;
+    for (Cells* c : {&verts_, &lines_, &polys_}) c->narrow();
+    // Ids as Int32 too where they fit.
+    if (n <= std::numeric_limits<std::int32_t>::max()) {
+      ids32_.resize(static_cast<std::size_t>(n));
+      for (std::int64_t i = 0; i < n; ++i)
+        ids32_[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(i);
+    } else {
+      ids_.resize(static_cast<std::size_t>(n));
+      for (std::int64_t i = 0; i < n; ++i) ids_[static_cast<std::size_t>(i)] = i;
+    }
     std::error_code ec;
     fs::create_directories(folder_, ec);
     if (ec) {
@@ -234,7 +270,10 @@ class Vtk final : public pdyn::Writer {
     const auto& p = frame.particles;
     const auto n = static_cast<std::uint64_t>(p.size());
     std::vector<Array> data;
-    if (has(fields_, pdyn::field::kId)) data.push_back({"id", "Int64", 1, ids_.data(), n * 8});
+    if (has(fields_, pdyn::field::kId)) {
+      data.push_back(ids_.empty() ? Array{"id", "Int32", 1, ids32_.data(), n * 4}
+                                  : Array{"id", "Int64", 1, ids_.data(), n * 8});
+    }
     if (has(fields_, pdyn::field::kVelocity)) {
       data.push_back({"velocity", "Float64", 3, p.v.data(), 3 * n * 8});
     }
@@ -326,6 +365,7 @@ class Vtk final : public pdyn::Writer {
     Cells polys;
     std::vector<std::int32_t> which;
     obstacle_mesh(ctx.obstacles, centre, extent, points, polys, which);
+    polys.narrow();
     const auto q = polys.arrays();
     std::vector<char> buf;
     const std::uint64_t np = points.size() / 3;
@@ -343,7 +383,8 @@ class Vtk final : public pdyn::Writer {
   std::optional<std::pair<pdyn::FileMark, std::uint64_t>> resume_;
   pdyn::OutputFile pvd_;
   Cells verts_, lines_, polys_;
-  std::vector<std::int64_t> ids_;
+  std::vector<std::int64_t> ids_;    // more than 2^31 - 1 particles
+  std::vector<std::int32_t> ids32_;  // else
   std::vector<char> buffer_;
   std::uint64_t frames_ = 0;
   bool has_obstacles_ = false;

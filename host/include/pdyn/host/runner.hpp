@@ -46,6 +46,11 @@ struct RunResult {
   /// Set when the total energy grew more than a millionfold with no force
   /// driving it: one line naming the step, the energies and the solver.
   std::string energy_warning;
+  /// Output, s: the writers' time in write() on the output thread, which
+  /// overlaps the steps (what a writer's throughput is measured against),
+  /// and the run's own time spent copying frames for it and waiting for it
+  /// (what output adds to the run).
+  double output_writing = 0.0, output_stalled = 0.0;
 };
 
 /// Runs `scene` to its end: steps the solver, applies collider responses
