@@ -111,11 +111,11 @@ int main(int argc, char** argv) {
   fmt::print("{:<14} {:>8} {:>9} {:>9} {:>10} {:>11} {:>14} {:>8}\n", "writer", "wall s",
              "overhead", "stalled", "writing s", "MB written", "B/particle-fr", "MB/s");
   for (const auto& v : variants) {
-    fmt::print("{:<14} {:>8.3f} {:>8.1f}% {:>8.1f}% {:>10.3f} {:>11.1f} {:>14.1f} {:>8}\n",
-               v.name, v.best, 100 * (v.best - base) / base, 100 * v.stalled / base, v.writing,
-               v.bytes / 1e6, v.bytes / particle_frames,
-               v.writing > 0.0 ? fmt::format("{:.0f}", v.bytes / 1e6 / v.writing)
-                               : std::string("-"));
+    fmt::print(
+        "{:<14} {:>8.3f} {:>8.1f}% {:>8.1f}% {:>10.3f} {:>11.1f} {:>14.1f} {:>8}\n", v.name, v.best,
+        100 * (v.best - base) / base, 100 * v.stalled / base, v.writing, v.bytes / 1e6,
+        v.bytes / particle_frames,
+        v.writing > 0.0 ? fmt::format("{:.0f}", v.bytes / 1e6 / v.writing) : std::string("-"));
   }
   std::error_code ec;
   fs::remove_all(dir / "out", ec);

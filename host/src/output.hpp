@@ -148,8 +148,8 @@ class Output {
   std::string failure_;
   std::int64_t step_ = 0;  // of the checkpoint being written, for messages
   crash::FatalSignalReport* crash_report_ = nullptr;
-  FrameSnapshot snapshot_;                // the frame the output thread writes
-  bool writing_ = false;                  // the output thread has a job
+  FrameSnapshot snapshot_;        // the frame the output thread writes
+  bool writing_ = false;          // the output thread has a job
   double writing_seconds_ = 0.0;  // updated by the output thread, read after wait()
   double stalled_seconds_ = 0.0;
   std::unique_ptr<OutputThread> thread_;  // started with the first frame

@@ -153,20 +153,30 @@ OutputFile::~OutputFile() {
   }
 }
 
+// A failed write or flush fails the file: from then on mark() and commit()
+// stop at its last complete frame (whole_, found now).
 void OutputFile::write(const void* data, std::size_t n) {
-  if (std::fwrite(data, 1, n, file_) != n) throw Error(write_failure(path_, errno));
+  if (whole_) throw Error(write_failure(path_, EIO));
+  if (std::fwrite(data, 1, n, file_) != n) fail(errno);
   crc_ = crc32(data, n, crc_);
   bytes_ += n;
 }
 
 FileMark OutputFile::mark() {
-  if (std::fflush(file_) != 0) throw Error(write_failure(path_, errno));
+  if (whole_) return *whole_;
+  if (std::fflush(file_) != 0) fail(errno);
   boundaries_.assign(1, written());
   return {bytes_, crc_};
 }
 
 void OutputFile::flush() {
-  if (std::fflush(file_) != 0) throw Error(write_failure(path_, errno));
+  if (whole_) throw Error(write_failure(path_, EIO));
+  if (std::fflush(file_) != 0) fail(errno);
+}
+
+void OutputFile::fail(int err) {
+  last_whole_frame();
+  throw Error(write_failure(path_, err));
 }
 
 FileMark OutputFile::last_whole_frame() {
@@ -185,6 +195,7 @@ FileMark OutputFile::last_whole_frame() {
 }
 
 void OutputFile::commit() {
+  if (whole_) return commit_at(*whole_);
   const bool ok = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
   const int err = errno;
   const bool closed = std::fclose(file_) == 0;

@@ -9,7 +9,8 @@
 //     created with ctx.resuming continues from it (OutputFile checks the
 //     bytes it continues with a CRC-32);
 //   - after a failed write (a full disk), mark() and commit() keep the
-//     file up to its last whole frame.
+//     file up to its last whole frame: OutputFile does it, given
+//     begin_frame() before each frame and flush() after it.
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -29,7 +30,6 @@ class Writer final : public pdyn::Writer {
 
   void write(const pdyn::Frame& frame) override {
     file_.begin_frame();
-    failed_ = true;  // until the frame is whole
     const auto& p = frame.particles;
     fmt::memory_buffer buf;
     fmt::format_to(std::back_inserter(buf), "{}\nTime={:.17g} Properties=species:S:1:pos:R:3\n",
@@ -40,29 +40,15 @@ class Writer final : public pdyn::Writer {
     }
     file_.write(buf.data(), buf.size());
     file_.flush();  // a full disk is met at this frame
-    failed_ = false;
   }
-  std::vector<std::uint8_t> mark() override {
-    if (failed_) return file_.last_whole_frame().encode();
-    failed_ = true;
-    const auto m = file_.mark();
-    failed_ = false;
-    return m.encode();
-  }
-  void commit() override {
-    if (failed_) {
-      file_.commit_at(file_.last_whole_frame());
-    } else {
-      file_.commit();
-    }
-  }
+  std::vector<std::uint8_t> mark() override { return file_.mark().encode(); }
+  void commit() override { file_.commit(); }
   std::vector<std::filesystem::path> temp_files() const override { return {file_.temp_path()}; }
 
  private:
   int digits_;
   std::optional<pdyn::FileMark> resume_;
   pdyn::OutputFile file_;
-  bool failed_ = false;
 };
 
 // Optional: reads the output back, so that `pdyn check` compares every

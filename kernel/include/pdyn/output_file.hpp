@@ -10,8 +10,13 @@
 //
 //   pdyn::OutputFile f(path, ctx.resume.empty() ? nullptr : &mark);
 //   f.write("t,x\n");           // throws pdyn::Error naming the file on failure
-//   ...
+//   f.begin_frame(); f.write(...); f.flush();   // each frame
+//   f.mark();                   // for a checkpoint
 //   f.commit();                 // now, and only now, PATH exists
+//
+// After a failed write (a full disk) mark() and commit() stop at the last
+// complete frame, so a writer whose only failures are the file's needs no
+// bookkeeping of its own.
 #pragma once
 
 #include <cstdint>
@@ -63,21 +68,30 @@ class OutputFile {
   OutputFile& operator=(const OutputFile&) = delete;
 
   /// Appends `n` bytes. Throws pdyn::Error "PATH: cannot write output file
-  /// (WHY)" on failure (a full disk).
+  /// (WHY)" on failure (a full disk). A failed write or flush fails the
+  /// file (failed()): from then on mark() and commit() keep it up to its
+  /// last complete frame, and write() and flush() throw.
   void write(const void* data, std::size_t n);
   void write(std::string_view s) { write(s.data(), s.size()); }
-  /// Flushes and returns how far the file has been written.
+  /// Flushes and returns how far the file has been written; once the file
+  /// has failed, last_whole_frame(). Throws pdyn::Error (and fails the
+  /// file) if the flush fails.
   FileMark mark();
   /// Hands what is buffered to the system (no fsync). Throws pdyn::Error on
   /// failure: a writer calls it after each frame, so that a full disk is met
   /// at the frame that does not fit.
   void flush();
+  /// A write or flush has failed. (Added within ABI 5, layout unchanged:
+  /// writers built before it kept a flag of their own and called
+  /// last_whole_frame() and commit_at(), which still works.)
+  bool failed() const noexcept { return whole_.has_value(); }
   /// What has been written so far (including a resumed prefix), without
   /// flushing: a writer notes it before a frame, so that after a failed
   /// write its mark() can still name the last complete frame.
   FileMark written() const noexcept { return {bytes_, crc_}; }
-  /// Flushes, fsyncs, closes and renames to the final name. Throws pdyn::Error
-  /// on failure, after removing the temporary file.
+  /// Flushes, fsyncs, closes and renames to the final name; once the file
+  /// has failed, commit_at(last_whole_frame()). Throws pdyn::Error on
+  /// failure, after removing the temporary file.
   void commit();
   /// The same, keeping only what `mark` covers (last_whole_frame()): after
   /// a failed write (a full disk), the file up to its last complete frame.
@@ -97,6 +111,7 @@ class OutputFile {
 
  private:
   void resume_from(const FileMark& mark);
+  [[noreturn]] void fail(int err);  // finds last_whole_frame(), throws
 
   std::filesystem::path path_, temp_;
   std::FILE* file_ = nullptr;

@@ -26,7 +26,6 @@ class Csv final : public pdyn::Writer {
 
   void write(const pdyn::Frame& frame) override {
     file_.begin_frame();
-    failed_ = true;  // until the frame is complete
     const auto& p = frame.particles;
     const double t = frame.time();
     const pdyn::Vec3 length = p.domain.length();
@@ -52,25 +51,11 @@ class Csv final : public pdyn::Writer {
     }
     file_.write(buf_.data(), buf_.size());
     file_.flush();  // a full disk is met at this frame, not at a later one
-    failed_ = false;
   }
 
-  // After a failed write, the file up to the last complete frame.
-  std::vector<std::uint8_t> mark() override {
-    if (failed_) return file_.last_whole_frame().encode();
-    failed_ = true;  // a flush that fails (a full disk) fails the writer
-    const auto m = file_.mark();
-    failed_ = false;
-    return m.encode();
-  }
-  // After a failed write, the file up to the last complete frame.
-  void commit() override {
-    if (failed_) {
-      file_.commit_at(file_.last_whole_frame());
-    } else {
-      file_.commit();
-    }
-  }
+  // After a failed write, both stop at the last complete frame (OutputFile).
+  std::vector<std::uint8_t> mark() override { return file_.mark().encode(); }
+  void commit() override { file_.commit(); }
   std::vector<std::filesystem::path> temp_files() const override { return {file_.temp_path()}; }
 
  private:
@@ -78,7 +63,6 @@ class Csv final : public pdyn::Writer {
   std::optional<pdyn::FileMark> resume_;  // where a resumed run continues the file
   pdyn::OutputFile file_;
   fmt::memory_buffer buf_;
-  bool failed_ = false;
 };
 
 // The reader (pdyn check): every frame's t, x and v; 17 significant digits

@@ -20,33 +20,18 @@ class Energy final : public pdyn::Writer {
 
   void write(const pdyn::Frame& frame) override {
     file_.begin_frame();
-    failed_ = true;
     const double k = frame.kinetic_energy, u = frame.potential_energy;
     file_.write(fmt::format("{:.17g},{:.17g},{:.17g},{:.17g}\n", frame.time(), k, u, k + u));
     file_.flush();  // a full disk is met at this frame, not at a later one
-    failed_ = false;
   }
-  std::vector<std::uint8_t> mark() override {
-    if (failed_) return file_.last_whole_frame().encode();
-    failed_ = true;  // a flush that fails (a full disk) fails the writer
-    const auto m = file_.mark();
-    failed_ = false;
-    return m.encode();
-  }
-  // After a failed write, the file up to the last complete frame.
-  void commit() override {
-    if (failed_) {
-      file_.commit_at(file_.last_whole_frame());
-    } else {
-      file_.commit();
-    }
-  }
+  // After a failed write, both stop at the last complete frame (OutputFile).
+  std::vector<std::uint8_t> mark() override { return file_.mark().encode(); }
+  void commit() override { file_.commit(); }
   std::vector<std::filesystem::path> temp_files() const override { return {file_.temp_path()}; }
 
  private:
   std::optional<pdyn::FileMark> resume_;
   pdyn::OutputFile file_;
-  bool failed_ = false;
 };
 
 pdyn::PluginDescriptor describe() {
