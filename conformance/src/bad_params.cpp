@@ -184,6 +184,9 @@ std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
 std::string scene_text(const PluginDescriptor& d, const Params& sample, const Matrix3X& x,
                        const BadCase* bad, std::string& item_path) {
   std::string item = fmt::format("type: {}\n", d.name);
+  // A writer's own keys beside the host's: its file (never created, the
+  // scene is only loaded) and its schedule.
+  if (d.kind == PluginKind::Writer) item += "path: conformance-output.out\nevery: 1\n";
   bool placed = false;
   for (const auto& [key, value] : sample.values()) {
     if (bad && bad->key == key) {
@@ -224,6 +227,9 @@ std::string scene_text(const PluginDescriptor& d, const Params& sample, const Ma
   } else if (d.kind == PluginKind::Collider) {
     s += "colliders:\n" + indent(item, "  - ", "    ");
     item_path = "colliders[0]";
+  } else if (d.kind == PluginKind::Writer) {
+    s += "output:\n" + indent(item, "  - ", "    ");
+    item_path = "output[0]";
   }
   return s;
 }
