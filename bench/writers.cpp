@@ -5,7 +5,7 @@
 // output, the run's own time spent on output (copying frames for the output
 // thread and waiting for it), bytes written, bytes per particle-frame and
 // the writer's throughput in MB/s (bytes / its time in write() on the
-// output thread, which overlaps the steps).
+// output thread, which overlaps the steps, and in commit()).
 // Each variant runs `repeats` times, interleaved, and the fastest run of
 // each is reported, so that a slow moment of the machine hits all alike.
 //

@@ -292,6 +292,18 @@ fs::path Output::write_checkpoint_now(std::int64_t step, std::int64_t next_frame
 
 void Output::commit() {
   finish_frames();
+  // The writers' last flush, fsync and rename: writing time, and time the
+  // run waits for.
+  const auto t0 = Clock::now();
+  struct Count {
+    Output& out;
+    Clock::time_point t0;
+    ~Count() {
+      const double t = seconds_since(t0);
+      out.writing_seconds_ += t;
+      out.stalled_seconds_ += t;
+    }
+  } count{*this, t0};
   std::exception_ptr first;
   for (auto& s : slots_) {
     try {

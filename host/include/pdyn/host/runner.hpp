@@ -47,9 +47,10 @@ struct RunResult {
   /// driving it: one line naming the step, the energies and the solver.
   std::string energy_warning;
   /// Output, s: the writers' time in write() on the output thread, which
-  /// overlaps the steps (what a writer's throughput is measured against),
-  /// and the run's own time spent copying frames for it and waiting for it
-  /// (what output adds to the run).
+  /// overlaps the steps, and in commit() at the end (what a writer's
+  /// throughput is measured against); and the run's own time spent copying
+  /// frames for the output thread, waiting for it and committing (what
+  /// output adds to the run when a core is free for the output thread).
   double output_writing = 0.0, output_stalled = 0.0;
 };
 
