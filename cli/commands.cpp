@@ -59,7 +59,7 @@ struct RunArgs {
   std::string resume;             // checkpoint to continue from
   bool force = false;             // resume even if the scene changed
   bool strict = false;            // an energy that grows without a driving force: exit 4
-  int threads = 0;                // --threads; 0: the scene's simulation.threads, else all cores
+  int threads = 0;                // --threads; 0: simulation.threads, else pdyn::default_threads
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
 
@@ -469,8 +469,8 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
       ->check(at_least(0))
       ->excludes(steps);
   run->add_option("--threads", run_args.threads,
-                  "threads for forces and solvers (default: simulation.threads, else all "
-                  "cores); results are bit-identical for every count")
+                  "threads for forces and solvers (default: simulation.threads, else one per "
+                  "4096 particles, up to all cores); results are bit-identical for every count")
       ->check(CLI::Range(1, 1024));
   run->add_option("--resume", run_args.resume,
                   "continue from a checkpoint written by an earlier run of this scene");

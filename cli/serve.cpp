@@ -84,7 +84,7 @@ int cmd_serve(const ServeArgs& a, std::ostream& out, std::ostream& err) {
     options.root = root;
     options.threads = a.threads > 0                 ? a.threads
                       : session.scene_threads() > 0 ? session.scene_threads()
-                                                    : available_threads();
+                                                    : default_threads(session.particle_count());
     viewer::serve(session, options, out, a.scene);
     return kOk;
   } catch (...) {
@@ -106,7 +106,8 @@ SdkCommand add_serve_command(CLI::App& app) {
                   "folder of the page's files (default: bin/viewer next to pdyn, else "
                   "share/pdyn/viewer)");
   sub->add_option("--threads", a->threads,
-                  "threads for forces and solvers (default: simulation.threads, else all cores)");
+                  "threads for forces and solvers (default: simulation.threads, else one per 4096 "
+                  "particles, up to all cores)");
   add_scene_options(sub, a->sets, a->plugin_path);
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_serve(*a, out, err); }};
 }

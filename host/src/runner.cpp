@@ -452,7 +452,7 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
   set_threads(options.threads > 0 ? options.threads
               : scene.threads > 0 ? scene.threads
-                                  : available_threads());
+                                  : default_threads(sys.size()));
   RunResult result;
   SignalGuard signals(options.handle_signals);
   Output out(scene, options.resume);

@@ -40,7 +40,9 @@ void require_finite(const System& sys) {
 }  // namespace
 
 Simulation::Simulation(Scene scene, int threads) : scene_(std::move(scene)) {
-  set_threads(threads > 0 ? threads : scene_.threads > 0 ? scene_.threads : available_threads());
+  set_threads(threads > 0          ? threads
+              : scene_.threads > 0 ? scene_.threads
+                                   : default_threads(scene_.system->size()));
   stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
 }
 

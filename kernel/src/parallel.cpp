@@ -1,6 +1,8 @@
 // The process-wide thread count (see pdyn/parallel.hpp).
 #include "pdyn/parallel.hpp"
 
+#include <algorithm>
+
 namespace pdyn {
 
 void set_threads(int n) {
@@ -28,6 +30,11 @@ int available_threads() noexcept {
 #else
   return 1;
 #endif
+}
+
+int default_threads(Index particles) noexcept {
+  const Index per_thread = particles / kParallelMinElements;
+  return static_cast<int>(std::clamp<Index>(per_thread, 1, available_threads()));
 }
 
 }  // namespace pdyn

@@ -91,7 +91,8 @@ def load(scene, set=None, plugin_path=None, threads=0):
     set: {"simulation.dt": 5e-4, "forces[0].g": [0, 0, -1.62]} -- overrides,
         as `pdyn run --set` (values are Python values).
     plugin_path: extra folders searched for plugins first.
-    threads: force and solver threads; 0: the scene's, else every core.
+    threads: force and solver threads; 0: the scene's, else one per 4096
+        particles (at least 1, at most every core).
     Raises SceneError (with file, line, column) or PluginError."""
     overrides = _overrides(set)
     text = isinstance(scene, str) and ("\n" in scene or not os.path.exists(scene))

@@ -74,12 +74,23 @@ TEST(Threads, SceneSettingIsUsedAndCommandLineWins) {
   EXPECT_EQ(max_threads(), 2);
 }
 
-TEST(Threads, DefaultIsEveryCore) {
+// The default: one thread per kParallelMinElements particles, at least 1,
+// at most every core.
+TEST(Threads, DefaultFollowsTheParticleCount) {
   Scene scene = load_text(
       "simulation: { dt: 0.01, steps: 2 }\n"
       "particles: [ { position: [0, 0, 1], mass: 1 } ]\n");
   run_scene(scene);
-  EXPECT_EQ(max_threads(), available_threads());
+  EXPECT_EQ(max_threads(), 1);
+  const int cores = available_threads();
+  EXPECT_EQ(default_threads(0), 1);
+  EXPECT_EQ(default_threads(kParallelMinElements - 1), 1);
+  EXPECT_EQ(default_threads(2 * kParallelMinElements - 1), 1);
+  EXPECT_EQ(default_threads(2 * kParallelMinElements), std::min(2, cores));
+  EXPECT_EQ(default_threads(1000 * kParallelMinElements), cores);
+  Scene big = cloth("rk4", 2);  // 9,216 particles: 2 threads where there are 2 cores
+  run_scene(big);
+  EXPECT_EQ(max_threads(), std::min(2, cores));
 }
 
 TEST(Threads, ZeroIsRefusedWhereItIsWritten) {

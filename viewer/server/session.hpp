@@ -82,6 +82,7 @@ class Session {
   const std::string& solver_name() const { return scene_.solver_name; }
   /// simulation.threads of the scene as first loaded (0: not given).
   int scene_threads() const { return scene_.threads; }
+  Index particle_count() const { return scene_.system->size(); }
   /// Stiffness (N/m) and damping (N s/m) of a mouse spring on particle i
   /// when the page gives none (see session.cpp).
   std::pair<double, double> default_mouse_spring(Index i) const;

@@ -43,9 +43,17 @@ int max_threads() noexcept;
 /// OpenMP it does nothing. The runner calls it; plugins never need to.
 void set_threads(int n);
 
-/// The number of cores this process may use (omp_get_num_procs): the
-/// default thread count.
+/// The number of cores this process may use (omp_get_num_procs).
 int available_threads() noexcept;
+
+/// The thread count a host uses when the scene and the user name none: one
+/// thread per kParallelMinElements particles, at least 1 and at most
+/// available_threads(). Below that a second thread has too little to do:
+/// on the 2-core machine the cloth with rk4 ran 1.06x slower on 2 threads
+/// than on 1 at 2,500 particles, even at 4,900 and 1.22x faster at 10,000
+/// (docs/performance.md, "Threads and determinism"). Results are
+/// bit-identical for every count, so this changes only the speed.
+int default_threads(Index particles) noexcept;
 
 /// Calls body(begin, end) on contiguous, disjoint ranges that cover [0, n),
 /// one per thread (one range, on the calling thread, when n is small, when

@@ -25,7 +25,8 @@ struct RunOptions {
   /// applied by restore_checkpoint); its output files are continued.
   const Checkpoint* resume = nullptr;
   /// Threads for forces and solvers (pdyn run --threads); 0: the scene's
-  /// simulation.threads, else every core (pdyn::available_threads()). The
+  /// simulation.threads, else one per 4096 particles, up to every core
+  /// (pdyn::default_threads). The
   /// results are bit-identical for every count.
   int threads = 0;
   /// pdyn run --strict: a run whose energy grows without a driving force

@@ -102,7 +102,7 @@ struct Scene {
   double dt = 0.0;         ///< step, s
   std::int64_t steps = 0;  ///< number of steps
   double end_time = 0.0;   ///< time after the last step, s (steps * dt, or the duration)
-  int threads = 0;         ///< simulation.threads; 0: not given (all cores)
+  int threads = 0;         ///< simulation.threads; 0: not given (pdyn::default_threads)
   OutputSpec output;
   std::map<std::string, std::vector<Index>> groups;
   /// Every force and collider object, in the order the system holds them.

@@ -30,7 +30,8 @@ class StepError : public Error {
 class Simulation {
  public:
   /// Takes over a loaded scene (load_scene). Sets the thread count: `threads`
-  /// if > 0, else the scene's simulation.threads, else every core.
+  /// if > 0, else the scene's simulation.threads, else
+  /// pdyn::default_threads(particles).
   explicit Simulation(Scene scene, int threads = 0);
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
