@@ -46,13 +46,22 @@ void set_threads(int n);
 /// The number of cores this process may use (omp_get_num_procs).
 int available_threads() noexcept;
 
-/// The thread count a host uses when the scene and the user name none: one
-/// thread per kParallelMinElements particles, at least 1 and at most
-/// available_threads(). Below that a second thread has too little to do:
-/// on the 2-core machine the cloth with rk4 ran 1.06x slower on 2 threads
-/// than on 1 at 2,500 particles, even at 4,900 and 1.22x faster at 10,000
-/// (docs/performance.md, "Threads and determinism"). Results are
-/// bit-identical for every count, so this changes only the speed.
+/// The thread count for `particles` particles on a machine with
+/// `free_cores` cores not busy with other work: one thread per
+/// kParallelMinElements particles, at least 1 and at most max(1,
+/// free_cores). Below that a second thread has too little to do: on the
+/// 2-core machine the cloth with rk4 ran 1.06x slower on 2 threads than on
+/// 1 at 2,500 particles, even at 4,900 and 1.22x faster at 10,000. And a
+/// thread on a core another process keeps busy stalls the others at every
+/// barrier: with a CPU-bound process on each core, 2 threads took 1.8x the
+/// time of 1 (docs/performance.md, "Threads and determinism").
+int threads_for(Index particles, int free_cores) noexcept;
+
+/// The thread count a host uses when the scene and the user name none:
+/// threads_for(particles, the cores left idle by other processes, sampled
+/// from /proc/stat over 20 ms when more than one thread would be worth it;
+/// every core where that cannot be read). Results are bit-identical for
+/// every count, so this changes only the speed.
 int default_threads(Index particles) noexcept;
 
 /// Calls body(begin, end) on contiguous, disjoint ranges that cover [0, n),
