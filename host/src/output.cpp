@@ -292,18 +292,7 @@ fs::path Output::write_checkpoint_now(std::int64_t step, std::int64_t next_frame
 
 void Output::commit() {
   finish_frames();
-  // The writers' last flush, fsync and rename: writing time, and time the
-  // run waits for.
   const auto t0 = Clock::now();
-  struct Count {
-    Output& out;
-    Clock::time_point t0;
-    ~Count() {
-      const double t = seconds_since(t0);
-      out.writing_seconds_ += t;
-      out.stalled_seconds_ += t;
-    }
-  } count{*this, t0};
   std::exception_ptr first;
   for (auto& s : slots_) {
     try {
@@ -314,6 +303,11 @@ void Output::commit() {
       if (!first && !s.failed) first = std::current_exception();
     }
   }
+  // The writers' last flush, fsync and rename: writing time, and time the
+  // run waits for.
+  const double t = seconds_since(t0);
+  writing_seconds_ += t;
+  stalled_seconds_ += t;
   if (first) std::rethrow_exception(first);
 }
 

@@ -12,7 +12,6 @@
 #include <csignal>
 #include <cstring>
 #include <exception>
-#include <functional>
 #include <numeric>
 #include <ostream>
 #include <pdyn/parallel.hpp>
@@ -21,8 +20,6 @@
 
 #include "output.hpp"
 #include "pdyn/host/crash_report.hpp"
-#include "pdyn/host/scene_drawables.hpp"
-#include "pdyn/output_file.hpp"
 #include "pdyn/stepper.hpp"
 #include "pdyn/text.hpp"
 

@@ -139,15 +139,11 @@ struct Cells {
     if (!fits) return;
     connectivity32.assign(connectivity.begin(), connectivity.end());
     offsets32.assign(offsets.begin(), offsets.end());
-    count_ = offsets.size();
     connectivity = {};
     offsets = {};
     narrowed = true;
   }
-  std::uint64_t size() const { return narrowed ? count_ : offsets.size(); }
-
- private:
-  std::size_t count_ = 0;
+  std::uint64_t size() const { return narrowed ? offsets32.size() : offsets.size(); }
 };
 
 bool has(const std::vector<std::string>& fields, const char* f) {
