@@ -2,6 +2,7 @@
 // on the state, adding only, finite on degenerate configurations) and what
 // its descriptor and methods claim (internal: zero net force and torque,
 // translation invariance; f = -grad U; analytic Jacobians; dissipative;
+// independence of velocity or time;
 // and, for a pair force, the pair.* checks of pairs.cpp).
 #include <fmt/format.h>
 
@@ -227,6 +228,31 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
     });
   } else {
     out.push_back(skip("force.dissipative", "not declared dissipative"));
+  }
+
+  // A claim of independence lets a solver reuse forces evaluated at other
+  // velocities or another time (verlet): it must hold bit for bit.
+  const StateDependence claim = force->dependence();
+  if (!claim.velocity || !claim.time) {
+    guarded(out, "force.dependence", [&] {
+      const Matrix3X f0 = forces_of(*force, home);
+      double worst = 0.0;
+      for (int trial = 0; trial < 5; ++trial) {
+        State s = home;
+        if (!claim.velocity) s.v = random_state(rng).v;
+        if (!claim.time) s.t = home.t + 1.0 + trial;
+        const Matrix3X f = forces_of(*force, s);
+        if (!bit_equal(f, f0)) worst = std::max(worst, std::max(max_abs(f - f0), 1e-300));
+      }
+      const char* what = claim.velocity ? "time: the same bits at 5 other times"
+                         : claim.time   ? "velocity: the same bits at 5 other velocities"
+                                        : "velocity and time: the same bits at 5 other "
+                                          "velocities and times";
+      return result("force.dependence", worst == 0.0, worst, 0,
+                    fmt::format("declared independent of {}", what));
+    });
+  } else {
+    out.push_back(skip("force.dependence", "declares it depends on velocity and time"));
   }
 
   pair_checks(d, params, *force, rng, out);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "pdyn/error.hpp"
 #include "pdyn/parallel.hpp"
@@ -32,6 +33,7 @@ void System::set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::Ve
   type_.clear();
   images_.assign(static_cast<std::size_t>(n), {0, 0, 0});
   update_inverse_mass();
+  touch();
 }
 
 Index System::add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed) {
@@ -70,6 +72,7 @@ void System::set_domain(const Domain& domain) {
     }
   }
   domain_ = domain;
+  touch();
 }
 
 void System::set_radii(std::vector<double> radius) {
@@ -83,6 +86,7 @@ void System::set_radii(std::vector<double> radius) {
     }
   }
   radius_ = std::move(radius);
+  touch();
 }
 
 void System::set_types(std::vector<std::int32_t> type) {
@@ -96,6 +100,7 @@ void System::set_types(std::vector<std::int32_t> type) {
     }
   }
   type_ = std::move(type);
+  touch();
 }
 
 void System::set_images(std::vector<std::array<std::int32_t, 3>> images) {
@@ -110,8 +115,11 @@ void System::set_images(std::vector<std::array<std::int32_t, 3>> images) {
 // separations by the minimum image see the same system before and after.
 void System::wrap_positions() {
   if (!domain_.any_periodic()) return;
-  auto x = positions();
+  // Not positions(): only a wrap that moves a particle changes the version.
+  // Forces evaluated before it stay valid otherwise, bit for bit.
+  Eigen::Map<Matrix3X> x(state_.data(), 3, size());
   const Vec3 length = domain_.length();
+  bool moved = false;
   for (Index i = 0; i < size(); ++i) {
     const Vec3 before = x.col(i);
     const Vec3 after = domain_.wrap(before);
@@ -123,13 +131,16 @@ void System::wrap_positions() {
       }
     }
     x.col(i) = after;
+    moved = true;
   }
+  if (moved) touch();
 }
 
 void System::set_fixed(Index i, bool fixed) {
   fixed_.at(static_cast<std::size_t>(i)) = fixed ? 1 : 0;
   if (fixed) velocities().col(i).setZero();
   update_inverse_mass();
+  touch();
 }
 
 void System::update_inverse_mass() {
@@ -143,6 +154,7 @@ void System::update_inverse_mass() {
 
 void System::add_force(std::shared_ptr<Force> force, std::string label) {
   forces_.push_back({std::move(force), std::move(label)});
+  touch();
 }
 
 bool System::remove_force(const Force* force) {
@@ -150,11 +162,13 @@ bool System::remove_force(const Force* force) {
                                [&](const ForceEntry& e) { return e.force.get() == force; });
   if (it == forces_.end()) return false;
   forces_.erase(it);
+  touch();
   return true;
 }
 
 void System::add_collider(std::shared_ptr<Collider> collider, std::string label) {
   colliders_.push_back({std::move(collider), std::move(label)});
+  touch();
 }
 
 bool System::remove_collider(const Collider* collider) {
@@ -163,6 +177,7 @@ bool System::remove_collider(const Collider* collider) {
   });
   if (it == colliders_.end()) return false;
   colliders_.erase(it);
+  touch();
   return true;
 }
 
@@ -171,6 +186,7 @@ void System::get_state(Eigen::Ref<Eigen::VectorXd> y) const { y = state_; }
 void System::set_state(const Eigen::Ref<const Eigen::VectorXd>& y) {
   if (y.size() != state_.size()) throw Error("System::set_state: wrong state dimension");
   state_ = y;
+  touch();
 }
 
 ParticleView System::view() const noexcept {
@@ -242,7 +258,7 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   // memory-bound at large N; one pass reads the state and f once). Each
   // column is independent, so the split over threads cannot change a bit.
   Eigen::Map<Matrix3X> vel(dydt.data(), 3, n), a(dydt.data() + 3 * n, 3, n);
-  const auto v = velocities();
+  const auto v = std::as_const(*this).velocities();
   parallel_ranges(n, [&](Index b, Index e) {
     vel.middleCols(b, e - b) = v.middleCols(b, e - b);
     a.middleCols(b, e - b) = force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();

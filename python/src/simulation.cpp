@@ -135,13 +135,31 @@ class PySimulation {
   // ---- stepping ----
   std::int64_t step(std::int64_t n) {
     if (n < 0) throw py::value_error(fmt::format("step({}): expected a count >= 0", n));
+    touch_if_viewed();
     return released([&] { return sim_.step(n, interrupted); });
   }
   std::int64_t run_until(double t, std::int64_t max_steps) {
+    touch_if_viewed();
     return released([&] { return sim_.run_until(t, max_steps, interrupted); });
   }
   std::int64_t run_to_end() {
+    touch_if_viewed();
     return released([&] { return sim_.run_to_end(interrupted); });
+  }
+
+  // The views of positions and velocities are writable, and a write through
+  // one is invisible to the kernel. While any lives, each stepping call marks
+  // the state as changed (System::touch): the Stepper then copies its last
+  // good state afresh and a solver that keeps forces (verlet) evaluates them
+  // again, as after any other write.
+  void touch_if_viewed() {
+    for (const auto& w : views_) {
+      const py::object a = w();
+      if (!a.is_none() && py::reinterpret_borrow<py::array>(a).writeable()) {
+        sys().touch();
+        return;
+      }
+    }
   }
 
   // Steps with the GIL released; a Ctrl-C seen meanwhile is raised after.

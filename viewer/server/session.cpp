@@ -348,6 +348,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
     case Op::Move:
       if (auto it = drags_.find(client); it != drags_.end()) {
         movable_targets(*it->second.force)->set_target(0, *c.point);
+        sys.touch();  // the force changed: nothing evaluated before stays valid
       }
       break;
     case Op::Release:

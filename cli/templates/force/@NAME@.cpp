@@ -21,6 +21,10 @@ class Tether final : public pdyn::Force {
     return 0.5 * k_ * (p.x.colwise() - a_).squaredNorm();
   }
 
+  // Reads velocities only through the damping, and never the time: with
+  // c = 0, velocity Verlet evaluates it once per step instead of twice.
+  pdyn::StateDependence dependence() const override { return {c_ > 0.0, false}; }
+
   // df_i/dx_i = -k I, df_i/dv_i = -c I, for implicit solvers.
   bool add_jacobians(const pdyn::ParticleView& p, pdyn::JacobianSink& sink) override {
     const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();

@@ -25,6 +25,16 @@ class JacobianSink {
   virtual void add_dfdv(Index i, Index j, const Eigen::Matrix3d& block) = 0;
 };
 
+/// What a force's value depends on besides the positions and the particles'
+/// fixed properties (since ABI 6). Only a claim of independence is ever used:
+/// a solver may then reuse forces it evaluated at the same positions (velocity
+/// Verlet needs one force evaluation per step instead of two, see
+/// plugins/solvers/verlet). The default claims both, which is always safe.
+struct StateDependence {
+  bool velocity = true;  ///< f changes with the velocities (drag, damping)
+  bool time = true;      ///< f changes with the time (driven or time-varying forces)
+};
+
 class Force : public PluginObject {
  public:
   /// Adds this object's forces (N) into `f` (3 x N), for every particle it
@@ -48,6 +58,15 @@ class Force : public PluginObject {
     (void)sink;
     return false;
   }
+
+  /// Since ABI 6. Whether this object's forces depend on the velocities and
+  /// on the time, for the parameters it was created with (a spring with kd =
+  /// 0 reads no velocity). Claim independence only when add_forces would give
+  /// the same bits for any velocity or time: the conformance kit checks it,
+  /// and a solver that reuses forces relies on it. A force whose value can
+  /// change in another way between steps (a host moving its targets, see
+  /// pdyn/targets.hpp) keeps the default.
+  virtual StateDependence dependence() const { return {}; }
 };
 
 }  // namespace pdyn

@@ -171,6 +171,16 @@ class PairForce : public Force, public PairReference {
 
   const Law& law() const noexcept { return law_; }
 
+  /// A central law is a function of r^2 and the types only; a vector law
+  /// sees the whole ParticleView (velocities included).
+  StateDependence dependence() const override {
+    if constexpr (kCentral) {
+      return {false, false};
+    } else {
+      return {};
+    }
+  }
+
   /// df/dx of every listed pair within the cutoff (see the top of this
   /// file), when the law gives force_over_r_slope(); false otherwise. No
   /// df/dv: a central law depends on positions only.

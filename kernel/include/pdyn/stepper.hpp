@@ -19,6 +19,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -63,8 +64,9 @@ struct StepFault {
   }
 };
 
-/// Takes steps of one system with one solver. Holds the last good state
-/// (6N doubles, sized on the first step: later steps do not allocate).
+/// Takes steps of one system with one solver. Holds the last good state and
+/// the next one (2 x 6N doubles, sized on the first step: later steps do not
+/// allocate).
 class Stepper {
  public:
   /// `solver_label` names the solver in faults and crash reports ("rk4
@@ -103,6 +105,8 @@ class Stepper {
   Solver& solver_;
   const std::string* label_;
   Eigen::VectorXd previous_;  // the state the current step started from
+  Eigen::VectorXd next_;      // where a step's end state is copied while it is checked
+  std::uint64_t version_ = ~std::uint64_t{0};  // System::state_version() when previous_ was kept
   double t_previous_ = 0.0;
   StepFault fault_;
   StepFault replayed_;  // what a replay found

@@ -69,7 +69,10 @@ class System {
   Index dimension() const noexcept { return 6 * size(); }
   /// The state itself, [x | v] (6N), writable in place: a solver may assign
   /// a stage state to it directly instead of calling set_state.
-  Eigen::Map<Eigen::VectorXd> state() noexcept { return {state_.data(), state_.size()}; }
+  Eigen::Map<Eigen::VectorXd> state() noexcept {
+    ++version_;
+    return {state_.data(), state_.size()};
+  }
   Eigen::Map<const Eigen::VectorXd> state() const noexcept {
     return {state_.data(), state_.size()};
   }
@@ -88,10 +91,16 @@ class System {
   // ---- split views, for symplectic and implicit solvers ----
 
   /// Positions, m (3 x N view of the first half of state()).
-  Eigen::Map<Matrix3X> positions() noexcept { return {state_.data(), 3, size()}; }
+  Eigen::Map<Matrix3X> positions() noexcept {
+    ++version_;
+    return {state_.data(), 3, size()};
+  }
   Eigen::Map<const Matrix3X> positions() const noexcept { return {state_.data(), 3, size()}; }
   /// Velocities, m/s (3 x N view of the second half of state()).
-  Eigen::Map<Matrix3X> velocities() noexcept { return {state_.data() + 3 * size(), 3, size()}; }
+  Eigen::Map<Matrix3X> velocities() noexcept {
+    ++version_;
+    return {state_.data() + 3 * size(), 3, size()};
+  }
   Eigen::Map<const Matrix3X> velocities() const noexcept {
     return {state_.data() + 3 * size(), 3, size()};
   }
@@ -101,6 +110,22 @@ class System {
   const Matrix3X& compute_accelerations();
   /// Forces (N) of the last derivative or acceleration evaluation.
   const Matrix3X& forces() const noexcept { return force_; }
+  /// Since ABI 6: a count of the calls that may have changed what the forces
+  /// see, so that a solver can tell whether forces it evaluated are still
+  /// valid. Every call of the non-const state(), positions() or velocities()
+  /// (the writable views) and of set_state, set_particles, add_particle,
+  /// set_fixed, add_force, remove_force, add_collider, remove_collider,
+  /// set_domain, set_radii, set_types and touch increases it; so do a
+  /// collider response and a wrap that moved a particle. set_time does not:
+  /// a solver compares times itself. The pattern (plugins/solvers/verlet):
+  /// read it at the end of step() after the solver's own last write, and
+  /// reuse the forces in the next step() only if it has not changed when
+  /// that step starts.
+  std::uint64_t state_version() const noexcept { return version_; }
+  /// Marks the state as changed: for a host that writes through a writable
+  /// view it obtained earlier (a Map kept from state(), a NumPy array), or
+  /// that changes a force's parameters between steps (pdyn/targets.hpp).
+  void touch() noexcept { ++version_; }
   /// Force evaluations (derivative or compute_accelerations calls) since the
   /// system was assembled: the cost measure a run summary reports.
   std::uint64_t force_evaluations() const noexcept { return evaluations_; }
@@ -163,6 +188,7 @@ class System {
   std::vector<ForceEntry> forces_;
   std::vector<ColliderEntry> colliders_;
   std::uint64_t evaluations_ = 0;
+  std::uint64_t version_ = 0;  // state_version()
   Domain domain_;
   std::vector<double> radius_;                       // N or empty
   std::vector<std::int32_t> type_;                   // N or empty

@@ -30,7 +30,8 @@ class MovableTargets {
   /// Position of target k, m. Throws pdyn::Error if k >= target_count().
   virtual Vec3 target(std::size_t k) const = 0;
   /// Moves target k to `point` (m), from the next derivative evaluation on.
-  /// Call it between steps, not during one. Throws pdyn::Error if k >=
+  /// Call it between steps, not during one, and call System::touch() after
+  /// it (forces evaluated before are no longer valid). Throws pdyn::Error if k >=
   /// target_count() or `point` is not finite.
   virtual void set_target(std::size_t k, const Vec3& point) = 0;
 };

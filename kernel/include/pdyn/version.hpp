@@ -7,13 +7,18 @@
 /// built against another version is refused before any of its code runs
 /// beyond the version query. Bump it whenever a public header changes a type
 /// layout or a virtual function.
-#define PDYN_ABI_VERSION 5u
+#define PDYN_ABI_VERSION 6u
 // 4 (pdyn 0.2): ParticleView and MutableParticleView gained domain, radius
 //   and type at their ends (the simulation box, per-particle radii and
 //   types). Rebuild plugins; no source change (docs/plugins.md, "ABI").
 // 5 (pdyn 0.3): PluginKind gained Writer and PluginDescriptor gained
 //   writer_traits and create_writer at its end (output writers,
 //   pdyn/writer.hpp). Rebuild plugins; no source change (docs/plugins.md, "ABI").
+// 6 (pdyn 0.4): Force gained the virtual dependence() at the end of its
+//   vtable, and System a state version (state_version(), touch()) that its
+//   writable accessors count. Rebuild plugins; no source change: a force
+//   that does not override dependence() is taken to depend on velocity and
+//   time, as before (docs/plugins.md, "ABI").
 
 namespace pdyn {
 inline constexpr std::uint32_t kAbiVersion = PDYN_ABI_VERSION;

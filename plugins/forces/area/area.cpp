@@ -70,6 +70,9 @@ class Area final : public pdyn::Force {
     }
   }
 
+  // Only the damping term reads velocities.
+  pdyn::StateDependence dependence() const override { return {kd_ > 0.0, false}; }
+
   std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
     double u = 0.0;
     for (std::size_t s = 0; s < triples_.size(); ++s) {

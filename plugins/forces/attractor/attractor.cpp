@@ -47,6 +47,8 @@ class Attractor final : public pdyn::Force {
     });
   }
 
+  pdyn::StateDependence dependence() const override { return {false, false}; }
+
   std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
     double u = 0.0;
     each(p, [&](Index i) {

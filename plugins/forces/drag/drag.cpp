@@ -21,6 +21,8 @@ class Drag final : public pdyn::Force {
     for (const pdyn::Index i : selection_.ids()) f.col(i) -= k_ * p.v.col(i);
   }
 
+  pdyn::StateDependence dependence() const override { return {true, false}; }
+
   // df_i/dv_i = -k I for every selected particle; no position dependence.
   bool add_jacobians(const pdyn::ParticleView& p, pdyn::JacobianSink& sink) override {
     const Eigen::Matrix3d block = -k_ * Eigen::Matrix3d::Identity();

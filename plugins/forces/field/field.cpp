@@ -244,6 +244,13 @@ class Field final : public pdyn::Force {
       } catch (const mu::ParserError& e) {
         throw ParamError(param, explain(e, expr, constant_names, parser, constants), element);
       }
+      // Which variables it reads, for dependence(): a field of x, y, z and m
+      // only lets velocity Verlet reuse its forces.
+      for (const auto& [name, address] : parser.GetUsedVar()) {
+        (void)address;
+        if (name == "vx" || name == "vy" || name == "vz") reads_velocity_ = true;
+        if (name == "t") reads_time_ = true;
+      }
       if (parser.GetNumResults() != 1) {
         throw ParamError(param,
                          fmt::format("\"{}\" gives {} values (expected one number, without ',')",
@@ -275,6 +282,8 @@ class Field final : public pdyn::Force {
     }
   }
 
+  pdyn::StateDependence dependence() const override { return {reads_velocity_, reads_time_}; }
+
   std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
     if (!potential_) return std::nullopt;
     vars_[6] = p.t;
@@ -305,6 +314,7 @@ class Field final : public pdyn::Force {
   mutable std::array<double, 8> vars_{};
   std::array<mu::Parser, 3> component_;
   std::unique_ptr<mu::Parser> potential_;
+  bool reads_velocity_ = false, reads_time_ = false;  // some expression uses vx, vy, vz / t
   pdyn::Selection selection_;
 };
 

@@ -22,6 +22,9 @@ class Gravity final : public pdyn::Force {
     for (const pdyn::Index i : selection_.ids()) f.col(i) += p.mass(i) * g_;
   }
 
+  // f = m g reads neither velocities nor time.
+  pdyn::StateDependence dependence() const override { return {false, false}; }
+
   // A constant force: both Jacobians are zero, so there is nothing to add,
   // but saying so spares implicit solvers a finite difference.
   bool add_jacobians(const pdyn::ParticleView&, pdyn::JacobianSink&) override { return true; }

@@ -221,6 +221,9 @@ class NBody final : public pdyn::Force {
         theta2_(theta * theta),
         selection_(std::move(selection)) {}
 
+  // Newton's law of gravitation reads positions and masses only.
+  pdyn::StateDependence dependence() const override { return {false, false}; }
+
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
     const std::vector<Index>& ids = members(p);
     const Index n = static_cast<Index>(ids.size());

@@ -16,22 +16,35 @@
 //   velocity-independent forces a1 does not depend on it and the scheme is
 //   exactly velocity Verlet.
 //
-// * a0 is recomputed at the start of every step rather than reused from the
-//   previous step's a1 (the "one evaluation per step" form). The cached a1
-//   was evaluated at the predicted velocity, not at v1; and after the step
-//   the kernel's collider response may change x and v, and a host may set
-//   the state between steps (checkpoints, interactive edits). Reusing a1 is
-//   only valid when none of that happens and the forces ignore v, which a
-//   solver cannot know, so by default this costs two force evaluations per
-//   step. `reuse_forces: true` is the scene's promise that its forces depend
-//   on positions and time only (Lennard-Jones, gravity, undamped springs):
-//   then a1 is reused as the next step's a0 (LAMMPS's velocity Verlet, one
-//   evaluation per step) whenever the positions (after the kernel's wrap
-//   into a periodic box) and the set of force objects are exactly those
-//   the last step ended with, the time is, to rounding, and there is no
-//   collider (contact forces depend on velocity); any change
-//   (a collider's put-back, a checkpoint, an interactive edit) falls back
-//   to evaluating a0.
+// * The end-of-step forces a1 are reused as the next step's a0 (one force
+//   evaluation per step, as LAMMPS's velocity Verlet does) only when that
+//   gives the same bits as evaluating a0 afresh:
+//     - every force declares that it does not depend on velocity
+//       (Force::dependence(); the default claims it does), and there is no
+//       collider (contact forces depend on velocity): a1 was evaluated at
+//       v_half, not at v1;
+//     - nothing but the kernel's step wrote the state since this step ended
+//       (System::state_version(): a collider's response, a wrap that moved
+//       a particle, a checkpoint, an interactive edit, a force added or
+//       removed all change it);
+//     - no force evaluation has happened since, so the System still holds
+//       a1 (force_evaluations());
+//     - the time is the one a1 was evaluated at, exactly, if any force
+//       depends on time.
+//   Otherwise a0 is evaluated at the start of the step, as it always was
+//   before pdyn 0.4.
+// * With velocity-independent forces the step is the textbook one written in
+//   place, v += h/2 a0, x += h v, evaluate, v += h/2 a1, with no scratch
+//   state. The same operations in the same order as the general form
+//   (v_half = v0 + h/2 a0, x1 = x0 + h v_half, v1 = v_half + h/2 a1), so
+//   the two give the same bits whenever both apply.
+// * `reuse_forces: true` is a scene's promise, for forces that do not
+//   declare their dependence (plugins built before ABI 6), that they depend
+//   on positions and time only. It keeps the rule it had before (Promised
+//   below), so that scenes using it give the same bits as before: a1 is
+//   reused even after a wrap into a periodic box, when the positions and
+//   force objects are those the last step ended with and the time matches
+//   to within rounding.
 #include <algorithm>
 #include <cmath>
 #include <pdyn/parallel.hpp>
@@ -40,84 +53,136 @@
 
 namespace {
 
+using pdyn::Index;
+
 class Verlet final : public pdyn::Solver {
  public:
-  explicit Verlet(bool reuse) : reuse_(reuse) {}
+  explicit Verlet(bool promise) : promise_(promise) {}
 
   void step(pdyn::System& sys, double h) override {
+    // Read before this step takes its own writable views of the state.
+    const bool untouched = sys.state_version() == version_;
     const double t0 = sys.time();
+    const Needs needs = needs_of(sys);
+    const pdyn::Matrix3X* reusable = nullptr;
+    if (promise_) {
+      if (promised_.still_valid(sys)) reusable = &promised_.a1;
+    } else if (a1_ != nullptr && untouched && sys.force_evaluations() == evaluations_ &&
+               (!needs.time || t0 == t1_)) {
+      reusable = a1_;
+    }
     auto x = sys.positions();
     auto v = sys.velocities();
-
-    const pdyn::Index n = sys.size();
-    a0_.resize(3, n);  // no-op after the first step
-    half_.resize(3, n);
+    const Index n = sys.size();
+    const pdyn::Matrix3X& a0 = reusable != nullptr ? *reusable : sys.compute_accelerations();
     // Column ranges split over the host's threads; columns are independent,
     // so the result does not depend on the thread count.
-    const bool reused = reuse_ && still_valid(sys);
-    const pdyn::Matrix3X& a = reused ? last_a1_ : sys.compute_accelerations();
-    pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
-      const pdyn::Index m = e - b;
-      a0_.middleCols(b, m) = a.middleCols(b, m);
-      half_.middleCols(b, m) = v.middleCols(b, m) + (0.5 * h) * a0_.middleCols(b, m);  // v_half
-      x.middleCols(b, m) += h * half_.middleCols(b, m);
-      v.middleCols(b, m) +=
-          h * a0_.middleCols(b, m);  // velocity predictor, only seen by a1's forces
-    });
+    if (!needs.velocity) {
+      pdyn::parallel_ranges(n, [&](Index b, Index e) {
+        v.middleCols(b, e - b) += (0.5 * h) * a0.middleCols(b, e - b);  // v_half
+        x.middleCols(b, e - b) += h * v.middleCols(b, e - b);
+      });
+    } else {
+      half_.resize(3, n);  // no-op after the first step
+      pdyn::parallel_ranges(n, [&](Index b, Index e) {
+        const Index m = e - b;
+        half_.middleCols(b, m) = v.middleCols(b, m) + (0.5 * h) * a0.middleCols(b, m);
+        x.middleCols(b, m) += h * half_.middleCols(b, m);
+        v.middleCols(b, m) += h * a0.middleCols(b, m);  // predictor, only seen by a1's forces
+      });
+    }
     sys.set_time(t0 + h);
 
     const pdyn::Matrix3X& a1 = sys.compute_accelerations();
-    pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
-      v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
-    });
+    if (!needs.velocity) {
+      pdyn::parallel_ranges(n, [&](Index b, Index e) {
+        v.middleCols(b, e - b) += (0.5 * h) * a1.middleCols(b, e - b);
+      });
+    } else {
+      pdyn::parallel_ranges(n, [&](Index b, Index e) {
+        v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
+      });
+    }
+    // Valid as the next a0 only if nothing writes or evaluates before it.
+    a1_ = needs.velocity ? nullptr : &a1;
+    t1_ = sys.time();
+    evaluations_ = sys.force_evaluations();
+    version_ = sys.state_version();
     // With a collider a0 is always evaluated (still_valid): nothing to keep.
-    if (reuse_ && sys.collider_objects().empty()) remember(sys, a1);
+    if (promise_ && sys.collider_objects().empty()) promised_.remember(sys, a1);
   }
 
  private:
-  // The state the last step ended in: positions, time and force objects.
-  bool still_valid(const pdyn::System& sys) const {
-    // The time only to within rounding: the host sets it to k dt after a
-    // step that ended at t0 + h.
-    if (!valid_ || last_x_.cols() != sys.size() ||
-        std::abs(sys.time() - last_t_) > 1e-9 * std::max(1.0, std::abs(last_t_))) {
-      return false;
+  struct Needs {
+    bool velocity = false;  // some force or collider depends on velocity
+    bool time = false;      // some force depends on time
+  };
+
+  Needs needs_of(const pdyn::System& sys) const {
+    Needs needs;
+    needs.velocity = !sys.collider_objects().empty();
+    if (promise_) return needs;
+    for (const auto& entry : sys.force_objects()) {
+      const pdyn::StateDependence d = entry.force->dependence();
+      needs.velocity = needs.velocity || d.velocity;
+      needs.time = needs.time || d.time;
     }
-    // Colliders' contact forces depend on velocity (Witkin's resting
-    // contact tests |N . V|): with any collider, a0 is always evaluated.
-    if (!sys.collider_objects().empty()) return false;
-    const auto& forces = sys.force_objects();
-    if (forces.size() != last_forces_.size()) return false;
-    for (std::size_t k = 0; k < forces.size(); ++k) {
-      if (forces[k].force.get() != last_forces_[k]) return false;
-    }
-    return last_x_ == sys.positions();
+    return needs;
   }
 
-  void remember(const pdyn::System& sys, const pdyn::Matrix3X& a1) {
-    last_a1_ = a1;  // copies into storage sized on the first step
-    // As the kernel will leave them: wrapped into a periodic box.
-    last_x_ = sys.positions();
-    if (sys.domain().any_periodic()) {
-      for (pdyn::Index i = 0; i < last_x_.cols(); ++i) {
-        last_x_.col(i) = sys.domain().wrap(last_x_.col(i));
+  // reuse_forces: true keeps the rule it had before forces declared their
+  // dependence, so that the scenes using it give the same bits: a1 (a copy)
+  // is reused when the positions are those the last step ended with after
+  // the kernel's wrap into a periodic box (a1 was evaluated before the wrap:
+  // the same system, though its separations may round differently), the time
+  // matches to rounding, the force objects are the same and there is no
+  // collider. Every write through the state's views is not a reason to
+  // evaluate again: the promise is that velocities do not matter.
+  struct Promised {
+    pdyn::Matrix3X a1, x;
+    double t = 0.0;
+    std::vector<const pdyn::Force*> forces;
+    bool valid = false;
+
+    bool still_valid(const pdyn::System& sys) const {
+      if (!valid || x.cols() != sys.size() ||
+          std::abs(sys.time() - t) > 1e-9 * std::max(1.0, std::abs(t))) {
+        return false;
       }
+      if (!sys.collider_objects().empty()) return false;
+      const auto& now = sys.force_objects();
+      if (now.size() != forces.size()) return false;
+      for (std::size_t k = 0; k < now.size(); ++k) {
+        if (now[k].force.get() != forces[k]) return false;
+      }
+      return x == sys.positions();
     }
-    last_t_ = sys.time();
-    last_forces_.resize(sys.force_objects().size());
-    for (std::size_t k = 0; k < last_forces_.size(); ++k) {
-      last_forces_[k] = sys.force_objects()[k].force.get();
-    }
-    valid_ = true;
-  }
 
-  bool reuse_;
-  pdyn::Matrix3X a0_, half_;  // sized on the first step, reused after
-  // reuse_forces: a1, x and t at the end of the last step, and its forces.
-  pdyn::Matrix3X last_a1_, last_x_;
-  double last_t_ = 0.0;
-  std::vector<const pdyn::Force*> last_forces_;
-  bool valid_ = false;
+    void remember(const pdyn::System& sys, const pdyn::Matrix3X& a) {
+      a1 = a;  // copies into storage sized on the first step
+      x = sys.positions();
+      if (sys.domain().any_periodic()) {
+        for (Index i = 0; i < x.cols(); ++i) x.col(i) = sys.domain().wrap(x.col(i));
+      }
+      t = sys.time();
+      forces.resize(sys.force_objects().size());
+      for (std::size_t k = 0; k < forces.size(); ++k) {
+        forces[k] = sys.force_objects()[k].force.get();
+      }
+      valid = true;
+    }
+  };
+
+  bool promise_;
+  Promised promised_;
+  pdyn::Matrix3X half_;  // v_half for velocity-dependent forces, sized on first use
+  // The last step's end: the System's a1 (or nullptr if it cannot be reused),
+  // the time it was evaluated at, and the counters that tell whether anything
+  // happened to the System since.
+  const pdyn::Matrix3X* a1_ = nullptr;
+  double t1_ = 0.0;
+  std::uint64_t evaluations_ = 0;
+  std::uint64_t version_ = 0;
 };
 
 pdyn::PluginDescriptor describe() {
@@ -131,8 +196,8 @@ pdyn::PluginDescriptor describe() {
   d.solver_traits.symplectic = true;
   d.params = {pdyn::param::boolean(
       "reuse_forces", false,
-      "forces depend on positions and time only: reuse the last step's a1 as a0 (one force "
-      "evaluation per step)")};
+      "promise that the forces depend on positions and time only, for forces that do not say "
+      "(Force::dependence): reuse the last step's a1 as a0 even then")};
   d.create_solver = [](const pdyn::Params& p, const pdyn::SceneContext&) {
     return std::make_unique<Verlet>(p.boolean("reuse_forces"));
   };
