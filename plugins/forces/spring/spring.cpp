@@ -9,6 +9,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 
@@ -16,6 +19,12 @@ namespace {
 
 using pdyn::Index;
 using pdyn::IndexPair;
+// Particle ids as stored per spring: 32 bits (a scene's N is checked against
+// it in create()). With one rest length for all springs (a grid family)
+// a spring is 8 bytes instead of 24: at 10^6 particles and 4 springs each,
+// 64 MB less to stream per force evaluation (issue 17, item 3).
+using Id = std::int32_t;
+using IdPair = std::array<Id, 2>;
 
 class Spring final : public pdyn::Force {
  public:
@@ -26,6 +35,9 @@ class Spring final : public pdyn::Force {
          Index n_particles)
       : ks_(ks), kd_(kd) {
     group_by_block(pairs, rest, n_particles);
+    uniform_rest_ = std::all_of(rest.begin(), rest.end(), [&](double r) { return r == rest[0]; });
+    rest0_ = rest.empty() ? 0.0 : rest[0];
+    if (uniform_rest_) std::vector<double>().swap(rest_);
   }
 
   // Parallel without races, atomics or a thread-count-dependent rounding.
@@ -81,7 +93,7 @@ class Spring final : public pdyn::Force {
       if (len == 0.0) continue;  // add_forces adds nothing here either
       const pdyn::Vec3 n = dx / len;
       const Eigen::Matrix3d nn = n * n.transpose();
-      const double geometric = std::max(0.0, 1.0 - rest_[s] / len);
+      const double geometric = std::max(0.0, 1.0 - rest(static_cast<Index>(s)) / len);
       const Eigen::Matrix3d kx = -ks_ * (nn + geometric * (Eigen::Matrix3d::Identity() - nn));
       sink.add_dfdx(i, i, kx);
       sink.add_dfdx(i, j, -kx);
@@ -101,7 +113,8 @@ class Spring final : public pdyn::Force {
   std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
     double u = 0.0;
     for (std::size_t s = 0; s < pairs_.size(); ++s) {
-      const double stretch = (p.x.col(pairs_[s][0]) - p.x.col(pairs_[s][1])).norm() - rest_[s];
+      const double stretch =
+          (p.x.col(pairs_[s][0]) - p.x.col(pairs_[s][1])).norm() - rest(static_cast<Index>(s));
       u += 0.5 * ks_ * stretch * stretch;
     }
     return u;
@@ -114,20 +127,20 @@ class Spring final : public pdyn::Force {
   template <class Accumulator>
   void accumulate(const pdyn::ParticleView& p, Accumulator& f) const {
     if (kd_ > 0.0) {
-      accumulate<true>(p, f);
+      uniform_rest_ ? accumulate<true, true>(p, f) : accumulate<true, false>(p, f);
     } else {
-      accumulate<false>(p, f);
+      uniform_rest_ ? accumulate<false, true>(p, f) : accumulate<false, false>(p, f);
     }
   }
 
-  template <bool Damped, class Accumulator>
+  template <bool Damped, bool Uniform, class Accumulator>
   void accumulate(const pdyn::ParticleView& p, Accumulator& f) const {
     const Index n_blocks = static_cast<Index>(block_start_.size()) - 1;
     const bool parallel =
         pdyn::max_threads() > 1 && static_cast<Index>(pairs_.size()) >= pdyn::kParallelMinElements;
     auto interior = [&](Index blk) {
       for (Index s = block_start_[blk]; s < block_start_[blk + 1]; ++s) {
-        const pdyn::Vec3 fi = force_on_first<Damped>(p, s);
+        const pdyn::Vec3 fi = force_on_first<Damped, Uniform>(p, s);
         f.col(pairs_[s][0]) += fi;
         f.col(pairs_[s][1]) -= fi;
       }
@@ -143,7 +156,7 @@ class Spring final : public pdyn::Force {
     const Index first = block_start_.back(), n_boundary = static_cast<Index>(pairs_.size()) - first;
     if (n_boundary == 0) return;
     pdyn::parallel_ranges(n_boundary, [&](Index b, Index e) {
-      for (Index s = b; s < e; ++s) buffer_.col(s) = force_on_first<Damped>(p, first + s);
+      for (Index s = b; s < e; ++s) buffer_.col(s) = force_on_first<Damped, Uniform>(p, first + s);
     });
     pdyn::parallel_ranges(static_cast<Index>(touched_.size()), [&](Index b, Index e) {
       for (Index t = b; t < e; ++t) {
@@ -185,7 +198,7 @@ class Spring final : public pdyn::Force {
     std::vector<Index> next(start.begin(), start.end() - 1);
     for (Index s = 0; s < n_springs; ++s) {
       const Index to = next[bucket(given[s])]++;
-      pairs_[to] = given[s];
+      pairs_[to] = {static_cast<Id>(given[s][0]), static_cast<Id>(given[s][1])};
       rest_[to] = given_rest[s];
     }
     block_start_.assign(start.begin(), start.end() - 1);  // n_blocks + 1 entries
@@ -216,14 +229,14 @@ class Spring final : public pdyn::Force {
   // direction: the spring adds zero rather than NaN (a zero-length spring
   // at rest exerts no force anyway).
   // Inlined into both loops: a call per spring costs a fifth of the loop.
-  template <bool Damped>
+  template <bool Damped, bool Uniform>
   [[gnu::always_inline]] inline pdyn::Vec3 force_on_first(const pdyn::ParticleView& p,
                                                           Index s) const {
     const Index i = pairs_[s][0], j = pairs_[s][1];
     const pdyn::Vec3 dx = p.x.col(i) - p.x.col(j);
     const double len = dx.norm();
     if (len == 0.0) return pdyn::Vec3::Zero();
-    double magnitude = ks_ * (len - rest_[s]);
+    double magnitude = ks_ * (len - rest(s));
     if constexpr (Damped) {
       const pdyn::Vec3 dv = p.v.col(i) - p.v.col(j);
       magnitude += kd_ * dv.dot(dx) / len;
@@ -231,8 +244,12 @@ class Spring final : public pdyn::Force {
     return -(magnitude / len) * dx;
   }
 
-  std::vector<IndexPair> pairs_;  // grouped by block (group_by_block)
-  std::vector<double> rest_;      // rest length of each pair, m
+  double rest(Index s) const { return uniform_rest_ ? rest0_ : rest_[static_cast<std::size_t>(s)]; }
+
+  std::vector<IdPair> pairs_;  // grouped by block (group_by_block)
+  std::vector<double> rest_;   // rest length of each pair, m; empty if uniform_rest_
+  bool uniform_rest_ = false;  // every spring has rest length rest0_
+  double rest0_ = 0.0;         // m
   double ks_, kd_;
   std::vector<Index> block_start_;    // block b's interior springs: [start[b], start[b + 1])
   std::vector<Index> touched_;        // particles with boundary springs, increasing
@@ -245,6 +262,12 @@ class Spring final : public pdyn::Force {
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
   pdyn::require_distinct_particles(p, "pairs");
   const auto& pairs = p.pairs("pairs");
+  if (ctx.particles.size() > std::numeric_limits<Id>::max()) {
+    throw pdyn::ParamError("pairs",
+                           fmt::format("a scene of {} particles (expected at most {}: "
+                                       "springs store 32-bit particle ids)",
+                                       ctx.particles.size(), std::numeric_limits<Id>::max()));
+  }
   std::vector<double> rest =
       pdyn::rest_values(p, "rest", pairs.size(), "pairs", [&](std::size_t s) {
         return (ctx.particles.x.col(pairs[s][0]) - ctx.particles.x.col(pairs[s][1])).norm();
