@@ -170,8 +170,9 @@ class Progress {
 // Euler on a stiff chain reaches 1e293 J) must not pass for a success.
 //
 // It applies when every force object either reports a potential energy
-// that does not depend on time (checked once, at the start, by evaluating
-// it at the start, middle and end times of the run with the state held) or
+// that does not depend on time (declared, Force::dependence, or checked
+// once, at the start, by evaluating it at the start, middle and end times of
+// the run with the state held) or
 // declares the `dissipative` trait: then no force drives the system and its
 // total energy E = K + U can only be kept or lost, up to the solver's error.
 // Colliders only take energy away. The rule: E - E0 > 1e6 S, where
@@ -196,7 +197,9 @@ class EnergyWatch {
         return;  // a force whose work is not accounted for: no check
       }
       // A potential that changes with time at a fixed state (a moving
-      // trap) pumps energy in: a driving force.
+      // trap) pumps energy in: a driving force. A force that declares it
+      // does not depend on time (Force::dependence) is not asked.
+      if (!f.force->dependence().time) continue;
       for (const double t : {0.5 * (t0 + scene.end_time), scene.end_time}) {
         sys.set_time(t);
         const auto u = f.force->potential_energy(sys.view());

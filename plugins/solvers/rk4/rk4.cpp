@@ -26,17 +26,19 @@ class Rk4 final : public pdyn::Solver {
     k_.resize(n);
     sum_.resize(n);
     auto y = sys.state();
-    // Applies update(segment of y, of y0, of k, of sum) over [0, n) in parallel.
+    // Applies update(segment of y, of y0, of k, of sum) over [0, n) in
+    // parallel, chunk by chunk: the statements of one update then read each
+    // vector from memory once.
     auto update = [&](auto&& op) {
-      pdyn::parallel_ranges(n, [&](Index b, Index e) {
+      pdyn::parallel_chunks(n, pdyn::kChunkElements, [&](Index b, Index e) {
         op(y.segment(b, e - b), y0_.segment(b, e - b), k_.segment(b, e - b),
            sum_.segment(b, e - b));
       });
     };
-    update([](auto yy, auto y0, auto, auto) { y0 = yy; });
-
     sys.derivative(k_);  // k1
+    // y0 is saved in the pass that takes the first stage: one pass less.
     update([h](auto yy, auto y0, auto k, auto sum) {
+      y0 = yy;
       sum = k;
       yy = y0 + (0.5 * h) * k;
     });
