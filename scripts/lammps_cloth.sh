@@ -14,6 +14,7 @@
 #
 #   bash scripts/lammps_cloth.sh [BUILD_DIR]       (default: build)
 #   SIZES="316 1000" ROUNDS=5 bash scripts/lammps_cloth.sh
+#   ONE_CORE=1 ...                 only the 1-rank / 1-thread runs
 #
 # Needs LAMMPS (Debian: apt-get install lammps, binary lmp; mpirun for 2
 # ranks) for the reference; it is never a build dependency. Writes out/lammps-cloth/.
@@ -77,11 +78,13 @@ for n in $sizes; do
     lammps_cloth "$n" "$steps" 1 /dev/null
     l1=$(ns_lammps "$out/log.$n.1" "$n" "$steps")
     p1=$(ns_pdyn "$n" "$steps" 1)
-    l2=nan
-    if command -v mpirun >/dev/null && lammps_cloth "$n" "$steps" 2 /dev/null; then
-      l2=$(ns_lammps "$out/log.$n.2" "$n" "$steps")
+    l2=nan p2=nan
+    if [[ ${ONE_CORE:-0} == 0 ]]; then
+      if command -v mpirun >/dev/null && lammps_cloth "$n" "$steps" 2 /dev/null; then
+        l2=$(ns_lammps "$out/log.$n.2" "$n" "$steps")
+      fi
+      p2=$(ns_pdyn "$n" "$steps" 2)
     fi
-    p2=$(ns_pdyn "$n" "$steps" 2)
     echo "$l1 $p1 $l2 $p2" | tee -a "$out/times-$n"
   done
   /usr/bin/python3 - "$out/times-$n" "$n" <<'PY'

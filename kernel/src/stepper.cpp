@@ -2,8 +2,14 @@
 // pdyn/stepper.hpp).
 #include "pdyn/stepper.hpp"
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
+#include <cstring>
 #include <utility>
 
 #include "pdyn/error.hpp"
@@ -16,21 +22,56 @@ namespace pdyn {
 
 namespace {
 
+// Copies m doubles and tells whether all are finite, in one loop: the copy
+// is the last good state, read only if a later step fails, so it is written
+// with streaming stores where the CPU has them (it should not displace the
+// working set from the caches, nor be read from memory first, as a plain
+// store reads each cache line before writing it), and x * 0 is 0 for a
+// finite x and NaN for an infinity or a NaN, so the products' sum is 0 or
+// NaN. Eigen's allFinite() took longer than the copy (8% of a velocity
+// Verlet step of the 1000 x 1000 cloth against 6%: its early exit keeps the
+// loop scalar).
+bool copy_finite(const double* from, double* to, Index m) {
+#ifdef __SSE2__
+  Index k = 0;
+  double scalar = 0.0;
+  if (m > 0 && (reinterpret_cast<std::uintptr_t>(to) & 15) != 0) {
+    to[0] = from[0];
+    scalar += from[0] * 0.0;
+    k = 1;
+  }
+  const __m128d zero = _mm_setzero_pd();
+  __m128d sum = zero;
+  for (; k + 1 < m; k += 2) {
+    const __m128d x = _mm_loadu_pd(from + k);
+    sum = _mm_add_pd(sum, _mm_mul_pd(x, zero));
+    _mm_stream_pd(to + k, x);
+  }
+  for (; k < m; ++k) {
+    to[k] = from[k];
+    scalar += from[k] * 0.0;
+  }
+  return _mm_movemask_pd(_mm_cmpunord_pd(sum, sum)) == 0 && scalar == 0.0;
+#else
+  std::memcpy(to, from, static_cast<std::size_t>(m) * sizeof(double));
+  double sum = 0.0;
+  for (Index k = 0; k < m; ++k) sum += from[k] * 0.0;
+  return sum == 0.0;
+#endif
+}
+
 // Copies `from` into `to` and tells whether every value is finite, in one
-// pass over memory: each chunk (16 KiB, in L1 once written) is checked right
-// after it is copied. This is the only pass the Stepper makes over a good
-// step's state; a separate check and copy cost two (issue 17, item 1).
+// pass over memory, split over the threads. This is the only pass the
+// Stepper makes over a good step's state; a separate check and copy cost
+// two (issue 17, item 1).
 bool copy_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::VectorXd& to) {
   to.resize(from.size());  // allocates on the first step only
-  constexpr Index kChunk = 2048;
   std::atomic<bool> finite{true};
   parallel_ranges(from.size(), [&](Index b, Index e) {
-    bool ok = true;
-    for (Index c = b; c < e; c += kChunk) {
-      const Index m = std::min(kChunk, e - c);
-      to.segment(c, m) = from.segment(c, m);
-      ok = ok && to.segment(c, m).allFinite();
-    }
+    const bool ok = copy_finite(from.data() + b, to.data() + b, e - b);
+#ifdef __SSE2__
+    _mm_sfence();  // the streaming stores are weakly ordered: done before the barrier
+#endif
     if (!ok) finite.store(false, std::memory_order_relaxed);
   });
   return finite.load(std::memory_order_relaxed);
@@ -49,8 +90,14 @@ Index first_non_finite(const System& sys) {
 
 }  // namespace
 
+// The two state buffers are allocated and their pages touched here, before
+// the first step: at 10^6 particles that is 96 MB of page faults a timed loop
+// would otherwise pay in its first step.
 Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
-    : sys_(sys), solver_(solver), label_(&solver_label) {}
+    : sys_(sys), solver_(solver), label_(&solver_label) {
+  previous_.setZero(sys.dimension());
+  next_.setZero(sys.dimension());
+}
 
 // The solver's time after step() is overwritten with `t_end` itself: a run's
 // step k ends at k dt exactly, with no round-off carried from step to step,
