@@ -313,7 +313,10 @@ class Force:
     attributes describe it as a plugin: `parameters` (name -> pdyn.param;
     the constructor receives them as keywords, and the base class's sets
     them as attributes), `internal`, `dissipative`,
-    `singular` (the conformance kit checks each claim), `name` (default:
+    `singular`, `reads_velocity`, `reads_time` (the conformance kit checks
+    each claim; set the last two False, on the class or in __init__, for a
+    force of positions only, which verlet then evaluates once per step
+    instead of twice), `name` (default:
     the class name in snake_case), `version`. pdyn.check(cls) runs the kit;
     a scene loaded after the class is defined may use it by name."""
 
@@ -321,6 +324,8 @@ class Force:
     internal = False
     dissipative = False
     singular = False
+    reads_velocity = True
+    reads_time = True
     version = "0.1.0"
     t = 0.0
 

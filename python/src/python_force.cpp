@@ -29,7 +29,13 @@ class PythonForce final : public Force {
         has_potential_(
             !instance_.attr("potential_energy")
                  .attr("__func__")
-                 .is(py::module_::import("pdyn").attr("Force").attr("potential_energy"))) {}
+                 .is(py::module_::import("pdyn").attr("Force").attr("potential_energy"))),
+        // Per object, so that __init__ may decide from the parameters (a
+        // damping of 0 reads no velocity).
+        dependence_{instance_.attr("reads_velocity").cast<bool>(),
+                    instance_.attr("reads_time").cast<bool>()} {}
+
+  StateDependence dependence() const override { return dependence_; }
 
   ~PythonForce() override {
     // The kit and a released-GIL step may destroy it on any thread.
@@ -92,6 +98,7 @@ class PythonForce final : public Force {
   py::object instance_;
   py::object add_forces_;
   bool has_potential_;
+  StateDependence dependence_;
 };
 
 // Descriptors of Python forces live as long as the process: registries,

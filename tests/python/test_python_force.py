@@ -171,3 +171,43 @@ def test_base_constructor_sets_the_parameters():
     sim.add_force("gust", a=[0.0, 0.0, 3.0])
     sim.step(10)
     assert sim.v[1, 2] == pytest.approx(0.3, abs=1e-14)
+
+
+class CountingTether(Tether):
+    """a tether that says it reads neither velocities nor time, and counts its calls"""
+    reads_velocity = False
+    reads_time = False
+    calls = 0
+
+    def add_forces(self, x, v, mass, f):
+        type(self).calls += 1
+        f -= self.ks * x
+
+
+class LyingDrag(LinearDrag):
+    """linear drag that claims to read no velocity"""
+    reads_velocity = False
+
+
+def test_positions_only_force_is_evaluated_once_per_verlet_step():
+    # The same oscillator with the claim and without: the same bits, half the calls.
+    text = """
+simulation: { dt: 0.01, steps: 100, solver: { type: verlet } }
+particles: [ { position: [1, 0, 0], mass: 1 } ]
+"""
+    once, twice = pdyn.loads(text, threads=1), pdyn.loads(text, threads=1)
+    once.add_force(CountingTether(ks=4.0))
+    twice.add_force(Tether(ks=4.0))
+    once.run()
+    twice.run()
+    assert once.force_evaluations == 101
+    assert twice.force_evaluations == 200
+    assert CountingTether.calls == 101
+    assert np.array_equal(once.x, twice.x) and np.array_equal(once.v, twice.v)
+    assert once.x[0, 0] == pytest.approx(np.cos(2.0), abs=1e-3)  # x(1 s) = cos(w t), w = 2
+
+
+def test_conformance_kit_checks_the_dependence_claim():
+    assert pdyn.check(CountingTether).passed
+    report = pdyn.check(LyingDrag)
+    assert [r.name for r in report.failed] == ["force.dependence"], str(report)
