@@ -59,9 +59,11 @@ ns_pdyn() {  # n steps threads
 
 uptime
 for n in $sizes; do
-  # Steps so that each run takes about a second on one core.
-  steps=$((20000000 / (n * n)))
+  # Steps so that each run takes a few seconds on one core (10^8
+  # particle-steps), 100 to 1000.
+  steps=$((100000000 / (n * n)))
   ((steps > 1000)) && steps=1000
+  ((steps < 100)) && steps=100
   echo "== cloth $n x $n, $steps steps of 0.0002 s"
   pdyn_cloth "$n" 0 --set "output=[{ type: csv, path: $out/frame0-$n.csv }]" >/dev/null 2>&1
   /usr/bin/python3 bench/lammps/cloth.py data "$out/frame0-$n.csv" "$n" "$n" "$out/cloth$n.data"

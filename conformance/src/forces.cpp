@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <pdyn/local_force.hpp>
 #include <random>
 
 #include "checks.hpp"
@@ -253,6 +254,26 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
     });
   } else {
     out.push_back(skip("force.dependence", "declares it depends on velocity and time"));
+  }
+
+  // The kernel adds a local force range by range inside its gather pass:
+  // that must give add_forces' bits, however the particles are split.
+  if (LocalForce* local = local_force(*force); local != nullptr && local->acts_locally()) {
+    guarded(out, "force.local_range", [&] {
+      const Matrix3X whole = forces_of(*force, home);
+      double worst = 0.0;
+      const Index n = home.size();
+      for (const Index cut : {Index{1}, n / 3, n - 1}) {
+        Matrix3X f = Matrix3X::Zero(3, n);
+        local->add_forces_range(home.view(), f, cut, n);
+        local->add_forces_range(home.view(), f, 0, cut);
+        if (!bit_equal(f, whole)) worst = std::max(worst, std::max(max_abs(f - whole), 1e-300));
+      }
+      return result("force.local_range", worst == 0.0, worst, 0,
+                    "add_forces_range over [cut, N) then [0, cut), 3 cuts: add_forces' bits");
+    });
+  } else {
+    out.push_back(skip("force.local_range", "no LocalForce interface"));
   }
 
   pair_checks(d, params, *force, rng, out);

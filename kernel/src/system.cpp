@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "pdyn/error.hpp"
+#include "pdyn/local_force.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/plugin_call.hpp"
 
@@ -153,6 +154,7 @@ void System::update_inverse_mass() {
 }
 
 void System::add_force(std::shared_ptr<Force> force, std::string label) {
+  local_.push_back(force ? local_force(*force) : nullptr);
   forces_.push_back({std::move(force), std::move(label)});
   touch();
 }
@@ -161,6 +163,7 @@ bool System::remove_force(const Force* force) {
   const auto it = std::find_if(forces_.begin(), forces_.end(),
                                [&](const ForceEntry& e) { return e.force.get() == force; });
   if (it == forces_.end()) return false;
+  local_.erase(local_.begin() + (it - forces_.begin()));
   forces_.erase(it);
   touch();
   return true;
@@ -233,11 +236,24 @@ void check_finite(const Matrix3X& f, const std::string& label) {
 
 // Witkin's loop, steps 1 and 2 (clear accumulators, invoke force objects),
 // followed by the colliders' contact forces, which must see the total force.
-void System::evaluate_forces() {
+// The forces at the end of the list that act locally (pdyn/local_force.hpp)
+// are left to the gather, which adds them chunk by chunk
+// (add_local_forces); the index of the first of them is returned. Not with
+// a collider (it must see them) or finite checks (each force is checked on
+// its own).
+std::size_t System::evaluate_forces() {
   ++evaluations_;
+  std::size_t first_local = forces_.size();
+  if (colliders_.empty() && !finite_checks_) {
+    while (first_local > 0 && local_[first_local - 1] != nullptr &&
+           local_[first_local - 1]->acts_locally()) {
+      --first_local;
+    }
+  }
   parallel_ranges(size(), [&](Index b, Index e) { force_.middleCols(b, e - b).setZero(); });
   const ParticleView p = view();
-  for (auto& entry : forces_) {
+  for (std::size_t k = 0; k < first_local; ++k) {
+    auto& entry = forces_[k];
     guarded(entry.label, "add_forces", [&] { entry.force->add_forces(p, force_); });
     if (finite_checks_) check_finite(force_, entry.label);
   }
@@ -246,20 +262,35 @@ void System::evaluate_forces() {
             [&] { entry.collider->apply_contact_forces(p, force_); });
     if (finite_checks_) check_finite(force_, entry.label);
   }
+  return first_local;
+}
+
+// Forces [first, end of list) on particles [begin, end), in list order; on
+// the calling thread of a gather's chunk. The call scope names each for a
+// crash report.
+void System::add_local_forces(std::size_t first, Index begin, Index end) {
+  if (first == forces_.size()) return;
+  const ParticleView p = view();
+  for (std::size_t k = first; k < forces_.size(); ++k) {
+    const crash::CallScope scope(forces_[k].label, "add_forces");
+    local_[k]->add_forces_range(p, force_, begin, end);
+  }
 }
 
 // Step 3, the gather: [v | f/m]. A fixed particle has zero velocity (nailing
 // zeroes it and its acceleration is zero) and zero inverse mass, so both
 // halves vanish for it without a branch.
 void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
-  evaluate_forces();
+  const std::size_t first_local = evaluate_forces();
   const Index n = size();
   // One pass over the particles writes both halves (both streams are
-  // memory-bound at large N; one pass reads the state and f once). Each
-  // column is independent, so the split over threads cannot change a bit.
+  // memory-bound at large N; one pass reads the state and f once), chunk by
+  // chunk, after the local forces have added into the chunk. Each column is
+  // independent, so the split over threads cannot change a bit.
   Eigen::Map<Matrix3X> vel(dydt.data(), 3, n), a(dydt.data() + 3 * n, 3, n);
   const auto v = std::as_const(*this).velocities();
-  parallel_ranges(n, [&](Index b, Index e) {
+  parallel_chunks(n, kChunkElements / 3, [&](Index b, Index e) {
+    add_local_forces(first_local, b, e);
     vel.middleCols(b, e - b) = v.middleCols(b, e - b);
     a.middleCols(b, e - b) = force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
   });
@@ -269,9 +300,10 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
 }
 
 const Matrix3X& System::compute_accelerations() {
-  evaluate_forces();
+  const std::size_t first_local = evaluate_forces();
   accel_.resize(3, size());  // allocates on the first call only
-  parallel_ranges(size(), [&](Index b, Index e) {
+  parallel_chunks(size(), kChunkElements / 3, [&](Index b, Index e) {
+    add_local_forces(first_local, b, e);
     accel_.middleCols(b, e - b) =
         force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
   });

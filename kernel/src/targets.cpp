@@ -1,10 +1,14 @@
-// The key function of MovableTargets (pdyn/targets.hpp): its type_info lives
-// in the kernel, so a host's dynamic_cast recognises the interface in a
-// force created by any plugin library.
+// The key functions of the optional force interfaces MovableTargets
+// (pdyn/targets.hpp) and LocalForce (pdyn/local_force.hpp): their type_info
+// lives in the kernel, so a dynamic_cast recognises the interface in a force
+// created by any plugin library.
 #include "pdyn/targets.hpp"
+
+#include "pdyn/local_force.hpp"
 
 namespace pdyn {
 
 MovableTargets::~MovableTargets() = default;
+LocalForce::~LocalForce() = default;
 
 }  // namespace pdyn

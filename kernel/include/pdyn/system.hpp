@@ -25,6 +25,8 @@
 
 namespace pdyn {
 
+class LocalForce;
+
 class System {
  public:
   System() = default;
@@ -173,7 +175,8 @@ class System {
   const std::vector<ColliderEntry>& collider_objects() const noexcept { return colliders_; }
 
  private:
-  void evaluate_forces();
+  std::size_t evaluate_forces();
+  void add_local_forces(std::size_t first, Index begin, Index end);
   void update_inverse_mass();
 
   Eigen::VectorXd state_;     // [x | v], 6N
@@ -186,6 +189,7 @@ class System {
   double time_ = 0.0;
   bool finite_checks_ = false;
   std::vector<ForceEntry> forces_;
+  std::vector<LocalForce*> local_;  // per force: its LocalForce interface, or nullptr
   std::vector<ColliderEntry> colliders_;
   std::uint64_t evaluations_ = 0;
   std::uint64_t version_ = 0;  // state_version()

@@ -1,24 +1,32 @@
 // drag: linear viscous drag, f = -k v (Witkin, SIGGRAPH '97 notes,
 // "Viscous Drag"). It removes energy, so it declares itself dissipative.
+#include <pdyn/local_force.hpp>
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 
 namespace {
 
-class Drag final : public pdyn::Force {
+// f_i = -k v_i depends on particle i alone: a LocalForce, which the kernel
+// adds inside its gather pass when it can.
+class Drag final : public pdyn::Force, public pdyn::LocalForce {
  public:
   Drag(double k, pdyn::Selection selection) : k_(k), selection_(std::move(selection)) {}
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
     if (selection_.all()) {
       // Column ranges on the host's threads; columns are independent.
-      pdyn::parallel_ranges(p.size(), [&](pdyn::Index b, pdyn::Index e) {
-        f.middleCols(b, e - b).noalias() -= k_ * p.v.middleCols(b, e - b);
-      });
+      pdyn::parallel_ranges(p.size(),
+                            [&](pdyn::Index b, pdyn::Index e) { add_forces_range(p, f, b, e); });
       return;
     }
     for (const pdyn::Index i : selection_.ids()) f.col(i) -= k_ * p.v.col(i);
+  }
+
+  bool acts_locally() const override { return selection_.all(); }
+  void add_forces_range(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f, pdyn::Index b,
+                        pdyn::Index e) override {
+    f.middleCols(b, e - b).noalias() -= k_ * p.v.middleCols(b, e - b);
   }
 
   pdyn::StateDependence dependence() const override { return {true, false}; }

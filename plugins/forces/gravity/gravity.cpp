@@ -1,12 +1,15 @@
 // gravity: constant gravitational acceleration, f = m g
 // (Witkin, SIGGRAPH '97 notes, "Gravity").
+#include <pdyn/local_force.hpp>
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 
 namespace {
 
-class Gravity final : public pdyn::Force {
+// f_i = m_i g depends on particle i alone: a LocalForce, which the kernel
+// adds inside its gather pass when it can.
+class Gravity final : public pdyn::Force, public pdyn::LocalForce {
  public:
   Gravity(const pdyn::Vec3& g, pdyn::Selection selection)
       : g_(g), selection_(std::move(selection)) {}
@@ -14,12 +17,17 @@ class Gravity final : public pdyn::Force {
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
     if (selection_.all()) {
       // Column ranges on the host's threads; columns are independent.
-      pdyn::parallel_ranges(p.size(), [&](pdyn::Index b, pdyn::Index e) {
-        f.middleCols(b, e - b).noalias() += g_ * p.mass.segment(b, e - b).transpose();
-      });
+      pdyn::parallel_ranges(p.size(),
+                            [&](pdyn::Index b, pdyn::Index e) { add_forces_range(p, f, b, e); });
       return;
     }
     for (const pdyn::Index i : selection_.ids()) f.col(i) += p.mass(i) * g_;
+  }
+
+  bool acts_locally() const override { return selection_.all(); }
+  void add_forces_range(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f, pdyn::Index b,
+                        pdyn::Index e) override {
+    f.middleCols(b, e - b).noalias() += g_ * p.mass.segment(b, e - b).transpose();
   }
 
   // f = m g reads neither velocities nor time.
