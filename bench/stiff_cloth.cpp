@@ -11,7 +11,7 @@
 //
 //   pdyn_bench_stiff_cloth [--size N]... [--repeats N] [--duration S]
 //                          [--cg-tolerance E]... [--threads T]
-//                          [--bisect-steps K] [--skip-rk4] [--trace]
+//                          [--bisect-steps K] [--rk4-dt S] [--skip-rk4] [--trace]
 //
 // --size N (repeatable; default 30) is an N x N grid of the same sheet:
 // 1 m x 1 m, 1 kg in all (spacing 1/(N-1) m, 1/N^2 kg per particle), springs
@@ -35,7 +35,8 @@
 // steps of its candidate dt: above rk4's limit the stiffest mode grows by a
 // few percent a step, so a few thousand steps show it. The timing run then
 // covers the whole duration and, should it not be stable, the step is
-// lowered by 1% until it is.
+// lowered by 1% until it is. --rk4-dt S skips the bisection and times rk4 at
+// S (with one --size: a step an earlier bisection found).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -212,6 +213,7 @@ int main(int argc, char** argv) {
   std::vector<int> sizes;
   std::vector<double> tolerances;
   bool skip_rk4 = false, tolerances_given = false;
+  double given_rk4_dt = 0.0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--size" && i + 1 < argc) {
@@ -228,13 +230,16 @@ int main(int argc, char** argv) {
       s.threads = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--bisect-steps" && i + 1 < argc) {
       s.bisect_steps = std::max(0, std::atoi(argv[++i]));
+    } else if (a == "--rk4-dt" && i + 1 < argc) {
+      given_rk4_dt = std::atof(argv[++i]);
     } else if (a == "--skip-rk4") {
       skip_rk4 = true;
     } else if (a == "--trace") {
       s.trace = true;
     } else {
       std::cerr << "usage: pdyn_bench_stiff_cloth [--size N]... [--repeats N] [--duration S] "
-                   "[--cg-tolerance E]... [--threads T] [--bisect-steps K] [--skip-rk4] "
+                   "[--cg-tolerance E]... [--threads T] [--bisect-steps K] [--rk4-dt S] "
+                   "[--skip-rk4] "
                    "[--trace]\n";
       return 2;
     }
@@ -268,7 +273,7 @@ int main(int argc, char** argv) {
       double rk4_dt = 0.0, rk4_unstable = 0.0;
       Outcome rk4;
       if (!skip_rk4) {
-        rk4_dt = largest_stable_rk4_dt(size, s, &rk4_unstable);
+        rk4_dt = given_rk4_dt > 0 ? given_rk4_dt : largest_stable_rk4_dt(size, s, &rk4_unstable);
         for (int k = 0; k < s.repeats; ++k) {
           Scene scene = load(size, "rk4", rk4_dt, s.duration);
           Outcome o = run(scene, s.threads);
@@ -296,7 +301,7 @@ int main(int argc, char** argv) {
             o.run.wall, skip_rk4 ? "-" : fmt::format("{:.1f}x", rk4.wall / o.run.wall),
             skip_rk4 ? "-" : fmt::format("{:.3f}", rk4.max_travel), o.run.max_travel, vs_rk4);
       }
-      if (!skip_rk4) {
+      if (!skip_rk4 && rk4_unstable > 0) {
         std::cerr << fmt::format("{} x {}: rk4 is unstable at dt = {:.4g} s\n", size, size,
                                  rk4_unstable);
       }
