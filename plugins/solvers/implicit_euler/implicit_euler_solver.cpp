@@ -22,7 +22,7 @@
 //   3 x 3 blocks (BlockLdlt below), by default. Preconditioned CG needs
 //   ~sqrt(cond A) ~ h w_max iterations, and on stiff cloth h w_max is in the
 //   hundreds; a sparse factorisation costs about as much as 50 CG
-//   iterations on the 30 x 30 cloth of bench/ and is exact, so it is 1.7x
+//   iterations on the 30 x 30 cloth of bench/ and is exact, so it is 1.5x
 //   faster there than CG at its loose default tolerance and more at any
 //   tighter one (docs/solvers.md). The ordering and L's pattern depend only
 //   on A's block pattern, which is kept from step to step, so they are
