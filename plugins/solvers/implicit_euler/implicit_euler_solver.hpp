@@ -8,12 +8,27 @@
 #include <cstdint>
 #include <pdyn/force.hpp>
 #include <pdyn/solver.hpp>
+#include <string>
 #include <utility>
 #include <vector>
 
 namespace pdyn::solvers {
 
+/// How the linear system of a step is solved.
+enum class LinearSolver {
+  Auto,    ///< direct when every force has Jacobians and the cloth is small enough, else cg
+  Direct,  ///< sparse block LDL^T factorisation (every force must supply Jacobians)
+  Cg,      ///< preconditioned conjugate gradients (matrix-free forces allowed)
+};
+
 struct ImplicitEulerOptions {
+  LinearSolver linear_solver = LinearSolver::Auto;
+  /// Auto solves directly while the factor needs at most this many bytes,
+  /// else by CG. On the stiff cloth the direct solve is the faster at every
+  /// size measured (docs/solvers.md), so the bound is on memory only: the
+  /// 316 x 316 cloth's factor takes 0.50 GB, the 1000 x 1000 one's would
+  /// take several.
+  std::int64_t direct_max_bytes = std::int64_t{1} << 30;
   /// CG stops when the residual r of (M - h df/dv - h^2 df/dx) dv = b
   /// satisfies r^T P^-1 r <= cg_tolerance^2 b^T P^-1 b, P the block-diagonal
   /// preconditioner (Baraff & Witkin's criterion). The default keeps the solve's error well below
@@ -24,6 +39,54 @@ struct ImplicitEulerOptions {
 };
 
 /// Linearised backward Euler (Baraff & Witkin 1998): see implicit_euler_solver.cpp.
+namespace detail {
+
+/// Sparse LDL^T of a symmetric positive definite matrix of 3 x 3 blocks,
+/// up-looking, one block row of L at a time (T. A. Davis, "Algorithm 849: a
+/// concise sparse Cholesky factorization package", ACM TOMS 31 (2005), with
+/// each scalar replaced by a 3 x 3 block), after an approximate minimum
+/// degree ordering of the block graph (Eigen's AMD). analyze() does
+/// everything that depends only on the pattern and allocates; factorize()
+/// and solve() then reuse that storage, so they allocate nothing.
+class BlockLdlt {
+ public:
+  /// The pattern: `particles` lists the unknowns' particle indices; block row
+  /// r (of particle particles[r]) holds slots row_start[particles[r]] ..
+  /// row_start[particles[r] + 1] - 1 of the caller's block-CSR matrix, slot s
+  /// at column particle col[s]. `compact` maps a particle to its position in
+  /// `particles` (-1: not an unknown; such columns must not appear).
+  void analyze(const std::vector<Index>& particles, const std::vector<Index>& compact,
+               const std::vector<Index>& row_start, const std::vector<Index>& col);
+  /// Factorises the matrix whose block-CSR values are `val` (same slots as
+  /// given to analyze). Returns -1, or the elimination step at which a pivot
+  /// block was not positive definite.
+  Index factorize(const std::vector<Eigen::Matrix3d>& val);
+  /// x = A^-1 b on the unknowns' particles; other entries of x are not touched.
+  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  /// 3 x 3 blocks in L below the diagonal, known after analyze().
+  std::size_t factor_blocks() const noexcept {
+    return lp_.empty() ? 0 : static_cast<std::size_t>(lp_.back());
+  }
+  /// Memory factorize() needs, known after analyze().
+  double factor_bytes() const noexcept;
+
+ private:
+  std::vector<Index> order_;                      // elimination step -> particle
+  std::vector<Index> ucol_start_, urow_, uslot_;  // A's upper triangle, permuted, by column
+  std::vector<Index> parent_, lp_, lnz_, li_;     // elimination tree and L's columns
+  // L's blocks and the work row are stored 4 x 3, the fourth row zero: a
+  // column is then two SSE2 packets (one AVX one) and Eigen vectorises the
+  // block products that make up nearly all of the factorisation's work.
+  using Block = Eigen::Matrix<double, 4, 3>;
+  std::vector<Block> lx_, y_;
+  std::vector<Eigen::Matrix3d> dinv_;  // D^-1
+  std::vector<Index> flag_, pattern_;
+  std::vector<Eigen::Vector4d> z_;
+  bool allocated_ = false;  // the storage above, by the first factorize() after analyze()
+};
+
+}  // namespace detail
+
 class ImplicitEuler final : public Solver {
  public:
   explicit ImplicitEuler(const ImplicitEulerOptions& options) : o_(options) {}
@@ -36,6 +99,10 @@ class ImplicitEuler final : public Solver {
   std::int64_t total_cg_iterations() const noexcept { return total_iterations_; }
   /// Steps taken so far.
   std::int64_t steps() const noexcept { return steps_; }
+  /// Whether the last step solved its linear system directly (else by CG).
+  bool last_step_direct() const noexcept { return last_direct_; }
+  /// 3 x 3 blocks in the direct solve's L (0 before its analysis).
+  std::size_t factor_blocks() const noexcept { return ldlt_.factor_blocks(); }
 
  private:
   struct Block {
@@ -57,12 +124,13 @@ class ImplicitEuler final : public Solver {
   void collect_jacobians(const System& sys);
   bool pattern_matches(const System& sys) const;
   void build_pattern(const System& sys);
-  void assemble(const System& sys, double h);
+  void assemble(const System& sys, double h, bool precondition);
   void apply(const System& sys, double h, const Eigen::VectorXd& u, Eigen::VectorXd& out);
   void fd_jvp(const System& sys, const Eigen::VectorXd& dx, const Eigen::VectorXd& dv,
               Eigen::VectorXd& out);
   void precondition(const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
   void solve(const System& sys, double h);
+  void solve_direct(const System& sys);
 
   ImplicitEulerOptions o_;
   Sink sink_;
@@ -81,6 +149,10 @@ class ImplicitEuler final : public Solver {
   std::vector<std::ptrdiff_t> slot_x_, slot_v_;
   std::vector<Eigen::Matrix3d> val_;
   std::vector<Eigen::Matrix3d> precond_;  // inverses of the diagonal blocks; 0 if fixed
+  std::vector<Index> free_, compact_;     // free particles; particle -> position in free_
+  detail::BlockLdlt ldlt_;
+  bool ldlt_analyzed_ = false;  // for the current pattern
+  bool last_direct_ = false;
 
   Eigen::VectorXd x0_, v0_, f0_, b_, dv_, r_, z_, p_, q_, kxv_;
   Eigen::VectorXd ux_, uv_, fd_out_;  // finite-difference directions and result

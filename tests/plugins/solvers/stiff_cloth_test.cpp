@@ -59,7 +59,8 @@ TEST(StiffCloth, Rk4AtTheSameStepBlowsUp) {
 }
 
 TEST(StiffCloth, ConjugateGradientsThatDoNotConvergeAreAClearError) {
-  Scene scene = StiffCloth("{ type: implicit_euler, cg_max_iterations: 3 }", 0.01, 0.1);
+  Scene scene =
+      StiffCloth("{ type: implicit_euler, linear_solver: cg, cg_max_iterations: 3 }", 0.01, 0.1);
   // The solver throws pdyn::Error; the runner stops with exit code 3 and
   // restores the last good state.
   const RunResult r = run_scene(scene);
