@@ -14,7 +14,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Solver;
   d.name = "implicit_euler";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.description =
       "linearised backward Euler (Baraff & Witkin 1998), (M - h df/dv - h^2 df/dx) dv = "
       "h (f0 + h df/dx v0) by sparse LDL^T or conjugate gradients; order 1";
