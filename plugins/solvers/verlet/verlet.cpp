@@ -67,8 +67,8 @@ class Verlet final : public pdyn::Solver {
     const pdyn::Matrix3X* reusable = nullptr;
     if (promise_) {
       if (promised_.still_valid(sys)) reusable = &promised_.a1;
-    } else if (a1_ != nullptr && untouched && sys.force_evaluations() == evaluations_ &&
-               (!needs.time || t0 == t1_)) {
+    } else if (a1_ != nullptr && &sys == system_ && a1_->cols() == sys.size() && untouched &&
+               sys.force_evaluations() == evaluations_ && (!needs.time || t0 == t1_)) {
       reusable = a1_;
     }
     auto x = sys.positions();
@@ -107,6 +107,7 @@ class Verlet final : public pdyn::Solver {
     }
     // Valid as the next a0 only if nothing writes or evaluates before it.
     a1_ = needs.velocity ? nullptr : &a1;
+    system_ = &sys;  // a host may hand the solver another System (Python's add_particles)
     t1_ = sys.time();
     evaluations_ = sys.force_evaluations();
     version_ = sys.state_version();
@@ -182,6 +183,7 @@ class Verlet final : public pdyn::Solver {
   // the time it was evaluated at, and the counters that tell whether anything
   // happened to the System since.
   const pdyn::Matrix3X* a1_ = nullptr;
+  const pdyn::System* system_ = nullptr;
   double t1_ = 0.0;
   std::uint64_t evaluations_ = 0;
   std::uint64_t version_ = 0;
