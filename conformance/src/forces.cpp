@@ -243,7 +243,7 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
         if (!claim.velocity) s.v = random_state(rng).v;
         if (!claim.time) s.t = home.t + 1.0 + trial;
         const Matrix3X f = forces_of(*force, s);
-        if (!bit_equal(f, f0)) worst = std::max(worst, std::max(max_abs(f - f0), 1e-300));
+        worst = std::max(worst, bits_apart(f, f0));
       }
       const char* what = claim.velocity ? "time: the same bits at 5 other times"
                          : claim.time   ? "velocity: the same bits at 5 other velocities"
@@ -267,7 +267,7 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
         Matrix3X f = Matrix3X::Zero(3, n);
         local->add_forces_range(home.view(), f, cut, n);
         local->add_forces_range(home.view(), f, 0, cut);
-        if (!bit_equal(f, whole)) worst = std::max(worst, std::max(max_abs(f - whole), 1e-300));
+        worst = std::max(worst, bits_apart(f, whole));
       }
       return result("force.local_range", worst == 0.0, worst, 0,
                     "add_forces_range over [cut, N) then [0, cut), 3 cuts: add_forces' bits");

@@ -5,6 +5,7 @@
 // check constructs the plugin with.
 #include "sample.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -83,6 +84,10 @@ bool Constant::add_jacobians(const ParticleView&, JacobianSink&) { return true; 
 bool bit_equal(const Matrix3X& a, const Matrix3X& b) {
   return a.cols() == b.cols() &&
          std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
+}
+
+double bits_apart(const Matrix3X& a, const Matrix3X& b) {
+  return bit_equal(a, b) ? 0.0 : std::max(max_abs(a - b), 1e-300);
 }
 
 bool bit_equal(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {

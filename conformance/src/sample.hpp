@@ -99,6 +99,11 @@ bool bit_equal(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 /// max |m_ij|, 0 for an empty matrix.
 double max_abs(const Matrix3X& m);
 
+/// 0 when a and b are the same bits, else max |a - b| (at least 1e-300, so
+/// that a difference in a zero's sign still counts): the measure of checks
+/// that demand bit-identical results.
+double bits_apart(const Matrix3X& a, const Matrix3X& b);
+
 /// How many entries are NaN or infinite.
 std::size_t non_finite(const Matrix3X& m);
 

@@ -65,8 +65,8 @@ struct StepFault {
 };
 
 /// Takes steps of one system with one solver. Holds the last good state and
-/// the next one (2 x 6N doubles, sized on the first step: later steps do not
-/// allocate).
+/// the next one (2 x 6N doubles, allocated when the stepper is made; steps do
+/// not allocate unless the system's size changed).
 class Stepper {
  public:
   /// `solver_label` names the solver in faults and crash reports ("rk4

@@ -105,14 +105,17 @@ class Verlet final : public pdyn::Solver {
         v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
       });
     }
+    if (promise_) {
+      // With a collider a0 is always evaluated (still_valid): nothing to keep.
+      if (sys.collider_objects().empty()) promised_.remember(sys, a1);
+      return;
+    }
     // Valid as the next a0 only if nothing writes or evaluates before it.
     a1_ = needs.velocity ? nullptr : &a1;
     system_ = &sys;  // a host may hand the solver another System (Python's add_particles)
     t1_ = sys.time();
     evaluations_ = sys.force_evaluations();
     version_ = sys.state_version();
-    // With a collider a0 is always evaluated (still_valid): nothing to keep.
-    if (promise_ && sys.collider_objects().empty()) promised_.remember(sys, a1);
   }
 
  private:
