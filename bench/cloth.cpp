@@ -15,6 +15,10 @@
 //                                            3 steps (run each in its own process)
 //   pdyn_bench_cloth --load                  scene load times
 //   pdyn_bench_cloth --run VARIANT N STEPS [THREADS]   just step (for callgrind)
+//   pdyn_bench_cloth --pairs ROUNDS [N ...]  issue 17's targets, side by side:
+//                                            fused, pdyn run 1 thread and 2
+//                                            threads in turn, ROUNDS times per
+//                                            size, the median of each ratio
 //
 // scripts/bench.sh runs all three and writes docs/performance.md's numbers.
 #include <benchmark/benchmark.h>
@@ -346,6 +350,69 @@ int load_times() {
   return 0;
 }
 
+// ---- side by side (issue 17, items 1 to 3) ----
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+template <class F>
+double seconds_of(F&& f) {
+  const auto t0 = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The three variants run in turn, round after round, so that the machine's
+// drift (a hypervisor may take half the CPU for seconds) hits all three
+// alike, and each ratio is taken within its round. A round runs each for 2e7
+// particle-steps (at least 20 steps): long enough that the runner's set-up
+// weighs little, as in a real run.
+int pairs(int rounds, const std::vector<int>& sizes) {
+  const bool ok = std::all_of(sizes.begin(), sizes.end(),
+                              [](int n) { return same_state_check(n, n >= 1000 ? 3 : 10); });
+  if (!ok || rounds < 1) return 1;
+  std::printf(
+      "\n| size | steps | fused, ns | pdyn run 1 thread, ns | ratio (target <= 1.05; <= 1.0 at "
+      "1000) | pdyn 2 threads, ns | speed-up (target >= 1.8 at 316, 1000) |\n|---|---|---|---|"
+      "---|---|---|\n");
+  for (int n : sizes) {
+    const int steps = std::max(20, 20'000'000 / (n * n));
+    FusedCloth fused(spec(n));
+    const std::vector<double> fused_start = fused.state();
+    pdyn::Scene scene = load_pdyn(n, steps);
+    const Eigen::VectorXd start = std::as_const(*scene.system).state();
+    auto run = [&](int threads) {
+      scene.system->set_state(start);
+      scene.system->set_time(0.0);
+      pdyn::RunOptions options;
+      options.threads = threads;
+      if (pdyn::run_scene(scene, options).exit_code != 0) std::exit(1);
+    };
+    std::vector<double> tf, t1, t2, r1, r2;
+    for (int r = 0; r < rounds; ++r) {
+      fused.state() = fused_start;
+      tf.push_back(seconds_of([&] {
+        for (int k = 0; k < steps; ++k) fused.step(kDt);
+      }));
+      t1.push_back(seconds_of([&] { run(1); }));
+      t2.push_back(seconds_of([&] { run(2); }));
+      r1.push_back(t1.back() / tf.back());
+      r2.push_back(t1.back() / t2.back());
+    }
+    const double per = 1e9 / (static_cast<double>(n) * n * steps);
+    std::printf("| %d x %d | %d | %.1f | %.1f | %.3f (%.3f-%.3f) | %.1f | %.2f (%.2f-%.2f) |\n", n,
+                n, steps, median(tf) * per, median(t1) * per, median(r1),
+                *std::min_element(r1.begin(), r1.end()), *std::max_element(r1.begin(), r1.end()),
+                median(t2) * per, median(r2), *std::min_element(r2.begin(), r2.end()),
+                *std::max_element(r2.begin(), r2.end()));
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }  // namespace
 
 // Steps one variant without timing it, for instruction counts:
@@ -393,6 +460,12 @@ int main(int argc, char** argv) {
     return memory(argv[2], std::atoi(argv[3]), argc >= 5 ? std::atoi(argv[4]) : 1);
   }
   if (argc >= 2 && std::strcmp(argv[1], "--load") == 0) return load_times();
+  if (argc >= 3 && std::strcmp(argv[1], "--pairs") == 0) {
+    std::vector<int> sizes;
+    for (int a = 3; a < argc; ++a) sizes.push_back(std::atoi(argv[a]));
+    if (sizes.empty()) sizes.assign(std::begin(kSizes), std::end(kSizes));
+    return pairs(std::atoi(argv[2]), sizes);
+  }
   benchmark::Initialize(&argc, argv);
   bool ok = true;
   for (int n : kSizes) ok = same_state_check(n, n >= 1000 ? 3 : 10) && ok;
