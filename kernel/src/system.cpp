@@ -277,6 +277,12 @@ void System::add_local_forces(std::size_t first, Index begin, Index end) {
   }
 }
 
+// Particles per chunk of the gather: the local forces' passes and the gather
+// then find the chunk's f, v, masses and output (about 28 KB) in the L1
+// cache. 682 (kChunkElements / 3) spilled to L2: 25% slower gathers on the
+// 316 x 316 cloth; 128 measured the same as 256.
+constexpr Index kGatherChunk = 256;
+
 // Step 3, the gather: [v | f/m]. A fixed particle has zero velocity (nailing
 // zeroes it and its acceleration is zero) and zero inverse mass, so both
 // halves vanish for it without a branch.
@@ -289,10 +295,20 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   // independent, so the split over threads cannot change a bit.
   Eigen::Map<Matrix3X> vel(dydt.data(), 3, n), a(dydt.data() + 3 * n, 3, n);
   const auto v = std::as_const(*this).velocities();
-  parallel_chunks(n, kChunkElements / 3, [&](Index b, Index e) {
+  double* out_v = vel.data();
+  double* out_a = a.data();
+  const double* in_v = v.data();
+  const double* f = force_.data();
+  const double* w = inv_mass_.data();
+  parallel_chunks(n, kGatherChunk, [&](Index b, Index e) {
     add_local_forces(first_local, b, e);
-    vel.middleCols(b, e - b) = v.middleCols(b, e - b);
-    a.middleCols(b, e - b) = force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
+    // One loop for both halves, over locals (Eigen made two loops of it).
+    for (Index i = b; i < e; ++i) {
+      for (Index d = 0; d < 3; ++d) {
+        out_v[3 * i + d] = in_v[3 * i + d];
+        out_a[3 * i + d] = f[3 * i + d] * w[i];
+      }
+    }
   });
   // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
   // blew up, so the blow-up is reported at the particle that moved.
@@ -302,7 +318,7 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
 const Matrix3X& System::compute_accelerations() {
   const std::size_t first_local = evaluate_forces();
   accel_.resize(3, size());  // allocates on the first call only
-  parallel_chunks(size(), kChunkElements / 3, [&](Index b, Index e) {
+  parallel_chunks(size(), kGatherChunk, [&](Index b, Index e) {
     add_local_forces(first_local, b, e);
     accel_.middleCols(b, e - b) =
         force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
