@@ -101,7 +101,9 @@ r1 = med([r[1] / r[0] for r in rows])
 r2 = med([r[3] / r[2] for r in rows])
 print(f"| {n} x {n} | {med(col(0)):.1f} ns | {med(col(1)):.1f} ns | **{r1:.3f}** "
       f"({min(r[1] / r[0] for r in rows):.3f}-{max(r[1] / r[0] for r in rows):.3f}) | "
-      f"{med(col(2)):.1f} ns | {med(col(3)):.1f} ns | **{r2:.3f}** | ({len(rows)} rounds)")
+      f"{med(col(2)):.1f} ns | {med(col(3)):.1f} ns | **{r2:.3f}** "
+      f"({min(r[3] / r[2] for r in rows):.3f}-{max(r[3] / r[2] for r in rows):.3f}) | "
+      f"({len(rows)} rounds)")
 PY
 done
 uptime

@@ -1,0 +1,173 @@
+#!/usr/bin/env python3
+"""Issue 17's targets in one table (docs/performance.md, "Issue 17's targets").
+
+Runs the benchmarks that measure each target, side by side in one run, and
+prints one Markdown row per target: the target, the measured figure (the
+median of alternated rounds or pairs, with the range), and "met" or by how
+much it is missed. Called by scripts/bench_targets.sh, which builds first:
+
+    bash scripts/bench_targets.sh [BUILD_DIR]
+    ROUNDS=5 STIFF="30 100" bash scripts/bench_targets.sh
+
+Environment: ROUNDS (default 5) rounds or pairs per comparison; STIFF (default
+"30 100 316") the stiff-cloth sizes; STIFF_316_DURATION (default 0.2) the
+simulated seconds at 316 x 316, whose rk4 run takes about 18 minutes for
+1 s; RK4_DT_316 (default 1.00151e-05, found by pdyn_bench_stiff_cloth's
+bisection) rk4's largest stable step there. LAMMPS rows need `lmp` (Debian:
+apt-get install lammps); without it they are marked "not run".
+"""
+
+import json
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+BUILD = sys.argv[1] if len(sys.argv) > 1 else "build"
+ROUNDS = int(os.environ.get("ROUNDS", "5"))
+STIFF = [int(s) for s in os.environ.get("STIFF", "30 100 316").split()]
+STIFF_316_DURATION = os.environ.get("STIFF_316_DURATION", "0.2")
+RK4_DT_316 = os.environ.get("RK4_DT_316", "1.00151e-05")
+CLOTH = "tests/scenes/shared/cloth.yaml"
+rows = []  # (item, target, measured, verdict)
+
+
+def run(cmd, **kw):
+    print("$ " + " ".join(cmd), file=sys.stderr, flush=True)
+    return subprocess.run(cmd, check=True, text=True, capture_output=True, **kw).stdout
+
+
+def verdict(value, bound, at_most=True):
+    """'met', or by how much `value` misses `bound` (relative to the bound)."""
+    if (value <= bound) if at_most else (value >= bound):
+        return "**met**"
+    return f"missed by {abs(value / bound - 1) * 100:.0f}%"
+
+
+def uptime():
+    with open("/proc/loadavg") as f:
+        return f.read().split()[0]
+
+
+def cloth_pairs():
+    out = run([f"{BUILD}/bin/pdyn_bench_cloth", "--pairs", str(ROUNDS), "32", "100", "316", "1000"])
+    print(out, file=sys.stderr)
+    pat = re.compile(r"^\| (\d+) x \d+ \| \d+ \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) "
+                     r"\| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) \|$")
+    for line in out.splitlines():
+        m = pat.match(line)
+        if not m:
+            continue
+        n = int(m[1])
+        ratio, speedup = float(m[4]), float(m[8])
+        rows.append((f"1. pdyn run / fused reference, 1 thread, {n} x {n}", "<= 1.05",
+                     f"{ratio:.3f} ({m[5]}-{m[6]}; {m[3]} vs {m[2]} ns)", verdict(ratio, 1.05)))
+        if n == 1000:
+            rows.append(("3. the same at 1000 x 1000 (memory traffic)", "<= 1.0",
+                         f"{ratio:.3f}", verdict(ratio, 1.0)))
+        if n in (316, 1000):
+            rows.append((f"2. 2 threads over 1, {n} x {n}", ">= 1.8",
+                         f"{speedup:.2f} ({m[9]}-{m[10]})", verdict(speedup, 1.8, at_most=False)))
+
+
+def wall(cmd):
+    t0 = time.perf_counter()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def pdyn_cloth(n, steps, threads=None):
+    cmd = [f"{BUILD}/bin/pdyn", "run", CLOTH, "--set", f"particles[0].grid.nx={n}",
+           "--set", f"particles[0].grid.ny={n}", "--set", f"simulation.steps={steps}",
+           "--set", "output=null"]
+    return cmd + (["--threads", str(threads)] if threads else [])
+
+
+def default_vs_one(n, steps):
+    """Median over ROUNDS alternated pairs of whole processes: default / 1 thread."""
+    ratios = []
+    for _ in range(ROUNDS):
+        d = wall(pdyn_cloth(n, steps))
+        one = wall(pdyn_cloth(n, steps, 1))
+        ratios.append(d / one)
+    return statistics.median(ratios), min(ratios), max(ratios)
+
+
+def threads():
+    r, lo, hi = default_vs_one(30, 4000)
+    rows.append(("2. default threads / 1 thread, 30 x 30, idle", "<= 1.05",
+                 f"{r:.3f} ({lo:.3f}-{hi:.3f})", verdict(r, 1.05)))
+    busy = [subprocess.Popen(["sh", "-c", "while :; do :; done"]) for _ in range(os.cpu_count())]
+    try:
+        time.sleep(0.5)
+        r, lo, hi = default_vs_one(316, 100)
+    finally:
+        for p in busy:
+            p.kill()
+            p.wait()
+    rows.append(("2. default / 1 thread, 316 x 316, a busy loop on every core", "<= 1.10",
+                 f"{r:.3f} ({lo:.3f}-{hi:.3f})", verdict(r, 1.10)))
+
+
+def lammps():
+    if not shutil.which("lmp"):
+        for s in ("316 x 316", "1000 x 1000"):
+            rows.append((f"5. pdyn / LAMMPS, velocity Verlet, {s}", "<= 1.0", "not run (no lmp)", "-"))
+        return
+    out = run(["bash", "scripts/lammps_cloth.sh", BUILD],
+              env=dict(os.environ, SIZES="316 1000", ROUNDS=str(ROUNDS)))
+    print(out, file=sys.stderr)
+    for line in out.splitlines():
+        m = re.match(r"^\| (\d+) x \d+ \| ([\d.]+) ns \| ([\d.]+) ns \| \*\*([\d.]+)\*\* \(([\d.-]+)\) \| "
+                     r"([\d.]+) ns \| ([\d.]+) ns \| \*\*([\d.]+)\*\* \(([\d.-]+)\)", line)
+        if not m:
+            continue
+        n = m[1]
+        r1, r2 = float(m[4]), float(m[8])
+        rows.append((f"5. pdyn / LAMMPS, velocity Verlet, 1 thread / 1 rank, {n} x {n}", "<= 1.0",
+                     f"{r1:.3f} ({m[5]}; {m[3]} vs {m[2]} ns)", verdict(r1, 1.0)))
+        rows.append((f"5. pdyn / LAMMPS, 2 threads / 2 ranks, {n} x {n}", "<= 1.0",
+                     f"{r2:.3f} ({m[9]}; {m[7]} vs {m[6]} ns)", verdict(r2, 1.0)))
+
+
+def stiff():
+    for n in STIFF:
+        cmd = [f"{BUILD}/bin/pdyn_bench_stiff_cloth", "--size", str(n), "--cg-tolerance", "0",
+               "--repeats", "1" if n >= 316 else "3"]
+        if n >= 316:
+            cmd += ["--rk4-dt", RK4_DT_316, "--duration", STIFF_316_DURATION]
+        out = run(cmd)
+        print(out, file=sys.stderr)
+        for line in out.splitlines():
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            if len(cells) == 11 and cells[0] == f"{n} x {n}" and cells[4].startswith("direct"):
+                speedup = float(cells[8].rstrip("x"))
+                rows.append((f"4. implicit_euler / rk4 time to solution, stiff cloth {n} x {n}",
+                             ">= 10x", f"{speedup:.1f}x (rk4 {cells[3]} s, implicit {cells[7]} s, "
+                             f"{cells[6]} steps)", verdict(speedup, 10, at_most=False)))
+
+
+def load():
+    out = run([f"{BUILD}/bin/pdyn_bench_cloth", "--load"])
+    first = json.loads(out.splitlines()[0])
+    rows.append(("6. load the 1000 x 1000 grid-builder scene", "<= 0.5 s",
+                 f"{first['seconds']:.3f} s", verdict(first["seconds"], 0.5)))
+
+
+def main():
+    start = uptime()
+    for part in (cloth_pairs, threads, lammps, load, stiff):
+        part()
+    print(f"\nIssue 17's targets (load average {start} before, {uptime()} after; "
+          f"{ROUNDS} rounds or pairs per comparison, medians):\n")
+    print("| item | target | measured | |")
+    print("|---|---|---|---|")
+    for r in rows:
+        print("| " + " | ".join(r) + " |")
+
+
+if __name__ == "__main__":
+    main()

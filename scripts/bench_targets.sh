@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Issue 17's targets in one table (docs/performance.md): builds what the
+# benchmarks need, then runs bench/targets.py, which measures every target
+# side by side and prints one row per target with "met" or by how much it is
+# missed. About 25 minutes on the 2-core machine; run it on a quiet machine.
+#
+#   bash scripts/bench_targets.sh [BUILD_DIR]
+#   ROUNDS=3 STIFF="30 100" bash scripts/bench_targets.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+build=${1:-build}
+[[ -d "$build" ]] || cmake --preset default
+cmake --build "$build" --target pdyn pdyn_plugins pdyn_bench_cloth pdyn_bench_stiff_cloth -j"$(nproc)"
+exec /usr/bin/python3 bench/targets.py "$build"
