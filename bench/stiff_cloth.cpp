@@ -155,6 +155,8 @@ struct ImplicitOutcome {
   double cg_mean = 0.0;
   std::int64_t cg_max = 0;
   std::size_t factor_blocks = 0;
+  double factor_flops = 0.0;    // per factorisation
+  double factor_seconds = 0.0;  // all factorisations of the run
 };
 
 // Reads the built-in implicit_euler's statistics after every step.
@@ -203,6 +205,8 @@ ImplicitOutcome run_implicit(int size, double dt, double cg_tolerance, const Set
               static_cast<double>(std::max<std::int64_t>(1, solver->steps()));
   o.cg_max = counting->max_iterations();
   o.factor_blocks = solver->factor_blocks();
+  o.factor_flops = solver->factor_flops();
+  o.factor_seconds = solver->factor_seconds();
   return o;
 }
 
@@ -288,9 +292,14 @@ int main(int argc, char** argv) {
       }
       for (const ImplicitOutcome& o : implicit) {
         const std::string solve =
-            o.direct ? fmt::format("direct LDL^T ({} blocks in L)", o.factor_blocks)
-                     : fmt::format("CG {:g} ({:.0f} / {} iterations per step)", o.cg_tolerance,
-                                   o.cg_mean, o.cg_max);
+            o.direct
+                ? fmt::format(
+                      "direct LDL^T ({} blocks in L; factorising {:.0f}% of the "
+                      "time, {:.1f} GFlop/s)",
+                      o.factor_blocks, 100.0 * o.factor_seconds / o.run.wall,
+                      o.factor_flops * static_cast<double>(o.run.steps) / o.factor_seconds * 1e-9)
+                : fmt::format("CG {:g} ({:.0f} / {} iterations per step)", o.cg_tolerance,
+                              o.cg_mean, o.cg_max);
         const std::string vs_rk4 =
             skip_rk4 ? "-" : fmt::format("{:.3f}", (o.run.x - rk4.x).colwise().norm().maxCoeff());
         std::cout << fmt::format(
