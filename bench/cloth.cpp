@@ -18,7 +18,8 @@
 //   pdyn_bench_cloth --pairs ROUNDS [N ...]  issue 17's targets, side by side:
 //                                            fused, pdyn run 1 thread and 2
 //                                            threads in turn, ROUNDS times per
-//                                            size, the median of each ratio
+//                                            size: each ratio's median and
+//                                            interquartile range
 //
 // scripts/bench.sh runs all three and writes docs/performance.md's numbers.
 #include <benchmark/benchmark.h>
@@ -352,11 +353,15 @@ int load_times() {
 
 // ---- side by side (issue 17, items 1 to 3) ----
 
-double median(std::vector<double> v) {
+// The q-quantile of v (0.5: the median), interpolated between order statistics.
+double quantile(std::vector<double> v, double q) {
   std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+  const double at = q * static_cast<double>(v.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(at);
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (at - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
+double median(const std::vector<double>& v) { return quantile(v, 0.5); }
 
 template <class F>
 double seconds_of(F&& f) {
@@ -367,9 +372,11 @@ double seconds_of(F&& f) {
 
 // The three variants run in turn, round after round, so that the machine's
 // drift (a hypervisor may take half the CPU for seconds) hits all three
-// alike, and each ratio is taken within its round. A round runs each for 2e7
-// particle-steps (at least 20 steps): long enough that the runner's set-up
-// weighs little, as in a real run.
+// alike, and each ratio is taken within its round. A round runs each for
+// 5e6 particle-steps (at least 10 steps, about half a second): short, so
+// that many rounds fit and a slow spell spoils few of them, long enough
+// that the runner's set-up (the energy check's first potential) weighs
+// about 1%. The median is quoted with the interquartile range.
 int pairs(int rounds, const std::vector<int>& sizes) {
   const bool ok = std::all_of(sizes.begin(), sizes.end(),
                               [](int n) { return same_state_check(n, n >= 1000 ? 3 : 10); });
@@ -379,7 +386,7 @@ int pairs(int rounds, const std::vector<int>& sizes) {
       "1000) | pdyn 2 threads, ns | speed-up (target >= 1.8 at 316, 1000) |\n|---|---|---|---|"
       "---|---|---|\n");
   for (int n : sizes) {
-    const int steps = std::max(20, 20'000'000 / (n * n));
+    const int steps = std::max(10, 5'000'000 / (n * n));
     FusedCloth fused(spec(n));
     const std::vector<double> fused_start = fused.state();
     pdyn::Scene scene = load_pdyn(n, steps);
@@ -404,10 +411,9 @@ int pairs(int rounds, const std::vector<int>& sizes) {
     }
     const double per = 1e9 / (static_cast<double>(n) * n * steps);
     std::printf("| %d x %d | %d | %.1f | %.1f | %.3f (%.3f-%.3f) | %.1f | %.2f (%.2f-%.2f) |\n", n,
-                n, steps, median(tf) * per, median(t1) * per, median(r1),
-                *std::min_element(r1.begin(), r1.end()), *std::max_element(r1.begin(), r1.end()),
-                median(t2) * per, median(r2), *std::min_element(r2.begin(), r2.end()),
-                *std::max_element(r2.begin(), r2.end()));
+                n, steps, median(tf) * per, median(t1) * per, median(r1), quantile(r1, 0.25),
+                quantile(r1, 0.75), median(t2) * per, median(r2), quantile(r2, 0.25),
+                quantile(r2, 0.75));
     std::fflush(stdout);
   }
   return 0;

@@ -9,11 +9,13 @@ much it is missed. Called by scripts/bench_targets.sh, which builds first:
     bash scripts/bench_targets.sh [BUILD_DIR]
     ROUNDS=5 STIFF="30 100" bash scripts/bench_targets.sh
 
-Environment: ROUNDS (default 5) rounds or pairs per comparison; STIFF (default
+Environment: ROUNDS (default 5) rounds of the LAMMPS comparison; CLOTH_ROUNDS
+(default 15) rounds of the cloth and thread comparisons; STIFF (default
 "30 100 316") the stiff-cloth sizes; STIFF_316_DURATION (default 0.2) the
 simulated seconds at 316 x 316, whose rk4 run takes about 18 minutes for
 1 s; RK4_DT_316 (default 1.00151e-05, found by pdyn_bench_stiff_cloth's
-bisection) rk4's largest stable step there. LAMMPS rows need `lmp` (Debian:
+bisection) rk4's largest stable step there; PARTS (default "cloth threads
+lammps load stiff") which measurements to run. LAMMPS rows need `lmp` (Debian:
 apt-get install lammps); without it they are marked "not run".
 """
 
@@ -28,6 +30,7 @@ import time
 
 BUILD = sys.argv[1] if len(sys.argv) > 1 else "build"
 ROUNDS = int(os.environ.get("ROUNDS", "5"))
+CLOTH_ROUNDS = int(os.environ.get("CLOTH_ROUNDS", "15"))
 STIFF = [int(s) for s in os.environ.get("STIFF", "30 100 316").split()]
 STIFF_316_DURATION = os.environ.get("STIFF_316_DURATION", "0.2")
 RK4_DT_316 = os.environ.get("RK4_DT_316", "1.00151e-05")
@@ -53,7 +56,7 @@ def uptime():
 
 
 def cloth_pairs():
-    out = run([f"{BUILD}/bin/pdyn_bench_cloth", "--pairs", str(ROUNDS), "32", "100", "316", "1000"])
+    out = run([f"{BUILD}/bin/pdyn_bench_cloth", "--pairs", str(CLOTH_ROUNDS), "32", "100", "316", "1000"])
     print(out, file=sys.stderr)
     pat = re.compile(r"^\| (\d+) x \d+ \| \d+ \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) "
                      r"\| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) \|$")
@@ -87,13 +90,15 @@ def pdyn_cloth(n, steps, threads=None):
 
 
 def default_vs_one(n, steps):
-    """Median over ROUNDS alternated pairs of whole processes: default / 1 thread."""
+    """Median and quartiles over CLOTH_ROUNDS alternated pairs of whole processes:
+    default / 1 thread."""
     ratios = []
-    for _ in range(ROUNDS):
+    for _ in range(CLOTH_ROUNDS):
         d = wall(pdyn_cloth(n, steps))
         one = wall(pdyn_cloth(n, steps, 1))
         ratios.append(d / one)
-    return statistics.median(ratios), min(ratios), max(ratios)
+    q = statistics.quantiles(ratios, n=4, method="inclusive")
+    return q[1], q[0], q[2]
 
 
 def threads():
@@ -159,10 +164,13 @@ def load():
 
 def main():
     start = uptime()
-    for part in (cloth_pairs, threads, lammps, load, stiff):
-        part()
-    print(f"\nIssue 17's targets (load average {start} before, {uptime()} after; "
-          f"{ROUNDS} rounds or pairs per comparison, medians):\n")
+    parts = {"cloth": cloth_pairs, "threads": threads, "lammps": lammps, "load": load,
+             "stiff": stiff}
+    for name in os.environ.get("PARTS", " ".join(parts)).split():
+        parts[name]()
+    print(f"\nIssue 17's targets (load average {start} before, {uptime()} after). Medians "
+          f"of {CLOTH_ROUNDS} alternated rounds (cloth, threads; in brackets the interquartile "
+          f"range) and of {ROUNDS} (LAMMPS; in brackets the range):\n")
     print("| item | target | measured | |")
     print("|---|---|---|---|")
     for r in rows:

@@ -67,7 +67,7 @@ bool copy_finite(const double* from, double* to, Index m) {
 bool copy_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::VectorXd& to) {
   to.resize(from.size());  // allocates on the first step only
   std::atomic<bool> finite{true};
-  parallel_ranges(from.size(), [&](Index b, Index e) {
+  parallel_state_chunks(from.size(), from.size(), [&](Index b, Index e) {
     const bool ok = copy_finite(from.data() + b, to.data() + b, e - b);
 #ifdef __SSE2__
     _mm_sfence();  // the streaming stores are weakly ordered: done before the barrier

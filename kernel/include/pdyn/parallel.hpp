@@ -102,4 +102,24 @@ void parallel_chunks(Index n, Index chunk, Body&& body) {
   });
 }
 
+/// As parallel_chunks over a state vector [x | v] of `dim` = 6N doubles,
+/// but each thread takes the same particles' elements in both halves: the
+/// elements [b, e) of the positions and [dim/2 + b, dim/2 + e) of the
+/// velocities, b and e from a split of the first half. Then a thread
+/// updates the positions and velocities of the particles whose forces it
+/// gathered (System::derivative splits by particle), and neither half
+/// travels between the cores' caches at every stage: with parallel_chunks
+/// over all 6N, one thread updated every position and the other every
+/// velocity, and 2 threads ran the 316 x 316 cloth only 1.4x faster than 1.
+/// The body is called once per chunk of each half, the positions' chunks
+/// first.
+template <class Body>
+void parallel_state_chunks(Index dim, Index chunk, Body&& body) {
+  const Index half = dim / 2;
+  parallel_ranges(half, [&](Index begin, Index end) {
+    for (Index b = begin; b < end; b += chunk) body(b, std::min(end, b + chunk));
+    for (Index b = begin; b < end; b += chunk) body(half + b, half + std::min(end, b + chunk));
+  });
+}
+
 }  // namespace pdyn

@@ -12,8 +12,9 @@ class Euler final : public pdyn::Solver {
     dydt_.resize(sys.dimension());  // no-op after the first step
     sys.derivative(dydt_);
     auto y = sys.state();
-    // Split over the host's threads; element-wise, so thread-count independent.
-    pdyn::parallel_ranges(y.size(), [&](pdyn::Index b, pdyn::Index e) {
+    // Split over the host's threads by particle (pdyn::parallel_state_chunks);
+    // element-wise, so thread-count independent.
+    pdyn::parallel_state_chunks(y.size(), y.size(), [&](pdyn::Index b, pdyn::Index e) {
       y.segment(b, e - b) += h * dydt_.segment(b, e - b);
     });
     sys.set_time(sys.time() + h);

@@ -17,12 +17,12 @@ class Midpoint final : public pdyn::Solver {
     // y = y0 + c k, split over the host's threads; element-wise, so the
     // result does not depend on the thread count.
     auto stage = [&](double c) {
-      pdyn::parallel_ranges(n, [&](pdyn::Index b, pdyn::Index e) {
+      pdyn::parallel_state_chunks(n, n, [&](pdyn::Index b, pdyn::Index e) {
         y.segment(b, e - b) = y0_.segment(b, e - b) + c * k_.segment(b, e - b);
       });
     };
-    pdyn::parallel_ranges(
-        n, [&](pdyn::Index b, pdyn::Index e) { y0_.segment(b, e - b) = y.segment(b, e - b); });
+    pdyn::parallel_state_chunks(
+        n, n, [&](pdyn::Index b, pdyn::Index e) { y0_.segment(b, e - b) = y.segment(b, e - b); });
     sys.derivative(k_);
     stage(0.5 * h);
     sys.set_time(t0 + 0.5 * h);

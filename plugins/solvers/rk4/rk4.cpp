@@ -30,7 +30,7 @@ class Rk4 final : public pdyn::Solver {
     // parallel, chunk by chunk: the statements of one update then read each
     // vector from memory once.
     auto update = [&](auto&& op) {
-      pdyn::parallel_chunks(n, pdyn::kChunkElements, [&](Index b, Index e) {
+      pdyn::parallel_state_chunks(n, pdyn::kChunkElements, [&](Index b, Index e) {
         op(y.segment(b, e - b), y0_.segment(b, e - b), k_.segment(b, e - b),
            sum_.segment(b, e - b));
       });
