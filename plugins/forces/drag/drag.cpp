@@ -26,11 +26,17 @@ class Drag final : public pdyn::Force, public pdyn::LocalForce {
   bool acts_locally() const override { return selection_.all(); }
   void add_forces_range(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f, pdyn::Index b,
                         pdyn::Index e) override {
-    // Plain loops over locals, as gravity's (the gather's chunk is in cache).
+    // Plain loops over locals, as gravity's (the gather's chunk is in cache);
+    // over a dense accumulator one flat loop of 3 (e - b) doubles, which the
+    // compiler vectorises.
     double* fp = f.data();
     const pdyn::Index fs = f.outerStride();
     const double* v = p.v.data();
     const double k = k_;
+    if (fs == 3) {
+      for (pdyn::Index q = 3 * b; q < 3 * e; ++q) fp[q] -= k * v[q];
+      return;
+    }
     for (pdyn::Index i = b; i < e; ++i) {
       double* fi = fp + fs * i;
       fi[0] -= k * v[3 * i];
