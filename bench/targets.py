@@ -17,6 +17,12 @@ simulated seconds at 316 x 316, whose rk4 run takes about 18 minutes for
 bisection) rk4's largest stable step there; PARTS (default "cloth threads
 lammps load stiff") which measurements to run. LAMMPS rows need `lmp` (Debian:
 apt-get install lammps); without it they are marked "not run".
+
+Each missed target comes with the profile that explains it: a missed cloth
+ratio (items 1, 3) with perf's profile of pdyn and of the reference at that
+size (needs `perf`: apt-get install linux-perf); a missed 2-thread speed-up
+with the memory bandwidth the second core adds (pdyn_bench_triad); a missed
+stiff-cloth ratio with the factorisation's share of the time and its speed.
 """
 
 import json
@@ -150,9 +156,70 @@ def stiff():
             cells = [c.strip() for c in line.strip("|").split("|")]
             if len(cells) == 11 and cells[0] == f"{n} x {n}" and cells[4].startswith("direct"):
                 speedup = float(cells[8].rstrip("x"))
+                # The profile of a miss: the factorisation's share and speed.
+                why = re.search(r"factorising [\d.]+% of the time, [\d.]+ GFlop/s", cells[4])
                 rows.append((f"4. implicit_euler / rk4 time to solution, stiff cloth {n} x {n}",
                              ">= 10x", f"{speedup:.1f}x (rk4 {cells[3]} s, implicit {cells[7]} s, "
-                             f"{cells[6]} steps)", verdict(speedup, 10, at_most=False)))
+                             f"{cells[6]} steps; {why[0] if why else cells[4]})",
+                             verdict(speedup, 10, at_most=False)))
+
+
+def perf_top(cmd, label):
+    """perf's flat profile of `cmd`: [(percent, samples, library, symbol)] above 1.5%, and
+    the total samples (999 Hz, so samples / 999 is CPU seconds)."""
+    data = f"/tmp/pdyn-targets-{label}.perf"
+    run(["perf", "record", "-q", "-F", "999", "-o", data, "--"] + cmd)
+    out = run(["perf", "report", "-i", data, "--stdio", "--no-children", "-n", "-q",
+               "--sort", "dso,symbol", "--percent-limit", "1.5"])
+    total = run(["perf", "report", "-i", data, "--stdio", "--no-children", "-n", "-q",
+                 "--sort", "comm"])
+    os.remove(data)
+    top = []
+    for line in out.splitlines():
+        m = re.match(r"^\s*([\d.]+)%\s+(\d+)\s+(\S+)\s+\[.\]\s+(.*?)\s*$", line)
+        if m:
+            # perf pads symbols it found no source line for with "-" columns.
+            sym = re.sub(r"(\s+-)+$", "", m[4])
+            top.append((float(m[1]), int(m[2]), m[3], sym[:90].rstrip()))
+    samples = sum(int(m[1]) for m in re.finditer(r"^\s*[\d.]+%\s+(\d+)", total, re.M))
+    return top, samples
+
+
+def missed(prefixes):
+    """The sizes n of missed rows whose item starts with one of `prefixes`."""
+    out = []
+    for item, _, _, result in rows:
+        m = re.search(r"(\d+) x \d+", item)
+        if item.startswith(prefixes) and result.startswith("missed") and m:
+            out.append(int(m[1]))
+    return sorted(set(out))
+
+
+def profiles():
+    """The profile of each missed cloth target: for items 1 and 3, where the time goes
+    in pdyn and in the fused reference (perf, 1 thread, set-up included); for item 2,
+    what a second core adds to the machine's memory bandwidth (the triad)."""
+    bench = f"{BUILD}/bin/pdyn_bench_cloth"
+    for n in missed(("1.", "3.")):
+        if not shutil.which("perf"):
+            print("\n(no `perf` here: apt-get install linux-perf to print the profile of the miss)")
+            break
+        steps = str(max(15, 15_000_000 // (n * n)))
+        print(f"\nProfile of the {n} x {n} miss: `perf record -F 999` of "
+              f"`{bench} --run VARIANT {n} {steps} 1` ({steps} rk4 steps, 1 thread, set-up "
+              "included), functions above 1.5% (samples at 999 Hz: ~CPU ms):")
+        for variant in ("pdyn_run", "fused"):
+            top, samples = perf_top([bench, "--run", variant, str(n), steps, "1"], variant)
+            print(f"\n{variant}: {samples} samples\n")
+            print("| % | samples | library | function |")
+            print("|---|---|---|---|")
+            for pct, count, dso, sym in top:
+                print(f"| {pct:.1f} | {count} | {dso} | `{sym}` |")
+    if any(n >= 316 for n in missed(("2. 2 threads",))):
+        print("\nA missed 2-thread speed-up: what the second core adds to the memory bandwidth "
+              f"(`{BUILD}/bin/pdyn_bench_triad 256 5`); at 10^6 particles the step moves "
+              "~2.6 kB per particle, so 2 threads gain at most the triad's 2-thread ratio:\n")
+        print(run([f"{BUILD}/bin/pdyn_bench_triad", "256", "5"]))
 
 
 def load():
@@ -175,6 +242,10 @@ def main():
     print("|---|---|---|---|")
     for r in rows:
         print("| " + " | ".join(r) + " |")
+    try:
+        profiles()
+    except (subprocess.CalledProcessError, OSError) as e:
+        print(f"\n(the profile could not be taken: {e})")
 
 
 if __name__ == "__main__":

@@ -10,5 +10,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
 [[ -d "$build" ]] || cmake --preset default
-cmake --build "$build" --target pdyn pdyn_plugins pdyn_bench_cloth pdyn_bench_stiff_cloth -j"$(nproc)"
+cmake --build "$build" --target pdyn pdyn_plugins pdyn_bench_cloth pdyn_bench_stiff_cloth pdyn_bench_triad -j"$(nproc)"
 exec /usr/bin/python3 bench/targets.py "$build"
