@@ -15,6 +15,7 @@
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/host/version.hpp"
 #include "pdyn/resolve.hpp"
 #include "pdyn/text.hpp"
 #include "render.hpp"
@@ -452,7 +453,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   // The program's version and the plugin ABI it loads: what a plugin built
   // elsewhere must match (pdyn/version.hpp).
   app.set_version_flag("--version",
-                       fmt::format("pdyn {} (plugin ABI {})", PDYN_VERSION_STRING, kAbiVersion));
+                       fmt::format("pdyn {} (plugin ABI {})", host::version(), kAbiVersion));
   Common common;
   RunArgs run_args;
 

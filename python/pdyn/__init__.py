@@ -20,6 +20,11 @@ from .errors import CheckpointError, Error, PluginError, SceneError, StepError
 from . import _pdyn
 from .sweep import sweep
 
+#: pdyn's version, "MAJOR.MINOR.PATCH" (CHANGELOG.md), as `pdyn --version` prints it.
+__version__ = _pdyn.version
+#: The plugin ABI version this module's host loads (docs/plugins.md, "Versions and the ABI").
+abi_version = _pdyn.abi_version
+
 __all__ = [
     "load", "loads", "Simulation", "Force", "param", "plugins", "describe", "check",
     "CheckReport", "sweep", "Error", "SceneError", "PluginError", "StepError",
