@@ -5,6 +5,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "pdyn/host/version.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
@@ -32,7 +33,10 @@ TEST(New, WritesAProjectForEachKind) {
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(entries(dir), 5u);  // CMakeLists.txt, NAME.cpp, test_NAME.cpp, README.md, scene.yaml
     const std::string cmake = read(dir / "CMakeLists.txt");
-    EXPECT_NE(cmake.find("find_package(pdyn 0.1 REQUIRED)"), std::string::npos) << cmake;
+    // The project asks for the release it was written against (MAJOR.MINOR).
+    const std::string release(host::version());
+    const std::string wanted = release.substr(0, release.rfind('.'));
+    EXPECT_NE(cmake.find("find_package(pdyn " + wanted + " REQUIRED)"), std::string::npos) << cmake;
     EXPECT_NE(
         cmake.find("pdyn_add_plugin(" + name + " KIND " + kind + " SOURCES " + name + ".cpp)"),
         std::string::npos)

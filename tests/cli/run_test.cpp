@@ -11,7 +11,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path small_scene(const std::string& name) {
+fs::path ten_step_scene(const std::string& name) {
   const fs::path dir = test::temp_dir(name);
   return test::write_file(dir / "scene.yaml",
                           "simulation: { dt: 0.01, steps: 10 }\n"
@@ -21,7 +21,7 @@ fs::path small_scene(const std::string& name) {
 
 // CLI11's NonNegativeNumber printed its upper bound, DBL_MAX, in 309 digits.
 TEST(RunCommand, NegativeStepsAreRefusedWithAReadableBound) {
-  const fs::path scene = small_scene("steps-negative");
+  const fs::path scene = ten_step_scene("steps-negative");
   const auto r = test::pdyn({"run", scene.string(), "--steps", "-5"});
   EXPECT_EQ(r.status, 2);
   EXPECT_EQ(r.err, "pdyn: --steps: -5 is out of range (expected at least 0) (see pdyn --help)\n");
@@ -33,7 +33,7 @@ TEST(RunCommand, NegativeStepsAreRefusedWithAReadableBound) {
 
 // Counts in the summaries read "1 particle", not "1 particles".
 TEST(RunCommand, SummariesPluraliseTheirCounts) {
-  const fs::path scene = small_scene("plural");
+  const fs::path scene = ten_step_scene("plural");
   const auto v = test::pdyn({"validate", scene.string()});
   EXPECT_EQ(v.status, 0) << v.err;
   EXPECT_EQ(v.out, scene.string() +

@@ -29,15 +29,6 @@ using namespace pdyn::test;
 
 constexpr std::size_t kHeader = 20;  // magic, u32 version, u64 payload length
 
-// Every regular file under `dir` and its bytes.
-std::map<std::string, std::string> snapshot(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = read_bytes(e.path());
-  }
-  return files;
-}
-
 std::uint32_t crc32(const std::string& s) {
   boost::crc_32_type crc;
   crc.process_bytes(s.data(), s.size());

@@ -119,13 +119,6 @@ Expectation read_expectation(const fs::path& file) {
   return e;
 }
 
-std::vector<std::string> split_lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
-
 fs::path bad_dir() { return test::source_path("tests/scenes/bad"); }
 
 std::vector<std::string> bad_scenes() {
@@ -152,7 +145,7 @@ class MalformedScene : public testing::TestWithParam<std::string> {
   // Checks `result` against the expectation of `file`.
   void check(const fs::path& file, const Expectation& e, const test::CommandResult& r) {
     EXPECT_EQ(r.status, e.status) << "stderr:\n" << r.err;
-    const auto lines = split_lines(r.err);
+    const auto lines = test::split_lines(r.err);
     if (e.errors) {
       EXPECT_EQ(lines.size(), *e.errors) << "stderr:\n" << r.err;
     }
@@ -232,7 +225,7 @@ forces:
 )");
   const auto r = test::pdyn({"validate", scene.string()});
   EXPECT_EQ(r.status, 2);
-  const auto lines = split_lines(r.err);
+  const auto lines = test::split_lines(r.err);
   ASSERT_EQ(lines.size(), 2u) << r.err;
   EXPECT_EQ(lines[0].rfind(scene.string() + ":6:17: particles[1].position: is not a 3-vector", 0),
             0u)

@@ -13,12 +13,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string problems(const std::string& yaml) { return test::load_problems(yaml); }
-
-const char* kHead = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n";
+const char* kPropertiesHead = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n";
 
 TEST(ParticleProperties, NoneGivenLeavesTheSystemWithoutRadiiOrTypes) {
-  const Scene s = test::load_text(std::string(kHead) +
+  const Scene s = test::load_text(std::string(kPropertiesHead) +
                                   "  - { position: [0, 0, 0], mass: 1 }\n"
                                   "  - chain: { from: [0, 0, 1], to: [1, 0, 1], n: 3, mass: 1 }\n");
   EXPECT_TRUE(s.system->radii().empty());
@@ -27,7 +25,7 @@ TEST(ParticleProperties, NoneGivenLeavesTheSystemWithoutRadiiOrTypes) {
 }
 
 TEST(ParticleProperties, OthersGetZeroOnceAnyParticleGivesOne) {
-  const Scene s = test::load_text(std::string(kHead) +
+  const Scene s = test::load_text(std::string(kPropertiesHead) +
                                   "  - { position: [0, 0, 0], mass: 1 }\n"
                                   "  - { position: [1, 0, 0], mass: 1, radius: 0.25 }\n"
                                   "  - { position: [2, 0, 0], mass: 1, type: 7 }\n"
@@ -35,7 +33,7 @@ TEST(ParticleProperties, OthersGetZeroOnceAnyParticleGivesOne) {
   EXPECT_EQ(s.system->radii(), (std::vector<double>{0, 0.25, 0, 0}));
   EXPECT_EQ(s.system->types(), (std::vector<std::int32_t>{0, 0, 7, 0}));
   // A radius given only to the last particle still makes N radii.
-  const Scene last = test::load_text(std::string(kHead) +
+  const Scene last = test::load_text(std::string(kPropertiesHead) +
                                      "  - grid: { origin: [0, 0, 0], u: [1, 0, 0], v: [0, 1, 0], "
                                      "nx: 2, ny: 2, mass: 1 }\n"
                                      "  - { position: [5, 5, 5], mass: 1, radius: 0.5 }\n");
@@ -45,7 +43,7 @@ TEST(ParticleProperties, OthersGetZeroOnceAnyParticleGivesOne) {
 
 TEST(ParticleProperties, EveryBuilderGivesItsWholeBlockOneRadiusAndType) {
   const Scene s = test::load_text(
-      std::string(kHead) +
+      std::string(kPropertiesHead) +
       "  - grid: { origin: [0, 0, 0], u: [1, 0, 0], v: [0, 1, 0], nx: 2, ny: 1, mass: 1,\n"
       "            particle_radius: 0.1, particle_type: 1 }\n"
       "  - chain: { from: [0, 0, 1], to: [1, 0, 1], n: 2, mass: 1, particle_radius: 0.2,\n"
@@ -90,7 +88,8 @@ TEST(ParticleProperties, BadValuesAreReportedAtTheirValue) {
        "expected one of: origin, u, v, nx, ny, mass, velocity, name, pin, particle_radius, "
        "particle_type, springs)"},
   };
-  for (const auto& c : cases) EXPECT_EQ(problems(kHead + c.particle), c.message) << c.particle;
+  for (const auto& c : cases)
+    EXPECT_EQ(test::load_problems(kPropertiesHead + c.particle), c.message) << c.particle;
 }
 
 TEST(ParticleProperties, SideFileColumnsRoundTripAndMixWithOtherEntries) {

@@ -23,8 +23,8 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pdyn::test;
 
-constexpr int kParticles = 36;
-constexpr double kDt = 0.001;
+constexpr int kFaultParticles = 36;
+constexpr double kFaultDt = 0.001;
 
 std::string faults_dir() { return (fs::path(PDYN_FIXTURE_DIR) / "faults").string(); }
 
@@ -33,7 +33,7 @@ std::string faults_dir() { return (fs::path(PDYN_FIXTURE_DIR) / "faults").string
 // the added entry.
 std::pair<std::string, int> scene_with(const std::string& solver, const std::string& line,
                                        bool collider = false) {
-  std::string s = sheet_scene(solver, /*every=*/3, /*ckpt_every=*/0, kDt);
+  std::string s = sheet_scene(solver, /*every=*/3, /*ckpt_every=*/0, kFaultDt);
   const std::string anchor = collider ? "restitution: 0.3 }\n" : "  - { type: drag, k: 0.001 }\n";
   const auto at = s.find(anchor);
   EXPECT_NE(at, std::string::npos);
@@ -62,7 +62,7 @@ Fault run_faulty(const std::string& name, const std::string& scene, std::int64_t
 Checkpoint plain_state_at(const std::string& solver, std::int64_t step,
                           const std::vector<std::string>& extra = {}) {
   const fs::path dir = temp_dir("fault-plain-" + solver);
-  write_file(dir / "scene.yaml", sheet_scene(solver, 3, 0, kDt));
+  write_file(dir / "scene.yaml", sheet_scene(solver, 3, 0, kFaultDt));
   std::vector<std::string> args = {"run", "scene.yaml", "--steps", std::to_string(step), "-q"};
   args.insert(args.end(), extra.begin(), extra.end());
   auto r = pdyn_in(dir, args);
@@ -94,7 +94,7 @@ std::int64_t expect_plugin_fault(const Fault& f, const std::string& plugin, int 
   // The last good frame (step - 1) ends the frames file; the checkpoint
   // holds that state.
   double last_t = -1;
-  EXPECT_GT(check_frames_file(f.dir / "out/frames.csv", kParticles, &last_t), 0);
+  EXPECT_GT(check_frames_file(f.dir / "out/frames.csv", kFaultParticles, &last_t), 0);
   EXPECT_TRUE(fs::exists(f.dir / "out/run.ckpt"));
   const Checkpoint c = read_checkpoint(f.dir / "out/run.ckpt");
   EXPECT_EQ(c.step, step - 1);
@@ -119,9 +119,9 @@ TEST(PluginFaults, ThrowingForceStopsWithExit3) {
       // Four evaluations a step: calls 1-40 are steps 1-10, call 41 is step 11.
       EXPECT_EQ(step, 11);
       double last_t = -1;
-      EXPECT_EQ(check_frames_file(f.dir / "out/frames.csv", kParticles, &last_t), 5)
+      EXPECT_EQ(check_frames_file(f.dir / "out/frames.csv", kFaultParticles, &last_t), 5)
           << "frames at steps 0, 3, 6, 9 and the last good one, 10";
-      EXPECT_EQ(last_t, 10 * kDt);
+      EXPECT_EQ(last_t, 10 * kFaultDt);
     }
     if (!solver_is_adaptive(solver)) {
       // The throwing force added nothing before it threw: the checkpointed
@@ -153,7 +153,7 @@ TEST(PluginFaults, ThrowingColliderStopsWithExit3) {
 TEST(PluginFaults, ThrowingSolverStopsWithExit3) {
   for (bool non_standard : {false, true}) {
     SCOPED_TRACE(non_standard ? "throws an int" : "throws std::runtime_error");
-    std::string scene = sheet_scene("throwing_solver", 3, 0, kDt);
+    std::string scene = sheet_scene("throwing_solver", 3, 0, kFaultDt);
     const std::string plain = "{ type: throwing_solver }";
     scene.replace(scene.find(plain), plain.size(),
                   std::string("{ type: throwing_solver, after: 5, non_standard: ") +
@@ -168,12 +168,12 @@ TEST(PluginFaults, ThrowingSolverStopsWithExit3) {
                                              : "step threw at step 6: fixture solver failure"))
         << r.err;
     double last_t = -1;
-    EXPECT_EQ(check_frames_file(f.dir / "out/frames.csv", kParticles, &last_t), 3)
+    EXPECT_EQ(check_frames_file(f.dir / "out/frames.csv", kFaultParticles, &last_t), 3)
         << "frames at steps 0 and 3 and the last good one, 5";
-    EXPECT_EQ(last_t, 5 * kDt);
+    EXPECT_EQ(last_t, 5 * kFaultDt);
     const Checkpoint c = read_checkpoint(f.dir / "out/run.ckpt");
     EXPECT_EQ(c.step, 5);
-    EXPECT_EQ(c.time, 5 * kDt);
+    EXPECT_EQ(c.time, 5 * kFaultDt);
   }
 }
 
@@ -192,14 +192,14 @@ TEST(PluginFaults, NaNForceIsNamed) {
     EXPECT_TRUE(contains(r.err, "non-finite force on particle 7")) << r.err;
     // The last good state is the final frame, complete and finite.
     double last_t = -1;
-    EXPECT_GT(check_frames_file(f.dir / "out/frames.csv", kParticles, &last_t), 0);
+    EXPECT_GT(check_frames_file(f.dir / "out/frames.csv", kFaultParticles, &last_t), 0);
     const auto frames = lines_of(read_bytes(f.dir / "out/frames.csv"));
-    for (std::size_t i = frames.size() - kParticles; i < frames.size(); ++i) {
+    for (std::size_t i = frames.size() - kFaultParticles; i < frames.size(); ++i) {
       EXPECT_EQ(frames[i].find("nan"), std::string::npos) << frames[i];
     }
     if (solver == "rk4") {
       EXPECT_TRUE(contains(r.err, "at step 11")) << r.err;
-      EXPECT_EQ(last_t, 10 * kDt);
+      EXPECT_EQ(last_t, 10 * kFaultDt);
     }
     ++tested;
   }

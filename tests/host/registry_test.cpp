@@ -70,13 +70,6 @@ class ScopedEnv {
   std::optional<std::string> old_;
 };
 
-std::vector<std::string> split_lines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
-
 bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
@@ -235,7 +228,7 @@ TEST(Registry, SceneUsingADuplicatedPluginNamesBothLibraries) {
   const fs::path scene = scene_with_force("dup-scene", "gravity");
   const auto r = test::pdyn({"validate", scene.string(), "--plugin-path", fixture("dup").string()});
   EXPECT_EQ(r.status, 3) << r.err;
-  const auto lines = split_lines(r.err);
+  const auto lines = test::split_lines(r.err);
   ASSERT_FALSE(lines.empty());
   EXPECT_TRUE(contains(lines.back(), (shipped_dir() / "pdyn_force_gravity.so").string()))
       << lines.back();
@@ -293,7 +286,7 @@ TEST(Registry, UnusedBrokenLibrariesOnlyWarn) {
                              "--plugin-path", fixture("notplugin").string(), "--plugin-path",
                              fixture("text").string()});
   EXPECT_EQ(r.status, 0) << r.err;
-  const auto lines = split_lines(r.err);
+  const auto lines = test::split_lines(r.err);
   ASSERT_EQ(lines.size(), 3u) << r.err;
   for (const auto& l : lines) EXPECT_EQ(l.rfind("pdyn: warning: ", 0), 0u) << l;
 }
@@ -305,7 +298,7 @@ TEST(Registry, SceneUsingAPluginWithTheWrongAbiExitsThree) {
   for (const char* command : {"validate", "run"}) {
     const auto r = test::pdyn({command, scene.string(), "--plugin-path", fixture("abi").string()});
     EXPECT_EQ(r.status, 3) << command << "\n" << r.err;
-    const auto lines = split_lines(r.err);
+    const auto lines = test::split_lines(r.err);
     ASSERT_FALSE(lines.empty()) << command;
     const std::string& error = lines.back();
     EXPECT_EQ(error.rfind(lib.string() + ": plugin 'abi_broken': ", 0), 0u) << error;
@@ -321,7 +314,7 @@ TEST(Registry, SceneUsingAFileThatIsNotALibraryExitsThree) {
       test::pdyn({"validate", scene.string(), "--plugin-path", fixture("text").string()});
   EXPECT_EQ(r.status, 3) << r.err;
   EXPECT_TRUE(contains(
-      split_lines(r.err).back(),
+      test::split_lines(r.err).back(),
       (fixture("text") / "pdyn_force_text.so").string() + ": plugin 'text': cannot load library: "))
       << r.err;
 }
@@ -340,7 +333,7 @@ TEST(Registry, UnknownPluginInASceneListsTheAvailableOnes) {
   const auto r =
       test::pdyn({"validate", scene.string(), "--plugin-path", fixture("push").string()});
   EXPECT_EQ(r.status, 2) << r.err;
-  const auto lines = split_lines(r.err);
+  const auto lines = test::split_lines(r.err);
   ASSERT_EQ(lines.size(), 1u) << r.err;
   EXPECT_EQ(lines[0].rfind(scene.string() + ":5:13: forces[0].type: unknown force type 'tset_push' "
                                             "(did you mean 'test_push'? expected one of: ",
@@ -487,7 +480,7 @@ TEST(Registry, MissingLibraryIsOneLineNamingItsPath) {
   const std::string lib = "/nonexistent/pdyn_force_ghost.so";
   const auto r = test::pdyn({"check", lib});
   EXPECT_EQ(r.status, 3) << r.err;
-  const auto lines = split_lines(r.err);
+  const auto lines = test::split_lines(r.err);
   ASSERT_EQ(lines.size(), 1u) << r.err;
   EXPECT_EQ(lines[0].rfind("pdyn: " + lib + ": plugin 'ghost': cannot load library: ", 0), 0u)
       << r.err;
@@ -505,7 +498,7 @@ TEST(Registry, ThrowingDescriptorIsAFaultNotACrash) {
   const auto res =
       test::pdyn({"run", scene.string(), "--plugin-path", fixture("construct").string()});
   EXPECT_EQ(res.status, 3) << res.err;
-  const std::string error = split_lines(res.err).back();
+  const std::string error = test::split_lines(res.err).back();
   EXPECT_EQ(error.rfind((fixture("construct") / "pdyn_force_throwing_descriptor.so").string() +
                             ": plugin 'throwing_descriptor': descriptor threw: ",
                         0),
@@ -520,7 +513,7 @@ TEST(Registry, ThrowingFactoryRefusesTheSceneNamingPluginAndLibrary) {
       test::pdyn({"run", scene.string(), "--plugin-path", fixture("construct").string()});
   EXPECT_EQ(res.status, 2) << res.err;
   std::vector<std::string> errors;
-  for (const auto& l : split_lines(res.err)) {
+  for (const auto& l : test::split_lines(res.err)) {
     if (l.rfind("pdyn: warning: ", 0) != 0) errors.push_back(l);
   }
   ASSERT_EQ(errors.size(), 1u) << res.err;

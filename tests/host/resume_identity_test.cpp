@@ -35,7 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pdyn::test;
 
-constexpr int kParticles = 36;
+constexpr int kResumeParticles = 36;
 
 // Asserts two files are byte-identical (with a hint where they first differ).
 void expect_same_file(const fs::path& a, const fs::path& b) {
@@ -119,7 +119,7 @@ TEST(ResumeIdentity, SplitRunEqualsWholeRun) {
       expect_same_file(dir / "ref/split.ckpt", dir / "out/split.ckpt");
       expect_same_file(dir / "ref/frames.csv", dir / "out/frames.csv");
       expect_same_file(dir / "ref/energy.csv", dir / "out/energy.csv");
-      EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles),
+      EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kResumeParticles),
                 200 / every + 1 + (200 % every != 0));
       expect_no_temporaries(dir / "out");
       ++tested;
@@ -147,7 +147,7 @@ TEST(ResumeIdentity, ResumingAtTheEndRewritesTheSameFiles) {
     expect_same_file(dir / "first-frames.csv", dir / "out/frames.csv");
     expect_same_file(dir / "first-energy.csv", dir / "out/energy.csv");
     expect_same_file(dir / "first-run.ckpt", dir / "out/run.ckpt");
-    EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles), 100 / 7 + 2);
+    EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kResumeParticles), 100 / 7 + 2);
   }
 }
 
@@ -254,7 +254,7 @@ TEST(ResumeIdentity, AdaptiveCheckpointPastScheduledSteps) {
     auto rest =
         pdyn_in(dir, {"run", "scene.yaml", "--steps", "20", "-q", "--resume", "out/run.ckpt"});
     EXPECT_EQ(rest.status, 0) << rest.err;
-    EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles), 21);
+    EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kResumeParticles), 21);
   }
 }
 

@@ -101,13 +101,6 @@ inline std::string periodic_scene(const std::string& solver, int every = 5, int 
   return s.str();
 }
 
-inline std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 /// Writes `bytes` to a new file at `p`. The old file is removed first
 /// rather than truncated: ext4 flushes a file truncated and rewritten on
 /// close, which made thousands of rewrites take seconds.

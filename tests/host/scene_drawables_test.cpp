@@ -14,7 +14,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kParticles = R"(
+const std::string kDrawablesParticles = R"(
 simulation: { dt: 0.001, steps: 1 }
 particles:
   - { position: [0, 0, 2], mass: 1 }
@@ -39,7 +39,7 @@ const PluginRegistry& registry_with(const std::string& extra) {
 }
 
 Scene load(const std::string& colliders, const std::string& extra = "") {
-  return load_scene_text(kParticles + "colliders:\n" + colliders, "scene.yaml",
+  return load_scene_text(kDrawablesParticles + "colliders:\n" + colliders, "scene.yaml",
                          registry_with(extra));
 }
 

@@ -25,8 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pdyn::test;
 
-constexpr int kSide = 16, kParticles = kSide * kSide;
-constexpr double kDt = 0.001;
+constexpr int kSide = 16, kSignalParticles = kSide * kSide;
+constexpr double kSignalDt = 0.001;
 
 // The words of a command line printed for a POSIX shell ('...' quoting).
 std::vector<std::string> shell_words(const std::string& line) {
@@ -75,7 +75,7 @@ std::vector<std::string> last_row(const fs::path& p) {
 void interrupt_and_resume(int sig, const std::string& name) {
   const fs::path dir = temp_dir("signal-" + name), ref = temp_dir("signal-ref-" + name);
   // No checkpoint section: an interrupted run still writes one, beside the frames.
-  const std::string scene = sheet_scene("rk4", /*every=*/50, /*ckpt_every=*/-1, kDt, kSide);
+  const std::string scene = sheet_scene("rk4", /*every=*/50, /*ckpt_every=*/-1, kSignalDt, kSide);
   write_file(dir / "scene.yaml", scene);
   write_file(ref / "scene.yaml", scene);
   // The signal is sent as soon as the run has started; should the test be
@@ -108,11 +108,11 @@ void interrupt_and_resume(int sig, const std::string& name) {
   const std::int64_t k = std::stoll(line.substr(at + 20));
   ASSERT_GT(k, 0) << line;
   ASSERT_LT(k, total) << line;
-  const double t_k = static_cast<double>(k) * kDt;
+  const double t_k = static_cast<double>(k) * kSignalDt;
 
   // Complete files under their final names, ending at step k.
   double last_t = -1;
-  const int frames = check_frames_file(dir / "out/frames.csv", kParticles, &last_t);
+  const int frames = check_frames_file(dir / "out/frames.csv", kSignalParticles, &last_t);
   EXPECT_EQ(frames, static_cast<int>(k / 50) + 1 + (k % 50 != 0))
       << "frames at 0, every 50 steps, and at " << k;
   EXPECT_EQ(last_t, t_k);
@@ -143,7 +143,7 @@ void interrupt_and_resume(int sig, const std::string& name) {
     EXPECT_TRUE(read_bytes(dir / f) == read_bytes(ref / f))
         << f << " differs from the uninterrupted run's";
   }
-  EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kParticles),
+  EXPECT_EQ(check_frames_file(dir / "out/frames.csv", kSignalParticles),
             static_cast<int>(total / 50) + 1);
 }
 
@@ -159,7 +159,7 @@ char process_state(pid_t pid) {
 
 TEST(Signals, SecondSignalExitsAtOnceLeavingNoFinalFile) {
   const fs::path dir = temp_dir("signal-double");
-  write_file(dir / "scene.yaml", sheet_scene("rk4", 50, -1, kDt, kSide));
+  write_file(dir / "scene.yaml", sheet_scene("rk4", 50, -1, kSignalDt, kSide));
   Child child({"run", "scene.yaml", "--steps", "1000000", "-q"}, dir);
   ASSERT_TRUE(wait_until([&] { return output_started(dir) || !child.running(); },
                          std::chrono::seconds(20)));
@@ -183,7 +183,7 @@ TEST(Signals, SecondSignalExitsAtOnceLeavingNoFinalFile) {
 
 TEST(Signals, QuickSigintPairLeavesOnlyCompleteFiles) {
   const fs::path dir = temp_dir("signal-pair");
-  write_file(dir / "scene.yaml", sheet_scene("rk4", 50, -1, kDt, kSide));
+  write_file(dir / "scene.yaml", sheet_scene("rk4", 50, -1, kSignalDt, kSide));
   Child child({"run", "scene.yaml", "--steps", "1000000", "-q"}, dir);
   ASSERT_TRUE(wait_until([&] { return output_started(dir) || !child.running(); },
                          std::chrono::seconds(20)));
@@ -197,7 +197,7 @@ TEST(Signals, QuickSigintPairLeavesOnlyCompleteFiles) {
   EXPECT_EQ(WEXITSTATUS(child.status()), 130);
   // Whatever exists under a final name is complete.
   if (fs::exists(dir / "out/frames.csv")) {
-    EXPECT_GE(check_frames_file(dir / "out/frames.csv", kParticles), 2);
+    EXPECT_GE(check_frames_file(dir / "out/frames.csv", kSignalParticles), 2);
   }
   if (fs::exists(dir / "out/energy.csv")) {
     const std::string e = read_bytes(dir / "out/energy.csv");

@@ -13,14 +13,13 @@
 
 #include "pdyn/host/scene_drawables.hpp"
 #include "pdyn/plugin.hpp"
+#include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string problems(const std::string& yaml) { return test::load_problems(yaml); }
 
 // What a force's factory saw in SceneContext::particles.
 struct Seen {
@@ -30,11 +29,6 @@ struct Seen {
   std::vector<Vec3> x;
 };
 Seen g_seen;
-
-class Nothing final : public Force {
- public:
-  void add_forces(const ParticleView&, Eigen::Ref<Matrix3X>) override {}
-};
 
 PluginDescriptor probe() {
   PluginDescriptor d;
@@ -48,7 +42,7 @@ PluginDescriptor probe() {
     g_seen.type.assign(ctx.particles.type.begin(), ctx.particles.type.end());
     g_seen.x.clear();
     for (Index i = 0; i < ctx.particles.size(); ++i) g_seen.x.push_back(ctx.particles.x.col(i));
-    return std::make_unique<Nothing>();
+    return std::make_unique<test::Nothing>();
   };
   return d;
 }
@@ -125,8 +119,9 @@ TEST(SimulationBox, BadBoxesAreReportedAtTheirValue) {
        "(expected max > min in every component)"},
   };
   for (const auto& c : cases) {
-    EXPECT_EQ(problems("simulation: { dt: 0.01, steps: 1, " + c.box + " }\n" + particles),
-              c.message)
+    EXPECT_EQ(
+        test::load_problems("simulation: { dt: 0.01, steps: 1, " + c.box + " }\n" + particles),
+        c.message)
         << c.box;
   }
 }
@@ -158,17 +153,17 @@ TEST(SimulationBox, AParticleOutsideAlongAnOpenAxisIsNamedWithItsEntry) {
 
 // Reads a frames CSV with the unwrapped columns: per row t, id and the 9
 // numbers x y z vx vy vz xu yu zu.
-struct Row {
+struct BoxRow {
   double t;
   Index id;
   Vec3 x, v, u;
 };
-std::vector<Row> read_frames(const fs::path& file) {
+std::vector<BoxRow> read_frames(const fs::path& file) {
   std::ifstream in(file);
   std::string line;
   std::getline(in, line);
   EXPECT_EQ(line, "t,id,x,y,z,vx,vy,vz,xu,yu,zu");
-  std::vector<Row> rows;
+  std::vector<BoxRow> rows;
   while (std::getline(in, line)) {
     std::istringstream s(line);
     std::string f;
@@ -220,7 +215,7 @@ TEST(SimulationBox, ParticlesCrossingPeriodicFacesStayInsideAndUnwrapToX0PlusVt)
     const auto rows = read_frames(dir / "out/frames.csv");
     ASSERT_EQ(rows.size(), 4u * (150 / 7 + 2));
     int crossings = 0;
-    for (const Row& row : rows) {
+    for (const BoxRow& row : rows) {
       const Index i = row.id;
       for (int k = 0; k < 2; ++k) {  // periodic: inside [min, max)
         EXPECT_GE(row.x[k], scene.system->domain().min[k]) << "t " << row.t << " particle " << i;

@@ -25,13 +25,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pdyn::test;
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 struct Outcome {
   int status = -1;
   std::string err;
@@ -48,15 +41,6 @@ Outcome run_in(const fs::path& dir, const std::string& args) {
   r.err = read_bytes(err);
   fs::remove(err);
   return r;
-}
-
-// Every regular file under `dir`, with its bytes.
-std::map<std::string, std::string> snapshot(const fs::path& dir) {
-  std::map<std::string, std::string> out;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    if (e.is_regular_file()) out[fs::relative(e.path(), dir).string()] = read_bytes(e.path());
-  }
-  return out;
 }
 
 struct Case {

@@ -22,10 +22,7 @@ using pdyn::FileMark;
 using pdyn::OutputFile;
 using pdyn::test::temp_dir;
 
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using pdyn::test::read_bytes;
 
 // Frame k: 1000 bytes of the digit k % 10 and a newline.
 std::string frame(int k) { return std::string(1000, static_cast<char>('0' + k % 10)) + "\n"; }

@@ -11,7 +11,7 @@
 namespace pdyn {
 namespace {
 
-const std::string kParticles = R"(simulation: { dt: 0.01, steps: 1 }
+const std::string kSelectionParticles = R"(simulation: { dt: 0.01, steps: 1 }
 particles:
   - { position: [5, 0, 1], mass: 2 }
   - grid: { origin: [0, 0, 1], u: [0.1, 0, 0], v: [0, 0.1, 0], nx: 3, ny: 2, mass: 0.5, name: cloud }
@@ -19,7 +19,7 @@ particles:
 forces:
 )";
 
-std::string Message(const std::string& yaml) {
+std::string SelectionMessage(const std::string& yaml) {
   try {
     test::load_text(yaml);
   } catch (const SceneError& e) {
@@ -29,7 +29,7 @@ std::string Message(const std::string& yaml) {
 }
 
 TEST(Selection, GravityOnAGroupMovesOnlyThatGroup) {
-  Scene scene = test::load_text(kParticles + "  - { type: gravity, group: cloud }\n");
+  Scene scene = test::load_text(kSelectionParticles + "  - { type: gravity, group: cloud }\n");
   // The group's potential only: 6 particles of 0.5 kg at z = 1 m.
   EXPECT_NEAR(scene.system->potential_energy(), 6 * 0.5 * 9.81 * 1.0, 1e-12);
   for (int s = 1; s <= 10; ++s) test::TakeStep(scene, s, 0.01);
@@ -41,7 +41,7 @@ TEST(Selection, GravityOnAGroupMovesOnlyThatGroup) {
 }
 
 TEST(Selection, IdsSelectExactlyThoseParticles) {
-  Scene scene = test::load_text(kParticles + "  - { type: drag, k: 1, ids: [0, 7] }\n" +
+  Scene scene = test::load_text(kSelectionParticles + "  - { type: drag, k: 1, ids: [0, 7] }\n" +
                                 "  - { type: gravity, ids: [7] }\n");
   const Matrix3X g = test::ForcesOf(*scene.system, 1);
   EXPECT_EQ(Vec3(g.col(7)), Vec3(0, 0, -9.81));
@@ -53,8 +53,9 @@ TEST(Selection, IdsSelectExactlyThoseParticles) {
 // A pair force on a group: only pairs of two members interact (the
 // selection's mask, Selection::mask), others feel nothing.
 TEST(Selection, APairForceOnAGroupJoinsOnlyItsMembers) {
-  Scene scene = test::load_text(
-      kParticles + "  - { type: lennard_jones, sigma: 0.1, cutoff: 0.25, group: cloud }\n");
+  Scene scene =
+      test::load_text(kSelectionParticles +
+                      "  - { type: lennard_jones, sigma: 0.1, cutoff: 0.25, group: cloud }\n");
   const Matrix3X f = test::ForcesOf(*scene.system, 0);
   EXPECT_EQ(Vec3(f.col(0)), Vec3::Zero());
   EXPECT_EQ(Vec3(f.col(7)), Vec3::Zero());
@@ -64,7 +65,8 @@ TEST(Selection, APairForceOnAGroupJoinsOnlyItsMembers) {
 }
 
 TEST(Selection, WithoutGroupOrIdsEveryParticleAsBefore) {
-  Scene scene = test::load_text(kParticles + "  - { type: gravity, g: [0.1, -0.2, -9.81] }\n");
+  Scene scene =
+      test::load_text(kSelectionParticles + "  - { type: gravity, g: [0.1, -0.2, -9.81] }\n");
   const System& sys = *scene.system;
   const Matrix3X f = test::ForcesOf(sys, 0);
   const Vec3 g(0.1, -0.2, -9.81);
@@ -72,19 +74,21 @@ TEST(Selection, WithoutGroupOrIdsEveryParticleAsBefore) {
 }
 
 TEST(Selection, RefusesBothKeysUnknownGroupsAndRepeatedIds) {
-  EXPECT_NE(Message(kParticles + "  - { type: gravity, group: cloud, ids: [0] }\n")
-                .find("test.yaml:7:41: forces[0].ids: both 'group' and 'ids' are given (expected "
-                      "at most one of them)"),
-            std::string::npos);
-  EXPECT_EQ(Message(kParticles + "  - { type: drag, group: clowd }\n"),
+  EXPECT_NE(
+      SelectionMessage(kSelectionParticles + "  - { type: gravity, group: cloud, ids: [0] }\n")
+          .find("test.yaml:7:41: forces[0].ids: both 'group' and 'ids' are given (expected "
+                "at most one of them)"),
+      std::string::npos);
+  EXPECT_EQ(SelectionMessage(kSelectionParticles + "  - { type: drag, group: clowd }\n"),
             "test.yaml:7:26: forces[0].group: unknown group 'clowd' (did you mean 'cloud'? "
             "expected one of: cloud)");
-  EXPECT_EQ(Message(kParticles + "  - { type: drag, ids: [0, 7, 0] }\n"),
+  EXPECT_EQ(SelectionMessage(kSelectionParticles + "  - { type: drag, ids: [0, 7, 0] }\n"),
             "test.yaml:7:31: forces[0].ids[2]: particle 0 is listed twice (expected each id once)");
-  EXPECT_NE(Message("simulation: { dt: 0.01, steps: 1 }\nparticles:\n  - { position: [0, 0, 0], "
-                    "mass: 1 }\nforces:\n  - { type: gravity, group: cloud }\n")
-                .find("the scene defines none"),
-            std::string::npos);
+  EXPECT_NE(
+      SelectionMessage("simulation: { dt: 0.01, steps: 1 }\nparticles:\n  - { position: [0, 0, 0], "
+                       "mass: 1 }\nforces:\n  - { type: gravity, group: cloud }\n")
+          .find("the scene defines none"),
+      std::string::npos);
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace pdyn::test;
 
-std::map<fs::path, std::string> snapshot(const fs::path& dir) {
+std::map<fs::path, std::string> snapshot_paths(const fs::path& dir) {
   std::map<fs::path, std::string> out;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
     if (!e.is_regular_file()) continue;
@@ -36,7 +36,7 @@ TEST(InputsUnchanged, NoRunOfAnySceneChangesAnyInputFile) {
   const fs::path root = temp_dir("inputs-unchanged");
   fs::copy(source_path("configs"), root / "configs", fs::copy_options::recursive);
   fs::copy(source_path("tests/scenes"), root / "scenes", fs::copy_options::recursive);
-  const auto before = snapshot(root);
+  const auto before = snapshot_paths(root);
   int scenes = 0;
   for (const auto& [file, bytes] : before) {
     if (file.extension() != ".yaml") continue;
@@ -50,7 +50,7 @@ TEST(InputsUnchanged, NoRunOfAnySceneChangesAnyInputFile) {
     }
   }
   EXPECT_GT(scenes, 60);
-  const auto after = snapshot(root);
+  const auto after = snapshot_paths(root);
   for (const auto& [file, bytes] : before) {
     const auto it = after.find(file);
     ASSERT_NE(it, after.end()) << file << " was removed";

@@ -71,15 +71,15 @@ std::string row_of(const std::string& report, const std::string& name) {
   return "";
 }
 
-struct Outcome {
+struct CrashOutcome {
   int shell_status = -1;  // as a shell reports it: the exit status, or 128 + signal
   std::string out, err;
 };
 
 // Runs PDYN_BIN with `args` in `cwd`, stdout and stderr captured, and waits
 // at most `limit` (then kills it: a test must not hang with the plugin).
-Outcome run_pdyn(const std::vector<std::string>& args, const fs::path& cwd,
-                 std::chrono::seconds limit = std::chrono::seconds(120)) {
+CrashOutcome run_pdyn(const std::vector<std::string>& args, const fs::path& cwd,
+                      std::chrono::seconds limit = std::chrono::seconds(120)) {
   std::vector<std::string> words = args;
   words.insert(words.begin(), PDYN_BIN);
   std::vector<char*> argv;
@@ -97,7 +97,7 @@ Outcome run_pdyn(const std::vector<std::string>& args, const fs::path& cwd,
   const int rc = posix_spawn(&pid, PDYN_BIN, &actions, nullptr, argv.data(), environ);
   fs::current_path(old);
   posix_spawn_file_actions_destroy(&actions);
-  Outcome o;
+  CrashOutcome o;
   if (rc != 0) {
     ADD_FAILURE() << "cannot start " << PDYN_BIN;
     return o;

@@ -12,11 +12,19 @@
 #include <stdexcept>
 #include <string>
 
+#include "pdyn/force.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn::test {
+
+/// A force that adds nothing and claims the default dependence (velocity and
+/// time): a force object whose presence alone is under test.
+class Nothing final : public Force {
+ public:
+  void add_forces(const ParticleView&, Eigen::Ref<Matrix3X>) override {}
+};
 
 /// `x` with 17 significant digits, so the scene loader reads back exactly
 /// the double the test compares against.

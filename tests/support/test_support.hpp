@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -45,5 +46,15 @@ std::filesystem::path shared_scene(const std::string& name);
 
 /// Loads shared_scene(NAME) with the shipped plugins and `overrides`.
 Scene load_shared(const std::string& name, const std::vector<Override>& overrides = {});
+
+/// The bytes of a file ("" if it cannot be read).
+std::string read_bytes(const std::filesystem::path& path);
+
+/// Every regular file under `dir`, by its path relative to `dir`, with its
+/// bytes: compared before and after a run to show what it changed.
+std::map<std::string, std::string> snapshot(const std::filesystem::path& dir);
+
+/// `text` split at newlines (without them).
+std::vector<std::string> split_lines(const std::string& text);
 
 }  // namespace pdyn::test

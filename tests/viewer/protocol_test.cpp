@@ -16,7 +16,7 @@ T at(const std::string& bytes, std::size_t offset) {
   return v;
 }
 
-Frame two_particles() {
+Frame two_particle_frame() {
   Frame f;
   f.topology = 7;
   f.time = 1.25;
@@ -30,7 +30,7 @@ Frame two_particles() {
 }
 
 TEST(ViewerFrame, FieldsSitAtTheDocumentedOffsets) {
-  const std::string b = encode_frame(two_particles());
+  const std::string b = encode_frame(two_particle_frame());
   ASSERT_EQ(b.size(), 48u + 12u * 2 + 4u * 2);
   EXPECT_EQ(b.substr(0, 4), "PDYF");
   EXPECT_EQ(at<std::uint32_t>(b, 4), 7u);
@@ -45,7 +45,7 @@ TEST(ViewerFrame, FieldsSitAtTheDocumentedOffsets) {
 }
 
 TEST(ViewerFrame, DecodesWhatItEncodesAndRefusesBrokenFrames) {
-  const Frame f = two_particles();
+  const Frame f = two_particle_frame();
   const std::string b = encode_frame(f);
   const Frame g = decode_frame(b);
   EXPECT_EQ(g.topology, f.topology);
@@ -80,7 +80,7 @@ TEST(ViewerCommand, EveryOpParsesWithItsFields) {
   EXPECT_EQ(*c.mass, 0.5);
 }
 
-std::string refusal(const std::string& text) {
+std::string protocol_refusal(const std::string& text) {
   try {
     parse_command(text);
   } catch (const ProtocolError& e) {
@@ -91,36 +91,40 @@ std::string refusal(const std::string& text) {
 
 TEST(ViewerCommand, EachMalformedMessageGetsItsReason) {
   // The JSON library's own detail follows the prefix; the expectation ends it.
-  const std::string not_json = refusal("{op: play");
+  const std::string not_json = protocol_refusal("{op: play");
   EXPECT_EQ(not_json.rfind("message is not JSON: ", 0), 0u) << not_json;
   EXPECT_NE(not_json.find("(expected a JSON object with an 'op')"), std::string::npos);
-  EXPECT_EQ(refusal("[1,2]"), "message is a JSON array (expected a JSON object with an 'op')");
-  EXPECT_EQ(refusal(R"({"id":3})").rfind("message has no 'op' string (expected one of: play, ", 0),
+  EXPECT_EQ(protocol_refusal("[1,2]"),
+            "message is a JSON array (expected a JSON object with an 'op')");
+  EXPECT_EQ(protocol_refusal(R"({"id":3})")
+                .rfind("message has no 'op' string (expected one of: play, ", 0),
             0u);
-  EXPECT_EQ(refusal(R"({"op":"explode"})").rfind("unknown op 'explode' (expected one of: play,", 0),
+  EXPECT_EQ(protocol_refusal(R"({"op":"explode"})")
+                .rfind("unknown op 'explode' (expected one of: play,", 0),
             0u);
-  EXPECT_EQ(refusal(R"({"op":"nail"})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"nail"})"),
             "nail: field 'id' is missing (expected a particle index, an integer >= 0)");
-  EXPECT_EQ(refusal(R"({"op":"nail","id":-1})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"nail","id":-1})"),
             "nail: field 'id' is -1 (expected a particle index, an integer >= 0)");
-  EXPECT_EQ(refusal(R"({"op":"nail","id":1.5})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"nail","id":1.5})"),
             "nail: field 'id' is 1.5 (expected a particle index, an integer >= 0)");
-  EXPECT_EQ(refusal(R"({"op":"move","point":[1,2]})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"move","point":[1,2]})"),
             "move: field 'point' is [1,2] (expected [x, y, z], three finite numbers in m)");
-  EXPECT_EQ(refusal(R"({"op":"move","point":[1,"a",2]})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"move","point":[1,"a",2]})"),
             "move: field 'point' is [1,\"a\",2] (expected [x, y, z], three finite numbers in m)");
-  EXPECT_EQ(refusal(R"({"op":"dt","value":0})"), "dt: field 'value' is 0 (expected a number > 0)");
-  EXPECT_EQ(refusal(R"({"op":"speed","value":"fast"})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"dt","value":0})"),
+            "dt: field 'value' is 0 (expected a number > 0)");
+  EXPECT_EQ(protocol_refusal(R"({"op":"speed","value":"fast"})"),
             "speed: field 'value' is string (expected a number)");
-  EXPECT_EQ(refusal(R"({"op":"create","point":[0,0,0],"mass":-1})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"create","point":[0,0,0],"mass":-1})"),
             "create: field 'mass' is -1 (expected a number > 0)");
-  EXPECT_EQ(refusal(R"({"op":"attach","a":1,"b":2,"ks":-5})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"attach","a":1,"b":2,"ks":-5})"),
             "attach: field 'ks' is -5 (expected a number >= 0)");
-  EXPECT_EQ(refusal(R"({"op":"solver","name":7})"),
+  EXPECT_EQ(protocol_refusal(R"({"op":"solver","name":7})"),
             "solver: field 'name' is missing or not a string (expected a solver name)");
   const std::string huge = R"({"op":"play","pad":")" + std::string(70000, 'x') + "\"}";
-  EXPECT_EQ(refusal(huge), "message of " + std::to_string(huge.size()) +
-                               " bytes is too long (expected at most 65536 bytes)");
+  EXPECT_EQ(protocol_refusal(huge), "message of " + std::to_string(huge.size()) +
+                                        " bytes is too long (expected at most 65536 bytes)");
 }
 
 TEST(ViewerCommand, RepliesAreJsonWithTheirOp) {

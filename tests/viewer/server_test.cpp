@@ -39,7 +39,7 @@ using nlohmann::json;
 using namespace std::chrono_literals;
 
 // A 10 x 10 cloth, pinned at two corners: always moving, quick to step.
-const char* kCloth = R"(
+const char* kClothScene = R"(
 simulation: { dt: 0.001, duration: 1, solver: { type: rk4 } }
 particles:
   - grid: { origin: [0, 0, 1], u: [0.1, 0, 0], v: [0, 0, 0.1], nx: 10, ny: 10, mass: 0.01,
@@ -53,7 +53,7 @@ class Server {
  public:
   Server() {
     const fs::path dir = test::temp_dir("serve");
-    scene_ = test::write_file(dir / "cloth.yaml", kCloth);
+    scene_ = test::write_file(dir / "cloth.yaml", kClothScene);
     test::write_file(dir / "page" / "index.html", "<!doctype html><title>pdyn</title>\n");
     int out[2];
     if (pipe(out) != 0) throw std::runtime_error("pipe");
@@ -132,7 +132,7 @@ std::pair<int, std::string> http_request(int port, http::verb verb, const std::s
   return {static_cast<int>(res.result_int()), res.body()};
 }
 
-struct Message {
+struct WsMessage {
   bool text = false;
   std::string data;
 };
@@ -149,8 +149,8 @@ class Client {
     ws_.binary(binary);
     ws_.write(net::buffer(text));
   }
-  std::optional<Message> read(std::chrono::milliseconds timeout = 5000ms) {
-    std::optional<Message> got;
+  std::optional<WsMessage> read(std::chrono::milliseconds timeout = 5000ms) {
+    std::optional<WsMessage> got;
     bool failed = false;
     buffer_.consume(buffer_.size());
     ws_.async_read(buffer_, [&](beast::error_code ec, std::size_t) {
@@ -158,7 +158,7 @@ class Client {
         failed = true;
         return;
       }
-      got = Message{ws_.got_text(), beast::buffers_to_string(buffer_.data())};
+      got = WsMessage{ws_.got_text(), beast::buffers_to_string(buffer_.data())};
     });
     ioc_.restart();
     ioc_.run_for(timeout);

@@ -20,7 +20,7 @@
 namespace pdyn {
 namespace {
 
-constexpr double kG = 9.81;        // m/s^2, along -z
+constexpr double kBallG = 9.81;    // m/s^2, along -z
 constexpr double kEpsilon = 1e-4;  // the collider's contact tolerance, m and m/s
 
 Scene Ball(double h0, const Vec3& v0, double kr, double dt, int steps) {
@@ -33,7 +33,7 @@ Scene Ball(double h0, const Vec3& v0, double kr, double dt, int steps) {
                          ", mass: 0.2 }\n"
                          "forces:\n"
                          "  - { type: gravity, g: [0, 0, " +
-                         test::Num(-kG) +
+                         test::Num(-kBallG) +
                          "] }\n"
                          "colliders:\n"
                          "  - { type: plane, point: [0, 0, 0], normal: [0, 0, 1], restitution: " +
@@ -53,7 +53,7 @@ TEST_P(BouncingBall, ApexHeightsFollowKrToThe2nTimesH0) {
   const double kr = GetParam();
   constexpr double kH0 = 1.0, kDt = 1e-4;
   // Time to the third apex: the fall plus 2.5 flights of the geometric series.
-  const double t_fall = std::sqrt(2.0 * kH0 / kG);
+  const double t_fall = std::sqrt(2.0 * kH0 / kBallG);
   const double t_end = t_fall * (1.0 + 2.0 * (kr + kr * kr) + 1.2 * kr * kr * kr);
   const int steps = static_cast<int>(t_end / kDt);
   Scene scene = Ball(kH0, Vec3::Zero(), kr, kDt, steps);
@@ -187,7 +187,7 @@ TEST(PlaneContact, SlidesDownAFrictionlessInclineWithTheTangentialPartOfGravity)
   constexpr double kDt = 1e-3;
   constexpr int kSteps = 1000;
   const Vec3 n = Vec3(0.0, 1.0, 1.0).normalized();
-  const Vec3 g(0.0, 0.0, -kG);
+  const Vec3 g(0.0, 0.0, -kBallG);
   const Vec3 g_t = g - g.dot(n) * n;
   const Vec3 v0(0.8, 0.0, 0.0);  // along the plane, across the slope
   Scene scene = test::load_text(

@@ -67,20 +67,8 @@ TEST(BoxCollider, NoParticleEndsAStepOutsideTheContainer) {
   EXPECT_EQ(contacts, 300);  // every particle reaches the wall
 }
 
-Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {
-  return test::load_text(
-      "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
-      "particles:\n"
-      "  - { position: " +
-      test::Vec(x) + ", velocity: " + test::Vec(v) +
-      ", mass: 0.1 }\n"
-      "colliders:\n"
-      "  - " +
-      collider + "\n");
-}
-
 TEST(BoxCollider, NormalImpactOnAFaceLeavesWithKrTimesTheSpeed) {
-  Scene scene = OneParticle({0.1, 0.1, 1}, {0, 0, -2}, "{ " + kBox + ", restitution: 0.7 }");
+  Scene scene = test::OneParticle({0.1, 0.1, 1}, {0, 0, -2}, "{ " + kBox + ", restitution: 0.7 }");
   const test::Impact hit = test::FirstImpact(scene, 1e-3, 1000);
   std::cout << "box outside, normal impact on the top face at 2 m/s: |v_out|/|v_in| = " << hit.ratio
             << " (kr = 0.7), z = " << hit.x.z() << " m\n";
@@ -90,7 +78,7 @@ TEST(BoxCollider, NormalImpactOnAFaceLeavesWithKrTimesTheSpeed) {
 
 TEST(BoxCollider, NormalImpactOnAnInnerWallLeavesWithKrTimesTheSpeed) {
   Scene scene =
-      OneParticle({0, 0, 0}, {0, 3, 0}, "{ " + kBox + ", inside: true, restitution: 0.3 }");
+      test::OneParticle({0, 0, 0}, {0, 3, 0}, "{ " + kBox + ", inside: true, restitution: 0.3 }");
   const test::Impact hit = test::FirstImpact(scene, 1e-3, 1000);
   std::cout << "box inside, normal impact on the wall y = 0.4 at 3 m/s: |v_out|/|v_in| = "
             << hit.ratio << " (kr = 0.3)\n";
@@ -103,7 +91,8 @@ TEST(BoxCollider, NormalImpactOnAnInnerWallLeavesWithKrTimesTheSpeed) {
 // the particle is on its way straight back, inside the box.
 TEST(BoxCollider, CornerOfTheContainerReflectsEveryComponent) {
   const Vec3 v0 = Vec3(0.5, 0.4, 0.3) * 4.0;
-  Scene scene = OneParticle({0, 0, 0}, v0, "{ " + kBox + ", inside: true, restitution: 1.0 }");
+  Scene scene =
+      test::OneParticle({0, 0, 0}, v0, "{ " + kBox + ", inside: true, restitution: 1.0 }");
   System& sys = *scene.system;
   double worst = -1.0;
   for (int k = 1; k <= 400; ++k) {

@@ -91,4 +91,18 @@ inline Impact FirstImpact(Scene& scene, double h, int max_steps) {
   return r;
 }
 
+/// A scene of one 0.1 kg particle at `x` (m) moving at `v` (m/s), stepped
+/// with rk4 at dt = 1 ms, and the collider given as YAML flow text.
+inline Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {
+  return load_text(
+      "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
+      "particles:\n"
+      "  - { position: " +
+      Vec(x) + ", velocity: " + Vec(v) +
+      ", mass: 0.1 }\n"
+      "colliders:\n"
+      "  - " +
+      collider + "\n");
+}
+
 }  // namespace pdyn::test

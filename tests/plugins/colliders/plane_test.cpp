@@ -21,7 +21,7 @@
 namespace pdyn {
 namespace {
 
-constexpr double kG = 9.81;  // m/s^2
+constexpr double kPlaneG = 9.81;  // m/s^2
 
 Scene Slide(const Vec3& v0, double mu, const Vec3& normal, const Vec3& g) {
   return test::load_text(
@@ -41,7 +41,7 @@ Scene Slide(const Vec3& v0, double mu, const Vec3& normal, const Vec3& g) {
 
 TEST(PlaneFriction, SlidingBlockDeceleratesAtMuGThenStopsAndStays) {
   constexpr double kMu = 0.3, kV0 = 2.0, kDt = 1e-3;
-  Scene scene = Slide({kV0, 0, 0}, kMu, {0, 0, 1}, {0, 0, -kG});
+  Scene scene = Slide({kV0, 0, 0}, kMu, {0, 0, 1}, {0, 0, -kPlaneG});
   System& sys = *scene.system;
   int k = 0;
   for (; k < 500; ++k) test::TakeStep(scene, k + 1, kDt);  // 0.5 s, before it stops (0.68 s)
@@ -58,12 +58,12 @@ TEST(PlaneFriction, SlidingBlockDeceleratesAtMuGThenStopsAndStays) {
     drift = std::max(
         {drift, (Vec3(sys.positions().col(0)) - x_stop).norm(), sys.velocities().col(0).norm()});
   }
-  const double t_expected = kV0 / (kMu * kG), x_expected = kV0 * kV0 / (2 * kMu * kG);
+  const double t_expected = kV0 / (kMu * kPlaneG), x_expected = kV0 * kV0 / (2 * kMu * kPlaneG);
   std::cout << "friction mu = 0.3 from 2 m/s: deceleration " << decel
-            << " m/s^2 (mu g = " << kMu * kG << "), stopped at t = " << stopped_at * kDt << " s ("
-            << t_expected << "), at x = " << x_stop.x() << " m (" << x_expected
+            << " m/s^2 (mu g = " << kMu * kPlaneG << "), stopped at t = " << stopped_at * kDt
+            << " s (" << t_expected << "), at x = " << x_stop.x() << " m (" << x_expected
             << "), drift afterwards " << drift << "\n";
-  EXPECT_NEAR(decel / (kMu * kG), 1.0, 0.02);
+  EXPECT_NEAR(decel / (kMu * kPlaneG), 1.0, 0.02);
   ASSERT_GT(stopped_at, 0) << "never stopped";
   EXPECT_NEAR(stopped_at * kDt / t_expected, 1.0, 0.02);
   EXPECT_NEAR(x_stop.x() / x_expected, 1.0, 0.02);
@@ -77,7 +77,7 @@ TEST(PlaneFriction, InclineHoldsBelowTheFrictionAngleAndSlidesAbove) {
   const double a = 20.0 * std::numbers::pi / 180.0;
   const Vec3 n(0.0, std::sin(a), std::cos(a));  // the floor tilted about x: downhill is -y
   {
-    Scene scene = Slide(Vec3::Zero(), 0.5, n, {0, 0, -kG});
+    Scene scene = Slide(Vec3::Zero(), 0.5, n, {0, 0, -kPlaneG});
     System& sys = *scene.system;
     double moved = 0.0;
     for (int k = 1; k <= 1000; ++k) {
@@ -89,11 +89,11 @@ TEST(PlaneFriction, InclineHoldsBelowTheFrictionAngleAndSlidesAbove) {
   }
   {
     constexpr double kMu = 0.2;
-    Scene scene = Slide(Vec3::Zero(), kMu, n, {0, 0, -kG});
+    Scene scene = Slide(Vec3::Zero(), kMu, n, {0, 0, -kPlaneG});
     System& sys = *scene.system;
     for (int k = 1; k <= 1000; ++k) test::TakeStep(scene, k, 1e-3);
     const double accel = sys.velocities().col(0).norm() / 1.0;
-    const double expected = kG * (std::sin(a) - kMu * std::cos(a));
+    const double expected = kPlaneG * (std::sin(a) - kMu * std::cos(a));
     std::cout << "incline 20 deg, mu = 0.2: acceleration " << accel << " m/s^2, expected "
               << expected << "\n";
     EXPECT_NEAR(accel / expected, 1.0, 0.02);

@@ -61,21 +61,9 @@ TEST(SphereCollider, NoParticleEndsAStepOutsideWhenKeptInside) {
   EXPECT_EQ(contacts, 300);  // every particle reaches the wall
 }
 
-Scene OneParticle(const Vec3& x, const Vec3& v, const std::string& collider) {
-  return test::load_text(
-      "simulation: { dt: 0.001, steps: 1, solver: { type: rk4 } }\n"
-      "particles:\n"
-      "  - { position: " +
-      test::Vec(x) + ", velocity: " + test::Vec(v) +
-      ", mass: 0.1 }\n"
-      "colliders:\n"
-      "  - " +
-      collider + "\n");
-}
-
 TEST(SphereCollider, NormalImpactFromOutsideLeavesWithKrTimesTheSpeed) {
-  Scene scene = OneParticle({0, 0, 1}, {0, 0, -2},
-                            "{ type: sphere, center: [0, 0, 0], radius: 0.5, restitution: 0.7 }");
+  Scene scene = test::OneParticle(
+      {0, 0, 1}, {0, 0, -2}, "{ type: sphere, center: [0, 0, 0], radius: 0.5, restitution: 0.7 }");
   const test::Impact hit = test::FirstImpact(scene, 1e-3, 1000);
   std::cout << "sphere outside, normal impact at 2 m/s: |v_out|/|v_in| = " << hit.ratio
             << " (kr = 0.7)\n";
@@ -84,7 +72,7 @@ TEST(SphereCollider, NormalImpactFromOutsideLeavesWithKrTimesTheSpeed) {
 }
 
 TEST(SphereCollider, NormalImpactFromInsideLeavesWithKrTimesTheSpeed) {
-  Scene scene = OneParticle(
+  Scene scene = test::OneParticle(
       {0.1, 0, 0}, {2, 0, 0},
       "{ type: sphere, center: [0, 0, 0], radius: 0.5, inside: true, restitution: 0.4 }");
   const test::Impact hit = test::FirstImpact(scene, 1e-3, 1000);
@@ -97,8 +85,9 @@ TEST(SphereCollider, NormalImpactFromInsideLeavesWithKrTimesTheSpeed) {
 // Off-centre: the normal at the contact is u = X / |X|, not the direction
 // of travel. V' = V_T - kr V_N with respect to u.
 TEST(SphereCollider, ObliqueImpactReflectsAboutTheLocalNormalAndKeepsTheTangent) {
-  Scene scene = OneParticle({0.3, 0.1, 1}, {0, 0, -2},
-                            "{ type: sphere, center: [0, 0, 0], radius: 0.5, restitution: 0.7 }");
+  Scene scene =
+      test::OneParticle({0.3, 0.1, 1}, {0, 0, -2},
+                        "{ type: sphere, center: [0, 0, 0], radius: 0.5, restitution: 0.7 }");
   const test::Impact hit = test::FirstImpact(scene, 1e-3, 1000);
   ASSERT_GT(hit.ratio, 0.0) << "no impact";
   const Vec3 u = hit.x.normalized();

@@ -23,8 +23,8 @@
 namespace pdyn {
 namespace {
 
-constexpr double kDt = 1e-3;         // s
-constexpr int kSteps = 5000;         // 5 s, about five periods
+constexpr double kDampedDt = 1e-3;   // s
+constexpr int kDampedSteps = 5000;   // 5 s, about five periods
 constexpr double kTolerance = 1e-9;  // m and m/s; rk4 achieves ~1.5e-10 here
 
 // m = 0.5 kg, ks = 20 N/m, kd = 0.4 N s/m, r = 1 m; initial stretch 0.3 m
@@ -39,7 +39,9 @@ test::Oscillator Damped(const Vec3& anchor, const Vec3& axis) {
   return o;
 }
 
-std::string Timing() { return "dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps); }
+std::string Timing() {
+  return "dt: " + test::Num(kDampedDt) + ", steps: " + std::to_string(kDampedSteps);
+}
 
 // Runs the oscillator along `axis` (anchored at `anchor`) and returns the
 // largest deviation from the closed form, max over steps of the position
@@ -49,9 +51,9 @@ double MaxDeviation(const Vec3& anchor, const Vec3& axis) {
   Scene scene = test::load_text(exact.scene("{ type: rk4 }", Timing()));
   System& sys = *scene.system;
   double worst = 0.0, min_length = exact.rest;
-  for (int k = 1; k <= kSteps; ++k) {
-    test::TakeStep(scene, k, kDt);
-    const double t = k * kDt;
+  for (int k = 1; k <= kDampedSteps; ++k) {
+    test::TakeStep(scene, k, kDampedDt);
+    const double t = k * kDampedDt;
     worst = std::max({worst, (sys.positions().col(1) - exact.x(t)).lpNorm<Eigen::Infinity>(),
                       (sys.velocities().col(1) - exact.v(t)).lpNorm<Eigen::Infinity>()});
     min_length = std::min(min_length, (sys.positions().col(1) - anchor).norm());
@@ -64,7 +66,8 @@ double MaxDeviation(const Vec3& anchor, const Vec3& axis) {
 
 TEST(DampedOscillator, Rk4MatchesTheUnderdampedClosedFormAlongX) {
   const double d = MaxDeviation(Vec3::Zero(), Vec3::UnitX());
-  std::cout << "rk4 damped oscillator along x, dt = " << kDt << ": max deviation " << d << "\n";
+  std::cout << "rk4 damped oscillator along x, dt = " << kDampedDt << ": max deviation " << d
+            << "\n";
   EXPECT_LT(d, kTolerance);
 }
 
@@ -72,8 +75,8 @@ TEST(DampedOscillator, Rk4MatchesTheUnderdampedClosedFormAlongX) {
 // spring's vector algebra (dx, dv . dx / L, dx / L) must not favour an axis.
 TEST(DampedOscillator, Rk4MatchesTheUnderdampedClosedFormAlongAnObliqueAxis) {
   const double d = MaxDeviation(Vec3(1.0, -2.0, 0.5), Vec3(1.0, 2.0, -2.0));
-  std::cout << "rk4 damped oscillator along (1, 2, -2)/3, dt = " << kDt << ": max deviation " << d
-            << "\n";
+  std::cout << "rk4 damped oscillator along (1, 2, -2)/3, dt = " << kDampedDt << ": max deviation "
+            << d << "\n";
   EXPECT_LT(d, kTolerance);
 }
 
@@ -86,10 +89,10 @@ TEST(DampedOscillator, ReportedEnergyMatchesTheClosedForm) {
   System& sys = *scene.system;
   EXPECT_NEAR(sys.kinetic_energy() + sys.potential_energy(), exact.energy(0.0), 1e-14);
   double previous = exact.energy(0.0);
-  for (int k = 1; k <= kSteps; ++k) {
-    test::TakeStep(scene, k, kDt);
+  for (int k = 1; k <= kDampedSteps; ++k) {
+    test::TakeStep(scene, k, kDampedDt);
     const double e = sys.kinetic_energy() + sys.potential_energy();
-    EXPECT_NEAR(e, exact.energy(k * kDt), 1e-9) << "step " << k;
+    EXPECT_NEAR(e, exact.energy(k * kDampedDt), 1e-9) << "step " << k;
     EXPECT_LE(e, previous + 1e-12) << "damping must not add energy, step " << k;
     previous = e;
   }

@@ -72,7 +72,7 @@ std::string scene_with(const std::string& expr) {
          quoted + "\", \"0\", \"0\"] }\n";
 }
 
-std::string refusal(const std::string& expr) {
+std::string expression_refusal(const std::string& expr) {
   try {
     test::load_text(scene_with(expr));
   } catch (const SceneError& e) {
@@ -87,14 +87,14 @@ TEST(FieldExpressionLanguage, EveryDocumentedExampleGivesItsValue) {
   for (const auto& r : rows) {
     SCOPED_TRACE("README.md:" + std::to_string(r.line) + ": " + r.expr);
     if (r.value == "refused") {
-      const std::string message = refusal(r.expr);
+      const std::string message = expression_refusal(r.expr);
       EXPECT_NE(message.find(r.note), std::string::npos) << message;
       continue;
     }
     double expected = 0;
     ASSERT_NO_THROW(expected = std::stod(r.value)) << "value '" << r.value << "'";
     Scene scene;
-    ASSERT_NO_THROW(scene = test::load_text(scene_with(r.expr))) << refusal(r.expr);
+    ASSERT_NO_THROW(scene = test::load_text(scene_with(r.expr))) << expression_refusal(r.expr);
     const double got = test::ForcesOf(*scene.system, 0)(0, 0);
     EXPECT_NEAR(got, expected, 1e-15 * std::max(1.0, std::abs(expected)))
         << "documented " << r.value;
@@ -103,7 +103,7 @@ TEST(FieldExpressionLanguage, EveryDocumentedExampleGivesItsValue) {
 
 TEST(FieldExpressionLanguage, EveryFunctionOfTheParserIsDocumented) {
   // The plugin lists the parser's functions when it refuses an unknown one.
-  const std::string message = refusal("zzzzzz(x)");
+  const std::string message = expression_refusal("zzzzzz(x)");
   const std::string lead = "expected one of the functions ";
   const auto at = message.find(lead);
   ASSERT_NE(at, std::string::npos) << message;
@@ -125,7 +125,7 @@ TEST(FieldExpressionLanguage, EveryFunctionOfTheParserIsDocumented) {
   EXPECT_EQ(documented, known);
   // The constants, likewise: both named, and nothing else called a constant.
   for (const char* c : {"_pi", "_e"}) {
-    EXPECT_EQ(refusal(c), "(accepted)") << c;
+    EXPECT_EQ(expression_refusal(c), "(accepted)") << c;
   }
 }
 

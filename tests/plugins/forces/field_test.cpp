@@ -20,7 +20,7 @@
 namespace pdyn {
 namespace {
 
-std::string Message(const std::string& yaml) {
+std::string FieldMessage(const std::string& yaml) {
   try {
     test::load_text(yaml);
   } catch (const SceneError& e) {
@@ -112,37 +112,39 @@ const char* kOne =
     "mass: 1 }\nforces:\n";
 
 TEST(FieldForce, RefusesBadExpressionsWithTheirPosition) {
-  EXPECT_EQ(Message(std::string(kOne) +
-                    "  - { type: field, constants: { k: 4 }, force: [\"0\", \"-k**y\", \"0\"] }\n"),
-            "test.yaml:5:54: forces[0].force[1]: unexpected operator '*' at position 3 in "
-            "\"-k**y\" (expected an expression in the variables x, y, z, vx, vy, vz, t, m or the "
-            "constants k and functions such as sin, exp, sqrt; a power is written x^2, not "
-            "x**2)");
-  EXPECT_EQ(Message(std::string(kOne) + "  - { type: field, force: [\"q*x\", \"0\", \"0\"] }\n"),
-            "test.yaml:5:28: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
-            "(expected one of the variables x, y, z, vx, vy, vz, t, m)");
+  EXPECT_EQ(
+      FieldMessage(std::string(kOne) +
+                   "  - { type: field, constants: { k: 4 }, force: [\"0\", \"-k**y\", \"0\"] }\n"),
+      "test.yaml:5:54: forces[0].force[1]: unexpected operator '*' at position 3 in "
+      "\"-k**y\" (expected an expression in the variables x, y, z, vx, vy, vz, t, m or the "
+      "constants k and functions such as sin, exp, sqrt; a power is written x^2, not "
+      "x**2)");
+  EXPECT_EQ(
+      FieldMessage(std::string(kOne) + "  - { type: field, force: [\"q*x\", \"0\", \"0\"] }\n"),
+      "test.yaml:5:28: forces[0].force[0]: unknown variable 'q' at position 0 in \"q*x\" "
+      "(expected one of the variables x, y, z, vx, vy, vz, t, m)");
   const std::string few =
-      Message(std::string(kOne) + "  - { type: field, force: [\"x\", \"y\"] }\n");
+      FieldMessage(std::string(kOne) + "  - { type: field, force: [\"x\", \"y\"] }\n");
   EXPECT_NE(few.find("forces[0].force: has 2 expressions (expected 3: [fx, fy, fz], in N)"),
             std::string::npos)
       << few;
   const std::string clash =
-      Message(std::string(kOne) +
-              "  - { type: field, constants: { x: 1 }, force: [\"x\", \"0\", \"0\"] }\n");
+      FieldMessage(std::string(kOne) +
+                   "  - { type: field, constants: { x: 1 }, force: [\"x\", \"0\", \"0\"] }\n");
   EXPECT_NE(
       clash.find("test.yaml:5:31: forces[0].constants: constant 'x' is named like a variable"),
       std::string::npos)
       << clash;
   const std::string open =
-      Message(std::string(kOne) + "  - { type: field, force: [\"sin(x\", \"0\", \"0\"] }\n");
+      FieldMessage(std::string(kOne) + "  - { type: field, force: [\"sin(x\", \"0\", \"0\"] }\n");
   EXPECT_NE(open.find("forces[0].force[0]: "), std::string::npos) << open;
   EXPECT_NE(open.find("in \"sin(x\""), std::string::npos) << open;
   const std::string two =
-      Message(std::string(kOne) + "  - { type: field, force: [\"1, 2\", \"0\", \"0\"] }\n");
+      FieldMessage(std::string(kOne) + "  - { type: field, force: [\"1, 2\", \"0\", \"0\"] }\n");
   EXPECT_NE(two.find("forces[0].force[0]: \"1, 2\" gives 2 values"), std::string::npos) << two;
   const std::string key =
-      Message(std::string(kOne) +
-              "  - { type: field, constants: { 2k: 1 }, force: [\"0\", \"0\", \"0\"] }\n");
+      FieldMessage(std::string(kOne) +
+                   "  - { type: field, constants: { 2k: 1 }, force: [\"0\", \"0\", \"0\"] }\n");
   EXPECT_NE(key.find("forces[0].constants: '2k' is not a name"), std::string::npos) << key;
 }
 

@@ -14,6 +14,22 @@
 
 namespace pdyn::test {
 
+/// Collects a force's Jacobian blocks (Force::add_jacobians) into dense
+/// 3N x 3N matrices df/dx (N/m) and df/dv (N s/m), for comparison with
+/// finite differences.
+class DenseSink final : public JacobianSink {
+ public:
+  explicit DenseSink(Index n)
+      : dfdx(Eigen::MatrixXd::Zero(3 * n, 3 * n)), dfdv(Eigen::MatrixXd::Zero(3 * n, 3 * n)) {}
+  void add_dfdx(Index i, Index j, const Eigen::Matrix3d& b) override {
+    dfdx.block<3, 3>(3 * i, 3 * j) += b;
+  }
+  void add_dfdv(Index i, Index j, const Eigen::Matrix3d& b) override {
+    dfdv.block<3, 3>(3 * i, 3 * j) += b;
+  }
+  Eigen::MatrixXd dfdx, dfdv;
+};
+
 /// A reproducible random cloud of particles (positions in [-1, 1]^3 m,
 /// velocities in [-2, 2]^3 m/s, masses in [0.5, 2] kg) as a scene's
 /// `simulation` and `particles` sections.

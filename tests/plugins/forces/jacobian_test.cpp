@@ -11,24 +11,14 @@
 #include <iostream>
 #include <random>
 
+#include "plugins/forces/force_support.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {
 
 using Dense = Eigen::MatrixXd;
-
-class DenseSink final : public JacobianSink {
- public:
-  explicit DenseSink(Index n) : dfdx(Dense::Zero(3 * n, 3 * n)), dfdv(Dense::Zero(3 * n, 3 * n)) {}
-  void add_dfdx(Index i, Index j, const Eigen::Matrix3d& b) override {
-    dfdx.block<3, 3>(3 * i, 3 * j) += b;
-  }
-  void add_dfdv(Index i, Index j, const Eigen::Matrix3d& b) override {
-    dfdv.block<3, 3>(3 * i, 3 * j) += b;
-  }
-  Dense dfdx, dfdv;
-};
+using test::DenseSink;
 
 struct State {
   double t = 0.0;

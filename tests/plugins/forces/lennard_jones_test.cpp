@@ -20,6 +20,7 @@
 #include "pdyn/parallel.hpp"
 #include "pdyn/resolve.hpp"
 #include "pdyn/system.hpp"
+#include "plugins/forces/force_support.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
@@ -243,14 +244,6 @@ TEST(LennardJones, SmallLiquidConservesEnergyToSecondOrder) {
 // central differences of the forces (h = 1e-6 sigma) to 1e-6 of the largest
 // block, for one type and for a mixture, on 125 particles of a jittered
 // lattice filling a periodic box (pairs across the faces included).
-struct DenseSink final : JacobianSink {
-  explicit DenseSink(Index n) : dfdx(Eigen::MatrixXd::Zero(3 * n, 3 * n)) {}
-  void add_dfdx(Index i, Index j, const Eigen::Matrix3d& block) override {
-    dfdx.block<3, 3>(3 * i, 3 * j) += block;
-  }
-  void add_dfdv(Index, Index, const Eigen::Matrix3d&) override { ADD_FAILURE() << "no df/dv"; }
-  Eigen::MatrixXd dfdx;
-};
 
 TEST(LennardJones, AnalyticJacobiansMatchCentralDifferences) {
   Params mixture;
@@ -266,7 +259,7 @@ TEST(LennardJones, AnalyticJacobiansMatchCentralDifferences) {
     d.periodic = {true, true, true};
     sys.set_domain(d);
     auto force = make(sys, given);
-    DenseSink sink(sys.size());
+    test::DenseSink sink(sys.size());
     ASSERT_TRUE(force->add_jacobians(sys.view(), sink));
     const double h = 1e-6;
     Eigen::MatrixXd numeric(3 * sys.size(), 3 * sys.size());
@@ -285,6 +278,7 @@ TEST(LennardJones, AnalyticJacobiansMatchCentralDifferences) {
     const double scale = sink.dfdx.cwiseAbs().maxCoeff();
     EXPECT_GT(scale, 1.0);
     EXPECT_LT((sink.dfdx - numeric).cwiseAbs().maxCoeff(), 1e-6 * scale);
+    EXPECT_TRUE(sink.dfdv.isZero(0.0)) << "a position-only law reported df/dv";
   }
 }
 

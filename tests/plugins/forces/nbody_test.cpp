@@ -221,10 +221,10 @@ TEST(NBody, BarnesHutForceErrorAgainstDirectSummationGrowsWithTheta) {
   const Matrix3X exact = forces_of(0);
   const double exact_u = objects[0].force->potential_energy(s.system->view()).value();
   const Eigen::VectorXd magnitude = exact.colwise().norm().transpose();
-  struct Row {
+  struct ThetaRow {
     double rms, worst, energy;
   };
-  std::vector<Row> rows;
+  std::vector<ThetaRow> rows;
   std::cout << "Barnes-Hut vs direct, Plummer sphere of 4000 bodies, eps 0.01:\n"
             << "theta  rms |df|/|f|  max |df|/|f|  |dU/U|  bias\n";
   for (std::size_t k = 0; k < thetas.size(); ++k) {
@@ -245,11 +245,11 @@ TEST(NBody, BarnesHutForceErrorAgainstDirectSummationGrowsWithTheta) {
   // Measured (rms, max, |dU/U|): theta 0.1: 3.0e-5, 6.9e-4, 1.1e-7; 0.3: 9.5e-4,
   // 9.5e-3, 2.9e-5; 0.5: 4.1e-3, 4.7e-2, 1.1e-4; 0.7: 1.0e-2, 0.10, 1.6e-4;
   // 1.0: 3.0e-2, 0.25, 3.0e-4. Bounds about twice that.
-  const std::vector<Row> bounds = {{6e-5, 1.5e-3, 3e-7},
-                                   {2e-3, 2e-2, 6e-5},
-                                   {8e-3, 0.1, 2.5e-4},
-                                   {2e-2, 0.2, 3.5e-4},
-                                   {6e-2, 0.5, 6e-4}};
+  const std::vector<ThetaRow> bounds = {{6e-5, 1.5e-3, 3e-7},
+                                        {2e-3, 2e-2, 6e-5},
+                                        {8e-3, 0.1, 2.5e-4},
+                                        {2e-2, 0.2, 3.5e-4},
+                                        {6e-2, 0.5, 6e-4}};
   for (std::size_t k = 0; k < thetas.size(); ++k) {
     EXPECT_LT(rows[k].rms, bounds[k].rms) << "theta " << thetas[k];
     EXPECT_LT(rows[k].worst, bounds[k].worst) << "theta " << thetas[k];

@@ -19,8 +19,8 @@
 namespace pdyn {
 namespace {
 
-constexpr int kSteps = 100000;
-const double kDt = 2.0 * std::numbers::pi / 100.0;  // T / 100
+constexpr int kEnergySteps = 100000;
+const double kEnergyDt = 2.0 * std::numbers::pi / 100.0;  // T / 100
 
 test::Oscillator Undamped() {
   test::Oscillator o;
@@ -32,14 +32,15 @@ test::Oscillator Undamped() {
 // Energy after every step (index 0: the initial energy).
 std::vector<double> EnergyHistory(const std::string& solver) {
   const test::Oscillator osc = Undamped();
-  Scene scene = test::load_text(osc.scene(
-      "{ type: " + solver + " }", "dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps)));
+  Scene scene = test::load_text(
+      osc.scene("{ type: " + solver + " }",
+                "dt: " + test::Num(kEnergyDt) + ", steps: " + std::to_string(kEnergySteps)));
   System& sys = *scene.system;
   std::vector<double> e;
-  e.reserve(kSteps + 1);
+  e.reserve(kEnergySteps + 1);
   e.push_back(sys.kinetic_energy() + sys.potential_energy());
-  for (int k = 1; k <= kSteps; ++k) {
-    test::TakeStep(scene, k, kDt);
+  for (int k = 1; k <= kEnergySteps; ++k) {
+    test::TakeStep(scene, k, kEnergyDt);
     e.push_back(sys.kinetic_energy() + sys.potential_energy());
   }
   return e;
@@ -66,11 +67,12 @@ Band BandOf(const std::vector<double>& e, std::size_t begin, std::size_t end) {
 void ExpectBoundedEnergy(const std::string& solver, double max_relative_error) {
   const std::vector<double> e = EnergyHistory(solver);
   const double e0 = e.front();
-  const std::size_t tenth = kSteps / 10;
-  const Band first = BandOf(e, 0, tenth + 1), last = BandOf(e, kSteps - tenth, kSteps + 1);
+  const std::size_t tenth = kEnergySteps / 10;
+  const Band first = BandOf(e, 0, tenth + 1),
+             last = BandOf(e, kEnergySteps - tenth, kEnergySteps + 1);
   double worst = 0.0;
   for (const double x : e) worst = std::max(worst, std::abs(x - e0) / e0);
-  std::cout << solver << " energy over " << kSteps << " steps at dt = T/100: band width "
+  std::cout << solver << " energy over " << kEnergySteps << " steps at dt = T/100: band width "
             << first.width() / e0 << " (first tenth), " << last.width() / e0
             << " (last tenth) of E0; mean drift " << (last.mean - first.mean) / e0
             << " of E0; max relative error " << worst << "\n";
@@ -90,16 +92,16 @@ TEST(EnergyConservation, SymplecticEulerStaysInABoundedBand) {
 
 TEST(EnergyConservation, EulerGrowsWithoutBound) {
   const std::vector<double> e = EnergyHistory("euler");
-  const double hw2 = kDt * kDt;  // (h w)^2 with w = 1
+  const double hw2 = kEnergyDt * kEnergyDt;  // (h w)^2 with w = 1
   std::size_t increases = 0;
   for (std::size_t k = 1; k < e.size(); ++k) increases += e[k] > e[k - 1] ? 1 : 0;
   const double log_growth = std::log(e.back() / e.front());
-  const double predicted = kSteps * std::log1p(hw2);
-  std::cout << "euler energy over " << kSteps
+  const double predicted = kEnergySteps * std::log1p(hw2);
+  std::cout << "euler energy over " << kEnergySteps
             << " steps at dt = T/100: E/E0 = " << e.back() / e.front() << " (ln " << log_growth
             << "; (1 + (h w)^2)^N predicts ln " << predicted << "); grew on " << increases << " of "
-            << kSteps << " steps\n";
-  EXPECT_EQ(increases, static_cast<std::size_t>(kSteps));  // every single step
+            << kEnergySteps << " steps\n";
+  EXPECT_EQ(increases, static_cast<std::size_t>(kEnergySteps));  // every single step
   EXPECT_NEAR(log_growth, predicted, 1e-6 * predicted);
   EXPECT_GT(e.back() / e.front(), 1e100);
 }

@@ -16,16 +16,16 @@
 namespace pdyn {
 namespace {
 
-const Vec3 kX0(0.5, -1.0, 2.0);  // m
-const Vec3 kV0(1.5, -0.5, 4.0);  // m/s, nonzero in every component
-const Vec3 kG(0.3, 0.0, -9.81);  // m/s^2, not along an axis
-constexpr double kMass = 2.0;    // kg: f = m g, a = g whatever the mass
-constexpr double kDt = 1e-3;     // s
-constexpr int kSteps = 1000;
+const Vec3 kX0(0.5, -1.0, 2.0);   // m
+const Vec3 kV0(1.5, -0.5, 4.0);   // m/s, nonzero in every component
+const Vec3 kG(0.3, 0.0, -9.81);   // m/s^2, not along an axis
+constexpr double kMass = 2.0;     // kg: f = m g, a = g whatever the mass
+constexpr double kFallDt = 1e-3;  // s
+constexpr int kFallSteps = 1000;
 
 Scene FreeFall(const std::string& solver) {
   return test::load_text(
-      "simulation: { dt: " + test::Num(kDt) + ", steps: " + std::to_string(kSteps) +
+      "simulation: { dt: " + test::Num(kFallDt) + ", steps: " + std::to_string(kFallSteps) +
       ", solver: { type: " + solver + " } }\n" +
       "particles:\n"
       "  - { position: " +
@@ -44,9 +44,9 @@ Deviation RunAgainstParabola(const std::string& solver) {
   Scene scene = FreeFall(solver);
   System& sys = *scene.system;
   Deviation d;
-  for (int k = 1; k <= kSteps; ++k) {
-    test::TakeStep(scene, k, kDt);
-    const double t = k * kDt;
+  for (int k = 1; k <= kFallSteps; ++k) {
+    test::TakeStep(scene, k, kFallDt);
+    const double t = k * kFallDt;
     const Vec3 x = kX0 + kV0 * t + 0.5 * kG * t * t;
     const Vec3 v = kV0 + kG * t;
     d.x = std::max(d.x, (sys.positions().col(0) - x).lpNorm<Eigen::Infinity>());
@@ -58,7 +58,7 @@ Deviation RunAgainstParabola(const std::string& solver) {
 TEST(FreeFall, Rk4FollowsTheExactParabola) {
   const Deviation d = RunAgainstParabola("rk4");
   std::cout << "rk4 free fall: max |x - exact| = " << d.x << " m, max |v - exact| = " << d.v
-            << " m/s over " << kSteps << " steps\n";
+            << " m/s over " << kFallSteps << " steps\n";
   EXPECT_LT(d.x, 1e-12);
   EXPECT_LT(d.v, 1e-12);
 }
@@ -79,10 +79,10 @@ TEST(FreeFall, EulerLagsTheParabolaByGHTOverTwo) {
   Scene scene = FreeFall("euler");
   System& sys = *scene.system;
   double dx = 0.0, dv = 0.0;
-  for (int k = 1; k <= kSteps; ++k) {
-    test::TakeStep(scene, k, kDt);
-    const double t = k * kDt;
-    const Vec3 x = kX0 + kV0 * t + 0.5 * kG * t * t - 0.5 * kG * kDt * t;
+  for (int k = 1; k <= kFallSteps; ++k) {
+    test::TakeStep(scene, k, kFallDt);
+    const double t = k * kFallDt;
+    const Vec3 x = kX0 + kV0 * t + 0.5 * kG * t * t - 0.5 * kG * kFallDt * t;
     const Vec3 v = kV0 + kG * t;
     dx = std::max(dx, (sys.positions().col(0) - x).lpNorm<Eigen::Infinity>());
     dv = std::max(dv, (sys.velocities().col(0) - v).lpNorm<Eigen::Infinity>());

@@ -58,11 +58,6 @@ TEST(ImplicitEuler, AutoSolvesDirectlyWhenEveryForceHasJacobians) {
   EXPECT_EQ(automatic.system->state(), direct.system->state());
 }
 
-class OpaqueDrag final : public Force {
- public:
-  void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) override { f -= 0.02 * p.v; }
-};
-
 const char* kSmallCloth =
     "simulation: { dt: 0.01, steps: 20, solver: { type: implicit_euler, linear_solver: %s, "
     "cg_tolerance: 1.0e-12 } }\n"
@@ -85,7 +80,7 @@ TEST(ImplicitEuler, DirectRefusesForcesWithoutJacobiansAndAutoFallsBackToCg) {
   ASSERT_EQ(run_scene(analytic).exit_code, 0);
 
   Scene automatic = test::load_text(SmallCloth("auto"));
-  automatic.system->add_force(std::make_shared<OpaqueDrag>(), "opaque drag");
+  automatic.system->add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
   const RunResult ra = run_scene(automatic);
   ASSERT_EQ(ra.exit_code, 0) << ra.message;
   const double diff =
@@ -95,7 +90,7 @@ TEST(ImplicitEuler, DirectRefusesForcesWithoutJacobiansAndAutoFallsBackToCg) {
   EXPECT_LT(diff, 1e-8);
 
   Scene direct = test::load_text(SmallCloth("direct"));
-  direct.system->add_force(std::make_shared<OpaqueDrag>(), "opaque drag");
+  direct.system->add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
   const RunResult rd = run_scene(direct);
   EXPECT_EQ(rd.exit_code, 3);
   EXPECT_NE(rd.message.find("implicit_euler: linear_solver: direct needs every force's Jacobian, "

@@ -65,7 +65,7 @@ TEST(Rk45, OutputFramesLandExactlyOnTheirTimes) {
   constexpr double kRtol = 1e-6;
   const auto dir = test::temp_dir("rk45-frames");
   const auto csv = dir / "frames.csv";
-  constexpr double kDt = 0.01;
+  constexpr double kOutputDt = 0.01;
   constexpr int kEvery = 7;
   Scene scene = test::load_text(osc.scene(Rk45(kRtol), "dt: 0.01, duration: 3") +
                                 "output: { path: " + csv.string() +
@@ -98,10 +98,10 @@ TEST(Rk45, OutputFramesLandExactlyOnTheirTimes) {
                       (v - osc.v(t)).lpNorm<Eigen::Infinity>() / w0});
   }
   // Frames at 0, 0.07, ..., 2.94 and the final one at 3.
-  const int n_frames = static_cast<int>(3.0 / (kEvery * kDt)) + 1;
+  const int n_frames = static_cast<int>(3.0 / (kEvery * kOutputDt)) + 1;
   ASSERT_EQ(static_cast<int>(times.size()), n_frames + 1);
   for (int m = 0; m < n_frames; ++m) {
-    const double expected = static_cast<double>(m) * (static_cast<double>(kEvery) * kDt);
+    const double expected = static_cast<double>(m) * (static_cast<double>(kEvery) * kOutputDt);
     EXPECT_EQ(times[static_cast<std::size_t>(m)], fmt::format("{:.17g}", expected))
         << "frame " << m;
   }
@@ -109,7 +109,7 @@ TEST(Rk45, OutputFramesLandExactlyOnTheirTimes) {
   std::cout << fmt::format(
       "rk45 dense output: {} frames every {} s from {} accepted steps ({} rejected); largest "
       "frame error against the closed form {:.3e}\n",
-      times.size(), kEvery * kDt, r.counts.accepted, r.counts.rejected, worst);
+      times.size(), kEvery * kOutputDt, r.counts.accepted, r.counts.rejected, worst);
   // Fewer steps than frames: frames come from the continuous extension
   // inside steps, and are as accurate as the steps (a few rtol).
   EXPECT_LT(r.counts.accepted, static_cast<std::int64_t>(times.size()));

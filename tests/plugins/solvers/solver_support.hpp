@@ -3,9 +3,11 @@
 // convergence order.
 #pragma once
 
+#include <Eigen/Core>
 #include <cmath>
 #include <vector>
 
+#include "pdyn/force.hpp"
 #include "support/oscillator.hpp"
 #include "support/test_support.hpp"
 
@@ -24,5 +26,13 @@ inline double FittedOrder(const std::vector<double>& h, const std::vector<double
   }
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
+
+/// Linear drag f = -0.02 v (N s/m) with no Jacobians: implicit_euler must
+/// take its derivatives matrix-free (finite differences) while it takes the
+/// other forces' analytically.
+class OpaqueDrag final : public Force {
+ public:
+  void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) override { f -= 0.02 * p.v; }
+};
 
 }  // namespace pdyn::test

@@ -127,12 +127,8 @@ TEST(ImplicitEuler, MixesAnalyticAndMatrixFreeForces) {
   Scene analytic = test::load_text(cloth + "  - { type: drag, k: 0.02 }\n");
   ASSERT_EQ(run_scene(analytic).exit_code, 0);
 
-  class OpaqueDrag final : public Force {
-   public:
-    void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) override { f -= 0.02 * p.v; }
-  };
   Scene mixed = test::load_text(cloth);
-  mixed.system->add_force(std::make_shared<OpaqueDrag>(), "opaque drag");
+  mixed.system->add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
   ASSERT_EQ(run_scene(mixed).exit_code, 0);
   const double diff = (analytic.system->state() - mixed.system->state()).lpNorm<Eigen::Infinity>();
   std::cout << "implicit_euler on a 5 x 5 cloth, drag analytic vs matrix-free: " << diff

@@ -12,18 +12,15 @@
 
 #include "pdyn/stepper.hpp"
 #include "pdyn/system.hpp"
+#include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {
 
-// Adds nothing; claims the default dependence (velocity and time).
-class Nothing final : public Force {
- public:
-  void add_forces(const ParticleView&, Eigen::Ref<Matrix3X>) override {}
-};
-
-void add_nothing(Scene& scene) { scene.system->add_force(std::make_shared<Nothing>(), "nothing"); }
+void add_nothing(Scene& scene) {
+  scene.system->add_force(std::make_shared<test::Nothing>(), "nothing");
+}
 
 // A Lennard-Jones cluster of 27 particles under gravity (both forces depend
 // on positions only), `extra` appended to the scene text (colliders, a

@@ -17,20 +17,20 @@ namespace {
 namespace fs = std::filesystem;
 using pdyn::test::shipped_plugins;
 
-const char* kHead =
+const char* kOutputHead =
     "simulation: { dt: 0.01, steps: 10 }\n"
     "particles:\n"
     "  - { position: [0, 0, 1], mass: 1 }\n"
     "  - { position: [1, 0, 1], mass: 1 }\n";
 
-Scene load(const std::string& output) {
-  return load_scene_text(std::string(kHead) + output, "s.yaml", shipped_plugins());
+Scene load_output(const std::string& output) {
+  return load_scene_text(std::string(kOutputHead) + output, "s.yaml", shipped_plugins());
 }
 
 // The diagnostics of a refused scene, one per line.
 std::string refused(const std::string& output) {
   try {
-    load(output);
+    load_output(output);
   } catch (const SceneError& e) {
     return e.what();
   }
@@ -38,7 +38,7 @@ std::string refused(const std::string& output) {
 }
 
 TEST(OutputList, EachWriterHasItsPathEveryAndFields) {
-  const Scene s = load(
+  const Scene s = load_output(
       "output:\n"
       "  - { type: csv, path: out/run.csv, every: 10 }\n"
       "  - { type: vtk, path: out/run.pvd, every: 50, fields: [velocity, mass, fixed, force] }\n"
@@ -60,7 +60,8 @@ TEST(OutputList, EachWriterHasItsPathEveryAndFields) {
 }
 
 TEST(OutputList, TheMappingFormIsACsvAndAnEnergyWriter) {
-  const Scene s = load("output: { path: f.csv, every: 0, energy: e.csv, unwrapped: true }\n");
+  const Scene s =
+      load_output("output: { path: f.csv, every: 0, energy: e.csv, unwrapped: true }\n");
   const auto& w = s.output.writers;
   ASSERT_EQ(w.size(), 2u);
   EXPECT_EQ(w[0].record.descriptor->name, "csv");
@@ -74,7 +75,7 @@ TEST(OutputList, TheMappingFormIsACsvAndAnEnergyWriter) {
 }
 
 TEST(OutputList, CheckpointAtTheTopLevel) {
-  const Scene s = load(
+  const Scene s = load_output(
       "output: [ { type: csv, path: a.csv } ]\n"
       "checkpoint: { path: c/run.ckpt, every: 5 }\n");
   EXPECT_EQ(s.output.checkpoint, "c/run.ckpt");
