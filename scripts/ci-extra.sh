@@ -7,12 +7,7 @@
 #   bash scripts/ci-extra.sh     (PDYN_FUZZ_SECONDS, default 120)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-launcher=()
-if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  # Paths relative to the clone, so that another clone's objects are reused.
-  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
-fi
+source scripts/ccache.sh
 cmake --preset asan -DPDYN_BROWSER_TEST=OFF "${launcher[@]}"  # the browser test runs on the build for use
 cmake --build --preset asan
 ctest --preset asan

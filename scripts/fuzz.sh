@@ -9,12 +9,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-120}"
-launcher=()
-if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  # Paths relative to the clone, so that another clone's objects are reused.
-  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
-fi
+source scripts/ccache.sh
 cmake --preset fuzz "${launcher[@]}" >/dev/null
 cmake --build --preset fuzz --target scene_fuzzer pdyn_plugins
 work=build-fuzz/corpus

@@ -16,7 +16,7 @@ what="${1:-demo}"
 case "$what" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
 
 packages=(
-  g++ cmake ninja-build            # toolchain
+  g++ cmake ninja-build ccache     # toolchain (ccache: rebuilds are copies)
   libeigen3-dev                    # math and state vectors
   libboost-dev                     # Boost.DLL (plugin loading), header-only here
   libyaml-cpp-dev                  # scenes
@@ -60,14 +60,7 @@ fi
 # exactly as the lock file pins them.
 npm ci --prefix viewer --no-audit --no-fund --loglevel=error
 
-# ccache, where the machine has it, makes a second build of the same sources
-# (another preset, another clone) mostly a copy.
-launcher=()
-if command -v ccache >/dev/null 2>&1; then
-  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-  # Paths relative to the clone, so that another clone's objects are reused.
-  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
-fi
+source scripts/ccache.sh
 
 if [[ "$what" == demo ]]; then
   # Only what the demo needs: the program, the shipped plugins, the Python module.
