@@ -14,6 +14,7 @@ With --drop PKG,... it first removes those packages' rows, as if someone
 had forgotten them, and succeeds only if it then reports exactly those
 packages missing (the check of the check)."""
 import argparse
+import functools
 import glob
 import json
 import os
@@ -48,6 +49,18 @@ def shipped_files(build):
     return files
 
 
+@functools.lru_cache(maxsize=None)
+def owner_package(path):
+    """The Debian package that installed `path` (or its target), or None.
+    Cached: each `dpkg -S` reads dpkg's whole database (about 0.3 s), and
+    thirty binaries name the same ten libraries."""
+    for candidate in (path, os.path.realpath(path)):
+        owner = subprocess.run(["dpkg", "-S", candidate], capture_output=True, text=True)
+        if owner.returncode == 0:
+            return owner.stdout.split(":")[0].strip()
+    return None
+
+
 def needed_packages(files):
     """{package: [(binary, soname)]} for every NEEDED library outside pdyn."""
     found = {}
@@ -64,12 +77,7 @@ def needed_packages(files):
             path = where.get(soname)
             if not path or path == "not":
                 raise SystemExit(f"license.notices: {f} needs {soname}, which ldd does not find")
-            pkg = None
-            for candidate in (path, os.path.realpath(path)):
-                owner = subprocess.run(["dpkg", "-S", candidate], capture_output=True, text=True)
-                if owner.returncode == 0:
-                    pkg = owner.stdout.split(":")[0].strip()
-                    break
+            pkg = owner_package(path)
             if pkg is None:
                 raise SystemExit(f"license.notices: {f} needs {soname} ({path}), which no Debian package owns")
             found.setdefault(pkg, []).append((os.path.basename(f), soname))
