@@ -404,14 +404,7 @@ int report_error(const std::exception_ptr& error, std::ostream& err) {
 void add_plugin_path_option(CLI::App* sub, std::vector<std::string>& plugin_path,
                             const char* help) {
   const CLI::Validator folder(
-      [](std::string& dir) -> std::string {
-        std::error_code ec;
-        if (fs::is_directory(dir, ec)) return {};
-        return fmt::format(
-            "'{}' is {} (expected a folder holding plugin libraries "
-            "pdyn_KIND_NAME.so)",
-            dir, fs::exists(dir, ec) ? "not a folder" : "no such folder");
-      },
+      [](std::string& dir) -> std::string { return PluginRegistry::folder_problem(dir); },
       "FOLDER");
   sub->add_option("--plugin-path", plugin_path,
                   help ? help

@@ -125,6 +125,13 @@ const char* kind_name(PluginKind kind) {
   return "?";
 }
 
+std::string PluginRegistry::folder_problem(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) return {};
+  return fmt::format("'{}' is {} (expected a folder holding plugin libraries pdyn_KIND_NAME.so)",
+                     dir.string(), fs::exists(dir, ec) ? "not a folder" : "no such folder");
+}
+
 std::vector<fs::path> PluginRegistry::search_path(const std::vector<fs::path>& extra) {
   std::vector<fs::path> candidates = extra;
   if (const char* env = std::getenv("PDYN_PLUGIN_PATH")) {

@@ -44,7 +44,7 @@ void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path,
 }  // namespace
 
 void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
-                        std::vector<std::string>* differences) {
+                        std::vector<std::string>* differences, std::string_view anyway) {
   System& sys = *scene.system;
   if (c.scene_text != scene.canonical_text) {
     std::vector<std::string> lines;
@@ -57,9 +57,10 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
     if (!force) {
       throw CheckpointError(fmt::format(
           "the checkpoint was written for a different scene ({}): {} (expected the same scene; "
-          "--force resumes anyway)",
+          "{})",
           c.scene_file,
-          lines.front() + (lines.size() > 1 ? fmt::format(" and {} more", lines.size() - 1) : "")));
+          lines.front() + (lines.size() > 1 ? fmt::format(" and {} more", lines.size() - 1) : ""),
+          anyway));
     }
     if (differences) *differences = lines;
   }

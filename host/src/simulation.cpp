@@ -148,9 +148,10 @@ void Simulation::save_checkpoint(const std::filesystem::path& path) const {
   write_checkpoint(path, c);
 }
 
-void Simulation::restore_checkpoint(const std::filesystem::path& path) {
+void Simulation::restore_checkpoint(const std::filesystem::path& path, bool force,
+                                    std::string_view anyway) {
   const Checkpoint c = read_checkpoint(path);
-  pdyn::restore_checkpoint(scene_, c, false);
+  pdyn::restore_checkpoint(scene_, c, force, nullptr, anyway);
   steps_ = c.step;
   next_frame_ = c.next_frame > 0 ? c.next_frame : 1;
   has_dense_ = c.has_dense;

@@ -11,6 +11,7 @@ docs/python.md is the guide; every name here has its docstring.
 """
 
 import math
+import operator
 import os
 import re
 
@@ -79,11 +80,18 @@ def _overrides(set):
 
 
 def _paths(plugin_path):
+    """plugin_path= as a list of folders, each checked as `pdyn run
+    --plugin-path` checks it (ValueError, with the same message)."""
     if plugin_path is None:
         return []
     if isinstance(plugin_path, (str, os.PathLike)):
-        return [os.fspath(plugin_path)]
-    return [os.fspath(p) for p in plugin_path]
+        plugin_path = [plugin_path]
+    paths = [os.fspath(p) for p in plugin_path]
+    for p in paths:
+        problem = _pdyn._plugin_folder_problem(p)
+        if problem:
+            raise ValueError(f"plugin_path: {problem}")
+    return paths
 
 
 # ---------------------------------------------------------------------------
@@ -178,8 +186,17 @@ class Simulation:
         """Takes n steps, exactly as `pdyn run` takes them (the same bits),
         with the GIL released. Raises StepError if a step fails (the
         simulation stays at the last good state) and KeyboardInterrupt on
-        Ctrl-C (after the step in progress). Returns the steps taken."""
-        return self._core.step(int(n))
+        Ctrl-C (after the step in progress). Returns the steps taken.
+        n is a whole number (an int or a NumPy integer) >= 0: step(2.5)
+        raises TypeError rather than taking 2 steps."""
+        try:
+            n = operator.index(n)
+        except TypeError:
+            raise TypeError(f"step(n): n = {n!r} is not a whole number of steps "
+                            f"(expected an int >= 0)") from None
+        if n < 0:
+            raise ValueError(f"step(n): n = {n} is negative (expected a number of steps >= 0)")
+        return self._core.step(n)
 
     def run(self, duration=None, every=None, callback=None):
         """Steps for `duration` seconds, or to the scene's end when None.
@@ -265,9 +282,12 @@ class Simulation:
         continues from it bit for bit."""
         self._core.save_checkpoint(os.fspath(path))
 
-    def restore(self, path):
-        """Restores a checkpoint of this scene (same particles and plugin objects)."""
-        self._core.restore_checkpoint(os.fspath(path))
+    def restore(self, path, force=False):
+        """Restores a checkpoint of this scene (same particles and plugin
+        objects). Raises CheckpointError if it was written for another scene;
+        force=True restores one whose scene differs only in its parameters,
+        as `pdyn run --resume --force` does."""
+        self._core.restore_checkpoint(os.fspath(path), bool(force))
 
     def __repr__(self):
         return (f"<pdyn.Simulation {self.file!r}: {self.n} particles, t = {self.t:g} s, "

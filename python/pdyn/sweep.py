@@ -68,6 +68,8 @@ def sweep(scene, grid, extract=None, executor=None, duration=None, plugin_path=N
     if isinstance(scene, os.PathLike) or (isinstance(scene, str) and "\n" not in scene
                                          and os.path.exists(scene)):
         scene = os.path.abspath(os.fspath(scene))
+    from . import _paths  # here: the package imports this module before defining it
+    _paths(plugin_path)  # a missing folder is refused now, as load() refuses it, not in a worker
     variants = grid_of(grid)
     own = executor is None
     if own:

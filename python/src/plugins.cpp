@@ -122,6 +122,8 @@ py::tuple check(py::object target, const std::vector<std::filesystem::path>& plu
 
 void bind_plugins(py::module_& m) {
   m.def("_plugins", &plugins);
+  m.def("_plugin_folder_problem",
+        [](const std::filesystem::path& dir) { return PluginRegistry::folder_problem(dir); });
   m.def("_describe", &describe);
   m.def("_check", &check);
 }

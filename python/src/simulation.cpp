@@ -351,8 +351,9 @@ void bind_simulation(py::module_& m) {
       .def("evaluate_forces", &PySimulation::evaluate_forces)
       .def("save_checkpoint",
            [](PySimulation& s, const std::filesystem::path& p) { s.sim().save_checkpoint(p); })
-      .def("restore_checkpoint",
-           [](PySimulation& s, const std::filesystem::path& p) { s.sim().restore_checkpoint(p); });
+      .def("restore_checkpoint", [](PySimulation& s, const std::filesystem::path& p, bool force) {
+        s.sim().restore_checkpoint(p, force, "restore(path, force=True) restores anyway");
+      });
   m.def("_load", &load);
 }
 

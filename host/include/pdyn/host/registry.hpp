@@ -38,6 +38,11 @@ class PluginRegistry {
   /// and install tree alike). Duplicates and missing folders are dropped.
   static std::vector<std::filesystem::path> search_path(
       const std::vector<std::filesystem::path>& extra);
+  /// Why `dir` cannot be a folder a user names for plugins (`pdyn ...
+  /// --plugin-path`, Python's plugin_path=): "'DIR' is no such folder
+  /// (expected ...)", or "" if it is a folder. search_path() drops missing
+  /// folders silently; a folder the user typed is checked with this first.
+  static std::string folder_problem(const std::filesystem::path& dir);
 
   /// Loads every `*.so` in `dirs` (in order, files sorted by name) and
   /// records its plugin, or a fault. Never throws for a bad library.

@@ -79,8 +79,11 @@ Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step);
 /// flags, time and every plugin's internal state. Throws CheckpointError if
 /// the checkpoint was written for another scene (unless `force`), or does not
 /// fit it. With `force`, `differences` receives one line per differing key.
+/// `anyway` names, in the caller's terms, how to restore regardless; it ends
+/// the message of a scene mismatch.
 void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
-                        std::vector<std::string>* differences = nullptr);
+                        std::vector<std::string>* differences = nullptr,
+                        std::string_view anyway = "--force resumes anyway");
 
 /// Where a run's checkpoint goes: output.checkpoint.path (or checkpoint.path),
 /// else beside output.path or the first writer's file (.ckpt), else

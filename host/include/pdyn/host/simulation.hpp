@@ -73,7 +73,11 @@ class Simulation {
   void save_checkpoint(const std::filesystem::path& path) const;
   /// Restores a checkpoint written for this scene (same particles and plugin
   /// objects). Throws CheckpointError otherwise; nothing is applied then.
-  void restore_checkpoint(const std::filesystem::path& path);
+  /// With `force`, one written for a scene that differs only in its
+  /// parameters is restored too, as `pdyn run --resume --force` does;
+  /// `anyway` names that option in the caller's terms in the message.
+  void restore_checkpoint(const std::filesystem::path& path, bool force = false,
+                          std::string_view anyway = "--force resumes anyway");
 
   /// Replaces the system (same forces, colliders, box, radii, types, time
   /// and images) with one holding the particles of the current one plus the
