@@ -119,11 +119,13 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
   }
 
   // Where the plugin author's guide is: installed beside this program
-  // (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources.
-  std::string guide = "docs/plugins.md in the pdyn sources";
+  // (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources. A pair
+  // force's author reads pairs.md (the law, PairForce), the others plugins.md.
+  const std::string page = a.kind == "pair" ? "pairs.md" : "plugins.md";
+  std::string guide = "docs/" + page + " in the pdyn sources";
   {
     const fs::path program = fs::read_symlink("/proc/self/exe", ec);
-    const fs::path installed = program.parent_path() / PDYN_BIN_TO_DOCS / "plugins.md";
+    const fs::path installed = program.parent_path() / PDYN_BIN_TO_DOCS / page;
     if (!ec && fs::is_regular_file(installed, ec)) guide = installed.lexically_normal().string();
   }
 

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
 
 #include "pdyn/host/version.hpp"
@@ -13,15 +15,48 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+std::string read(const fs::path& p) { return test::read_bytes(p); }
 
 std::size_t entries(const fs::path& dir) {
   return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), {}));
+}
+
+// docs/plugins.md names the files `pdyn new` writes; for every kind they
+// are exactly the files it writes (NAME standing for the plugin's name).
+TEST(New, TheGuideListsExactlyTheFilesItWrites) {
+  const std::string guide = read(test::source_path("docs/plugins.md"));
+  const auto from = guide.find("`pdyn new KIND NAME [DIR]` writes");
+  ASSERT_NE(from, std::string::npos) << "docs/plugins.md no longer describes pdyn new's files";
+  const std::string paragraph = guide.substr(from, guide.find("\n\n", from) - from);
+  std::set<std::string> listed;
+  const std::regex file("`([A-Za-z_]+\\.(txt|cpp|md|yaml))`");
+  for (std::sregex_iterator m(paragraph.begin(), paragraph.end(), file), end; m != end; ++m) {
+    listed.insert((*m)[1]);
+  }
+  const char* count[] = {"no", "one", "two", "three", "four", "five", "six", "seven", "eight"};
+  ASSERT_LT(listed.size(), std::size(count));
+  EXPECT_NE(paragraph.find(std::string("writes ") + count[listed.size()] + " files"),
+            std::string::npos)
+      << "the guide's count of files does not match its list: " << paragraph;
+  const fs::path root = test::temp_dir("new-files");
+  for (const std::string kind : {"force", "solver", "collider", "writer", "pair"}) {
+    SCOPED_TRACE(kind);
+    const fs::path dir = root / kind;
+    const auto r = test::pdyn({"new", kind, "demo_" + kind, dir.string()});
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::set<std::string> written;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) {
+      std::string name = fs::relative(e.path(), dir).string();
+      if (const auto at = name.find("demo_" + kind); at != std::string::npos) {
+        name.replace(at, kind.size() + 5, "NAME");
+      }
+      written.insert(name);
+    }
+    EXPECT_EQ(written, listed);
+    // The README points at the guide for its kind: pairs.md for a pair law.
+    const std::string readme = read(dir / "README.md");
+    EXPECT_NE(readme.find(kind == "pair" ? "pairs.md" : "plugins.md"), std::string::npos) << readme;
+  }
 }
 
 TEST(New, WritesAProjectForEachKind) {

@@ -29,6 +29,10 @@ HTML comments right before a fence (invisible on GitHub) steer the checker:
   <!-- snippet file: cloth.csv -->
         the block is the content of a side file, created beside the scenes
         and CMake projects of the later blocks of the same doc
+  <!-- snippet plugin: soft force -->
+        the C++ block is a whole plugin (NAME and KIND): with --sdk-prefix it
+        is also built as one against that install, and `pdyn check NAME`
+        must pass every check on it
   <!-- snippet: not checked (REASON) -->
         an explicit opt-out, counted and printed; at most MAX_NOT_CHECKED
 
@@ -106,6 +110,7 @@ class Block:
         self.context = notes.get("context")
         self.side_file = notes.get("file")
         self.not_checked = notes.get("not checked")
+        self.plugin = notes.get("plugin")
 
 
 class Checker:
@@ -283,6 +288,8 @@ class Checker:
 
         # Declarations (a class, a plugin): as they are, at namespace scope.
         error = self.compile_cpp("\n".join(prelude + [here] + lines) + "\n", d, "snippet.cpp")
+        if error is None and block.plugin:
+            return self.check_plugin(block, d)
         if error is None:
             return self.note(block, "compiles at namespace scope")
         # Statements: in a function whose parameters are the snippet's
@@ -308,6 +315,46 @@ class Checker:
             self.fail(block, f"cpp: {m.group(2)}", int(m.group(1)))
         else:
             self.fail(block, f"cpp: {wrapped_error}")
+
+    def check_plugin(self, block, d):
+        """A whole plugin: built against the SDK as its author would, then
+        `pdyn check NAME` on it (every row must pass)."""
+        name, kind = block.plugin.split()
+        if not self.args.sdk_prefix:
+            return self.note(block, "compiles (a plugin; built and checked only with --sdk-prefix)")
+        with open(os.path.join(d, f"{name}.cpp"), "w") as f:
+            f.write(block.text)
+        with open(os.path.join(d, "CMakeLists.txt"), "w") as f:
+            f.write(f"cmake_minimum_required(VERSION 3.25)\nproject({name} LANGUAGES CXX)\n"
+                    f"find_package(pdyn REQUIRED)\n"
+                    f"pdyn_add_plugin({name} KIND {kind} SOURCES {name}.cpp)\n")
+        error = self.build_project(d)
+        if error:
+            return self.fail(block, f"cpp: the plugin {name} does not build: {error}")
+        r = self.pdyn("check", name, "--plugin-path", os.path.join(d, "build"))
+        if r.returncode != 0:
+            rows = [l.strip() for l in r.stdout.splitlines() if re.search(r"\bFAIL", l)]
+            return self.fail(block, f"cpp: `pdyn check {name}` fails on the plugin as written: "
+                                    f"{'; '.join(rows) or first_line(r.stderr + r.stdout)}")
+        self.note(block, f"built as the plugin {name} and passed `pdyn check {name}`")
+
+    def build_project(self, d):
+        """Configures and builds the CMake project in `d` against the SDK
+        prefix; the first error line, or None."""
+        build = os.path.join(d, "build")
+        for what, cmd in [
+                ("configure", [self.args.cmake, "-S", d, "-B", build, "-G", self.args.generator,
+                               f"-DCMAKE_CXX_COMPILER={self.args.cxx}",
+                               f"-DCMAKE_PREFIX_PATH={self.args.sdk_prefix}",
+                               "-DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF"]),
+                ("build", [self.args.cmake, "--build", build])]:
+            r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+            if r.returncode != 0:
+                out = r.stderr + r.stdout
+                errors = [l for l in out.splitlines() if "rror" in l]
+                return f"{what} against {self.args.sdk_prefix} failed: " \
+                       f"{(errors or [first_line(out)])[0].strip()}"
+        return None
 
     # ---- json ------------------------------------------------------------------------------
 
@@ -372,21 +419,10 @@ class Checker:
             return
         with open(os.path.join(d, "CMakeLists.txt"), "w") as f:
             f.write(block.text)
-        build = os.path.join(d, "build")
         started = time.monotonic()
-        for what, cmd in [
-                ("configure", [self.args.cmake, "-S", d, "-B", build, "-G", self.args.generator,
-                               f"-DCMAKE_CXX_COMPILER={self.args.cxx}",
-                               f"-DCMAKE_PREFIX_PATH={self.args.sdk_prefix}",
-                               "-DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF"]),
-                ("build", [self.args.cmake, "--build", build])]:
-            r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-            if r.returncode != 0:
-                out = r.stderr + r.stdout
-                errors = [l for l in out.splitlines() if "rror" in l]
-                self.fail(block, f"cmake: {what} against {self.args.sdk_prefix} failed: "
-                                 f"{(errors or [first_line(out)])[0].strip()}")
-                return
+        error = self.build_project(d)
+        if error:
+            return self.fail(block, f"cmake: {error}")
         self.note(block, f"configured and built against {self.args.sdk_prefix} with "
                          f"{', '.join(sources)} in {time.monotonic() - started:.0f} s")
 
@@ -919,7 +955,7 @@ def read_blocks(doc, src):
         body = [l[len(indent):] if l.startswith(indent) else l for l in lines[k + 1:end]]
         notes, j = {}, k - 1
         while j >= 0:
-            c = re.match(r"^\s*<!--\s*snippet(?::\s*(not checked)\s*\((.*)\)|\s+(context|file):"
+            c = re.match(r"^\s*<!--\s*snippet(?::\s*(not checked)\s*\((.*)\)|\s+(context|file|plugin):"
                          r"\s*(.*?))\s*-->\s*$", lines[j])
             if not c:
                 break

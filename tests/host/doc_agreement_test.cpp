@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <regex>
+#include <set>
 #include <sstream>
 
 #include "pdyn/host/scene.hpp"
@@ -82,12 +84,16 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
       "particles:\n"
       "  - chain: { from: [0, 0, 1], to: [1, 0, 1], n: 3, mass: 1, bend: { k: 1 } }\n"
       "  - ring: { center: [0, 0, 3], radius: 0.5, n: 4, mass: 1, area: { k: 1 } }\n"
+      "  - { position: [9, 9, 9], mass: 1, radius: 0.1 }\n"
       "forces:\n"
       "  - { type: gravity }\n"
       "  - { type: drag, k: 0.1 }\n"
       "  - { type: field, force: ['-x', '0', '0'], potential: 'x^2/2' }\n"
       "  - { type: anchor, ids: [0], points: [[0, 0, 0]] }\n"
-      "  - { type: attractor, center: [5, 5, 5] }\n");
+      "  - { type: attractor, center: [5, 5, 5] }\n"
+      "  - { type: lennard_jones }\n"
+      "  - { type: soft_contact }\n"
+      "  - { type: nbody }\n");
   const auto start = doc.find("`potential` is the sum of the potential");
   ASSERT_NE(start, std::string::npos);
   const std::string sentence = doc.substr(start, doc.find("\n\n", start) - start);
@@ -96,10 +102,34 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
     const bool reports = f.force->potential_energy(scene.system->view()).has_value();
     const bool named = sentence.find(type) != std::string::npos;
     EXPECT_TRUE(named) << type << " is not named in: " << sentence;
-    if (reports) {
-      EXPECT_EQ(sentence.find(type + " does not"), std::string::npos) << type;
-    }
+    // The sentence names those that report one before its ';', and those
+    // that do not ("drag does not") after it.
+    const std::string reporters = sentence.substr(0, sentence.find(';'));
+    EXPECT_EQ(reports, reporters.find(type) != std::string::npos)
+        << type << (reports ? " reports a potential energy" : " reports none")
+        << ", which the sentence does not say: " << sentence;
   }
+}
+
+// README's "Shipped plugins" table lists exactly the shipped plugins, each
+// under its kind, and links each to its own folder.
+TEST(DocAgreement, ReadmeListsExactlyTheShippedPlugins) {
+  const std::string readme = test::read_bytes(test::source_path("README.md"));
+  const auto from = readme.find("## Shipped plugins");
+  ASSERT_NE(from, std::string::npos);
+  const std::string section = readme.substr(from, readme.find("\n## ", from + 1) - from);
+  std::set<std::string> listed;
+  const std::regex row(R"(\| (\w+) \| \[(\w+)\]\(plugins/(\w+)s/(\w+)/\) \|)");
+  for (std::sregex_iterator m(section.begin(), section.end(), row), end; m != end; ++m) {
+    EXPECT_EQ((*m)[1], (*m)[3]) << "the link of " << (*m)[2] << " is not under its kind's folder";
+    EXPECT_EQ((*m)[2], (*m)[4]) << "the link of " << (*m)[2] << " is not its own folder";
+    listed.insert(std::string((*m)[1]) + " " + std::string((*m)[2]));
+  }
+  std::set<std::string> shipped;
+  for (const auto& r : test::shipped_plugins().plugins()) {
+    shipped.insert(std::string(kind_name(r.descriptor->kind)) + " " + r.descriptor->name);
+  }
+  EXPECT_EQ(listed, shipped);
 }
 
 }  // namespace
