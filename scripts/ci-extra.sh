@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # What CI runs after the README's test command (scripts/quickstart.sh test):
 # the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer,
-# then a bounded libFuzzer run of the scene loader. Slower than the default
+# then a bounded libFuzzer run of the scene loader, then the Debian packages
+# built, installed, tried and removed (scripts/package_smoke.sh). Slower than the default
 # suite, so users get a fast answer from the quick start and CI stays complete.
 #
 #   bash scripts/ci-extra.sh     (PDYN_FUZZ_SECONDS, default 120)
@@ -12,3 +13,7 @@ cmake --preset asan -DPDYN_BROWSER_TEST=OFF "${launcher[@]}"  # the browser test
 cmake --build --preset asan
 ctest --preset asan
 bash scripts/fuzz.sh "${PDYN_FUZZ_SECONDS:-120}"
+# The Debian packages: built, installed on this machine, used as a new user
+# would (no build tree on any path) and removed again.
+bash scripts/package.sh
+bash scripts/package_smoke.sh
