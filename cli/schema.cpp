@@ -19,6 +19,7 @@
 #include "commands.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/scene_specs.hpp"
+#include "pdyn/host/side_files.hpp"
 #include "sdk_commands.hpp"
 
 namespace pdyn::cli {
@@ -184,6 +185,21 @@ Json plugin_entry(const PluginRegistry& registry, PluginKind kind) {
   return j;
 }
 
+// `file` and `format` of a particle file or a box taken from one.
+Json import_file_property() {
+  return {{"type", "string"},
+          {"minLength", 1},
+          {"description",
+           "a file of particles, relative to the scene's folder: pdyn's CSV (header "
+           "x,y,z[,vx,vy,vz],mass[,fixed][,radius][,type]), a LAMMPS data file or text dump, "
+           "or extended XYZ"}};
+}
+
+Json import_format_property() {
+  return {{"enum", side_files::kParticleFileFormats},
+          {"description", "the file's format, when its extension does not say"}};
+}
+
 Json make_schema(const PluginRegistry& registry) {
   Json defs = Json::object();
   for (const auto& r : registry.plugins()) {
@@ -215,6 +231,15 @@ Json make_schema(const PluginRegistry& registry) {
                  "or open"}};
   Json box = object(box_specs(), false, Json{{"periodic", periodic}});
   box["type"] = Json::array({"object", "null"});
+  // Or the box of a file (docs/scenes.md, "Particles from LAMMPS and
+  // extended XYZ files").
+  box = Json{{"anyOf", Json::array({box, Json{{"type", "object"},
+                                              {"properties",
+                                               {{"file", import_file_property()},
+                                                {"format", import_format_property()},
+                                                {"periodic", periodic}}},
+                                              {"required", {"file"}},
+                                              {"additionalProperties", false}}})}};
   box["description"] =
       "the simulation box: periodic along some axes, open (not a wall) along the others";
   Json simulation = object(simulation_specs(), false,
@@ -276,15 +301,18 @@ Json make_schema(const PluginRegistry& registry) {
                      {"additionalProperties", false}});
   }
 
-  // A CSV side file of particles (docs/scenes.md, `file`).
+  // A file of particles (docs/scenes.md, `file`): pdyn's CSV, a LAMMPS data
+  // or dump file, extended XYZ.
   items.push_back({{"type", "object"},
                    {"properties",
-                    {{"file",
-                      {{"type", "string"},
-                       {"minLength", 1},
+                    {{"file", import_file_property()},
+                     {"format", import_format_property()},
+                     {"mass",
+                      {{"type", "number"},
+                       {"exclusiveMinimum", 0},
                        {"description",
-                        "a CSV side file of particles, relative to the scene's folder: header "
-                        "x,y,z[,vx,vy,vz],mass[,fixed][,radius][,type]"}}}}},
+                        "kg: every particle's mass (needed where the file has "
+                        "none)"}}}}},
                    {"required", {"file"}},
                    {"additionalProperties", false}});
 

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "import_files.hpp"
 #include "pdyn/domain.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/resolve.hpp"
@@ -142,8 +143,13 @@ class Loader final : public BuilderHost {
   void check_inside_box();
   // ---- side files (side_files.hpp) ----
   std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
-                                    const char* expected);
+                                    const char* expected,
+                                    const std::vector<std::string>& keys = {"file"});
   void read_particle_file(const YAML::Node& item, const std::string& path);
+  // ---- imported files (import_files.hpp): a file's format and contents ----
+  std::optional<import_files::Imported> import_file(const YAML::Node& map, const std::string& path,
+                                                    const std::vector<std::string>& keys);
+  void read_box_file(const YAML::Node& n, const std::string& path);
   const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path, PluginKind kind);
   void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
                         std::vector<PendingPlugin>& out);

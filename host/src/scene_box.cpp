@@ -18,6 +18,7 @@ namespace pdyn::loading {
 // axes change the simulation.
 void Loader::read_box(const YAML::Node& n) {
   const std::string path = "simulation.box";
+  if (n.IsMap() && n["file"].IsDefined()) return read_box_file(n, path);
   if (!check_map(n, path,
                  "box: { min: [x, y, z], max: [x, y, z], periodic: [bool, bool, bool] }")) {
     return;
@@ -40,6 +41,25 @@ void Loader::read_box(const YAML::Node& n) {
   d.max = hi;
   d.periodic = periodic;
   box_ = d;
+}
+
+// `box: { file: melt.data }`: the box of a LAMMPS data or dump file or an
+// extended XYZ file's Lattice; `periodic` beside it replaces the file's
+// (a data file says nothing, and is taken as periodic along every axis).
+void Loader::read_box_file(const YAML::Node& n, const std::string& path) {
+  std::array<bool, 3> periodic{};
+  if (!read_periodic(n["periodic"], path + ".periodic", periodic)) return;
+  const auto imported = import_file(n, path, {"file", "format", "periodic"});
+  if (!imported) return;
+  if (!imported->box) {
+    error(n["file"], path + ".file",
+          fmt::format("{}.file: the file has no box (expected a LAMMPS data or dump file, or an "
+                      "extended XYZ file with a Lattice)",
+                      path));
+    return;
+  }
+  box_ = imported->box;
+  if (n["periodic"].IsDefined() && !n["periodic"].IsNull()) box_->periodic = periodic;
 }
 
 // `periodic: [x, y, z]`, each written as a boolean is anywhere in a scene

@@ -178,8 +178,9 @@ void Loader::read_particles(const YAML::Node& n) {
 
 // The `file` of a side-file mapping, relative to the scene's folder.
 std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::string& path,
-                                          const char* expected) {
-  check_keys(map, path, {"file"});
+                                          const char* expected,
+                                          const std::vector<std::string>& keys) {
+  check_keys(map, path, keys);
   const YAML::Node f = map["file"];
   if (!f.IsScalar() || f.Scalar().empty()) {
     error(f.IsDefined() ? f : map, path + ".file",
@@ -192,31 +193,81 @@ std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::stri
   return file;
 }
 
+// A file of another program's format, or pdyn's CSV: `file`, and `format`
+// when its extension does not say (import_files.hpp).
+std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
+                                                          const std::string& path,
+                                                          const std::vector<std::string>& keys) {
+  const auto file = side_file(map, path,
+                              "{ file: particles.csv } with header x,y,z,mass, or a LAMMPS data "
+                              "or dump file or an extended XYZ file",
+                              keys);
+  if (!file) return std::nullopt;
+  std::optional<import_files::Format> format;
+  if (const YAML::Node f = map["format"]; f.IsDefined()) {
+    if (f.IsScalar()) format = import_files::parse_format(f.Scalar());
+    if (!format) {
+      error(f, path + ".format",
+            fmt::format("{}.format: '{}' is not a format pdyn reads (expected one of {})", path,
+                        shown(f), import_files::format_names()));
+      return std::nullopt;
+    }
+  } else {
+    format = import_files::format_of_extension(*file);
+    if (!format) {
+      error(map["file"], path + ".file",
+            fmt::format("{}.file: '{}' has an extension that names no format (expected .csv, "
+                        ".data, .lmp, .dump, .lammpstrj, .xyz or .extxyz, or a format: key, one "
+                        "of {})",
+                        path, file->filename().string(), import_files::format_names()));
+      return std::nullopt;
+    }
+  }
+  return import_files::read(*file, *format, file->string(), diags_);
+}
+
 void Loader::read_particle_file(const YAML::Node& item, const std::string& path) {
-  const auto file = side_file(item, path, "{ file: particles.csv } with header x,y,z,mass");
-  if (!file) return;
-  auto rows = side_files::read_particles(*file, file->string(), diags_);
-  if (!rows) return;
-  if (static_cast<std::int64_t>(x_.size() + rows->x.size()) > kMaxParticles) {
+  auto imported = import_file(item, path, {"file", "format", "mass"});
+  if (!imported) return;
+  auto& rows = imported->rows;
+  // `mass` gives every particle of the file its mass: needed where the file
+  // has none (a dump without a mass column, an XYZ file without masses).
+  if (const YAML::Node m = item["mass"]; m.IsDefined()) {
+    double mass = 0.0;
+    if (!m.IsScalar() || !YAML::convert<double>::decode(m, mass) || !(mass > 0.0) ||
+        !std::isfinite(mass)) {
+      error(m, path + ".mass",
+            fmt::format("{}.mass: '{}' is not a mass (expected a number > 0, kg)", path, shown(m)));
+      return;
+    }
+    std::fill(rows.mass.begin(), rows.mass.end(), mass);
+  } else if (!imported->has_mass) {
+    error(item["file"], path + ".file",
+          fmt::format("{}.file: the file gives no masses (expected mass: KG beside file, or a "
+                      "Masses section or mass column in the file)",
+                      path));
+    return;
+  }
+  if (static_cast<std::int64_t>(x_.size() + rows.x.size()) > kMaxParticles) {
     error(item, path,
           fmt::format("{}: {} particles is too many (expected at most {} particles "
                       "in a scene)",
-                      path, x_.size() + rows->x.size(), kMaxParticles));
+                      path, x_.size() + rows.x.size(), kMaxParticles));
     return;
   }
-  x_.insert(x_.end(), rows->x.begin(), rows->x.end());
-  v_.insert(v_.end(), rows->v.begin(), rows->v.end());
-  m_.insert(m_.end(), rows->mass.begin(), rows->mass.end());
-  fixed_.insert(fixed_.end(), rows->fixed.begin(), rows->fixed.end());
+  x_.insert(x_.end(), rows.x.begin(), rows.x.end());
+  v_.insert(v_.end(), rows.v.begin(), rows.v.end());
+  m_.insert(m_.end(), rows.mass.begin(), rows.mass.end());
+  fixed_.insert(fixed_.end(), rows.fixed.begin(), rows.fixed.end());
   // The columns radius and type, if the file has them (others get 0).
-  const auto first = static_cast<std::ptrdiff_t>(x_.size() - rows->x.size());
-  if (!rows->radius.empty()) {
+  const auto first = static_cast<std::ptrdiff_t>(x_.size() - rows.x.size());
+  if (!rows.radius.empty()) {
     radius_.resize(x_.size(), 0.0);
-    std::copy(rows->radius.begin(), rows->radius.end(), radius_.begin() + first);
+    std::copy(rows.radius.begin(), rows.radius.end(), radius_.begin() + first);
   }
-  if (!rows->type.empty()) {
+  if (!rows.type.empty()) {
     type_.resize(x_.size(), 0);
-    std::copy(rows->type.begin(), rows->type.end(), type_.begin() + first);
+    std::copy(rows.type.begin(), rows.type.end(), type_.begin() + first);
   }
 }
 

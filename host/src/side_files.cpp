@@ -15,60 +15,18 @@
 #include <string_view>
 
 #include "pdyn/text.hpp"
+#include "text_file.hpp"
 
 namespace pdyn::side_files {
 
 namespace {
 
-// The problems of one file, capped.
-class Problems {
- public:
-  Problems(std::string shown, std::vector<Diagnostic>& out) : shown_(std::move(shown)), out_(out) {}
-  void add(std::size_t line, std::size_t column, std::string message) {
-    if (count_++ < kMaxProblemsPerFile) {
-      out_.push_back({fmt::format("{}:{}:{}", shown_, line, column), std::move(message)});
-    }
-  }
-  void add_file(std::string message) {
-    out_.push_back({shown_, std::move(message)});
-    ++count_;
-  }
-  bool any() const { return count_ > 0; }
-  void finish() {
-    if (count_ > kMaxProblemsPerFile) {
-      out_.push_back({shown_, fmt::format("{} more problems not shown (expected a valid file)",
-                                          count_ - kMaxProblemsPerFile)});
-    }
-  }
-
- private:
-  std::string shown_;
-  std::vector<Diagnostic>& out_;
-  std::size_t count_ = 0;
-};
-
-std::optional<std::string> slurp(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return std::nullopt;
-  std::string s;
-  in.seekg(0, std::ios::end);
-  s.resize(static_cast<std::size_t>(in.tellg()));
-  in.seekg(0);
-  in.read(s.data(), static_cast<std::streamsize>(s.size()));
-  return s;
-}
-
-struct Field {
-  std::string_view text;  // without surrounding blanks
-  std::size_t column;     // 1-based character column of the field's start
-};
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
-    s.remove_suffix(1);
-  return s;
-}
+using text_file::Field;
+using text_file::parse_real;
+using text_file::Problems;
+using text_file::quoted;
+using text_file::slurp;
+using text_file::trim;
 
 // Splits `line` at commas into `fields` (reused, so no allocation per line).
 void split(std::string_view line, std::vector<Field>& fields) {
@@ -109,31 +67,6 @@ void for_each_row(const std::string& text, Problems& problems, Header&& header, 
     row(line, fields);
   }
   if (!have_header) problems.add(1, 1, "the file is empty (expected a header row, then records)");
-}
-
-std::string quoted(std::string_view s) {
-  return s.empty() ? std::string("an empty field") : fmt::format("'{}'", s);
-}
-
-std::optional<double> parse_real(const Field& f, std::size_t line, std::string_view name,
-                                 Problems& problems) {
-  double x = 0.0;
-  const char* b = f.text.data();
-  const char* e = b + f.text.size();
-  if (!f.text.empty() && *b == '+') ++b;  // from_chars refuses a leading '+'
-  const auto [end, ec] = std::from_chars(b, e, x);
-  if (ec != std::errc() || end != e || f.text.empty()) {
-    problems.add(line, f.column,
-                 fmt::format("{}: {} is not a number (expected a real number, e.g. 0.25)", name,
-                             quoted(f.text)));
-    return std::nullopt;
-  }
-  if (!std::isfinite(x)) {
-    problems.add(line, f.column,
-                 fmt::format("{}: {} is not finite (expected a finite number)", name, f.text));
-    return std::nullopt;
-  }
-  return x;
 }
 
 std::string column_count_message(std::size_t got, std::size_t want, const std::string& header) {

@@ -31,6 +31,12 @@ namespace pdyn::side_files {
 
 inline constexpr std::size_t kMaxProblemsPerFile = 20;
 
+/// The formats a scene's `- file:` particle source takes (its `format:`
+/// key): pdyn's CSV, LAMMPS data files and text dumps, extended XYZ
+/// (docs/scenes.md).
+inline constexpr std::array<const char*, 4> kParticleFileFormats = {"csv", "lammps_data",
+                                                                    "lammps_dump", "extxyz"};
+
 /// Particles read from a CSV file, one entry per record.
 struct ParticleRows {
   std::vector<Vec3> x;              ///< m
