@@ -77,7 +77,13 @@ TEST(Schema, BuiltInSectionsComeFromTheLoadersTables) {
 // and particle_type, output.unwrapped: all in the schema, with their bounds.
 TEST(Schema, HasTheBoxRadiiTypesAndUnwrappedOutput) {
   const json s = schema();
-  const json& box = s["properties"]["simulation"]["properties"]["box"];
+  // Either the box itself, or the box of a file (a LAMMPS data or dump file,
+  // extended XYZ).
+  const json& either = s["properties"]["simulation"]["properties"]["box"]["anyOf"];
+  ASSERT_EQ(either.size(), 2u);
+  EXPECT_EQ(either[1]["required"], json({"file"}));
+  EXPECT_TRUE(either[1]["properties"].contains("periodic"));
+  const json& box = either[0];
   EXPECT_EQ(box["required"], json({"min", "max"}));
   EXPECT_EQ(box["additionalProperties"], false);
   EXPECT_EQ(box["type"], json({"object", "null"}));

@@ -39,10 +39,15 @@ foreach(kind force solver collider pair writer)
       message(FATAL_ERROR "pdyn new ${kind} did not write ${project}/${f}:\n${out}")
     endif()
   endforeach()
-  # The README points to the guide installed with pdyn, a file that exists.
+  # The README points to the guide installed with pdyn, a file that exists:
+  # pairs.md for a pair law, plugins.md for the other kinds.
   file(READ "${project}/README.md" readme)
+  set(guide plugins)
+  if(kind STREQUAL "pair")
+    set(guide pairs)
+  endif()
   # (Two ifs: ${CMAKE_MATCH_1} is expanded before the condition is evaluated.)
-  if(NOT readme MATCHES "guide is\n([^\n]*/share/doc/pdyn/plugins\\.md)\\.")
+  if(NOT readme MATCHES "guide is\n([^\n]*/share/doc/pdyn/${guide}\\.md)\\.")
     message(FATAL_ERROR "${project}/README.md does not name the installed guide:\n${readme}")
   endif()
   if(NOT EXISTS "${CMAKE_MATCH_1}")
