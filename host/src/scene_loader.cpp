@@ -181,8 +181,10 @@ std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::stri
                                           const char* expected,
                                           const std::vector<std::string>& keys) {
   check_keys(map, path, keys);
+  // A const lookup of a missing key gives an invalid node whose Is*() throw:
+  // ask IsDefined() first (a fuzzer found `pairs: { other: 1 }`).
   const YAML::Node f = map["file"];
-  if (!f.IsScalar() || f.Scalar().empty()) {
+  if (!f.IsDefined() || !f.IsScalar() || f.Scalar().empty()) {
     error(f.IsDefined() ? f : map, path + ".file",
           fmt::format("{}.file: is not a file name (expected {})", path, expected));
     return std::nullopt;
