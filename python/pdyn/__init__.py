@@ -188,8 +188,11 @@ class Simulation:
         simulation stays at the last good state) and KeyboardInterrupt on
         Ctrl-C (after the step in progress). Returns the steps taken.
         n is a whole number (an int or a NumPy integer) >= 0: step(2.5)
-        raises TypeError rather than taking 2 steps."""
+        raises TypeError rather than taking 2 steps, and so does a bool
+        (step(True) is a mistake, not one step)."""
         try:
+            if isinstance(n, (bool, np.bool_)):
+                raise TypeError
             n = operator.index(n)
         except TypeError:
             raise TypeError(f"step(n): n = {n!r} is not a whole number of steps "

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "pdyn/host/scene.hpp"
+#include "pdyn/pair.hpp"
 #include "plugins/forces/force_support.hpp"
 
 namespace pdyn {
@@ -97,18 +98,49 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
   const auto start = doc.find("`potential` is the sum of the potential");
   ASSERT_NE(start, std::string::npos);
   const std::string sentence = doc.substr(start, doc.find("\n\n", start) - start);
+  // The sentence names those that report one before its ';', and those that
+  // do not ("drag does not") after it.
+  const std::string reporters = sentence.substr(0, sentence.find(';'));
+  std::set<std::string> in_scene;
   for (const auto& f : scene.system->force_objects()) {
     const std::string type = f.label.substr(0, f.label.find(' '));
+    in_scene.insert(type);
     const bool reports = f.force->potential_energy(scene.system->view()).has_value();
     const bool named = sentence.find(type) != std::string::npos;
     EXPECT_TRUE(named) << type << " is not named in: " << sentence;
-    // The sentence names those that report one before its ';', and those
-    // that do not ("drag does not") after it.
-    const std::string reporters = sentence.substr(0, sentence.find(';'));
     EXPECT_EQ(reports, reporters.find(type) != std::string::npos)
         << type << (reports ? " reports a potential energy" : " reports none")
         << ", which the sentence does not say: " << sentence;
   }
+  // Every shipped force is in the scene above, so a new one must be added
+  // there and named in the sentence.
+  for (const auto& r : test::shipped_plugins().plugins()) {
+    if (r.descriptor->kind != PluginKind::Force) continue;
+    EXPECT_TRUE(in_scene.count(r.descriptor->name))
+        << "the shipped force " << r.descriptor->name << " is not in this test's scene";
+  }
+  // "every pair force written on PairForce": any law, central or not, with
+  // or without types, gives a potential energy.
+  struct Central {
+    PairTerm operator()(double, std::int32_t, std::int32_t) const { return {0.5, 0.0}; }
+  };
+  struct General {
+    PairVector operator()(const ParticleView&, const PairPoint&) const { return {}; }
+  };
+  const std::string flat = std::regex_replace(reporters, std::regex("\\s+"), " ");
+  EXPECT_NE(flat.find("every pair force written on `PairForce`"), std::string::npos) << sentence;
+  const ParticleView view = scene.system->view();
+  const std::optional<double> central =
+      PairForce<Central>(Central{}, 1.0, 0.1).potential_energy(view);
+  ASSERT_TRUE(central.has_value());
+  EXPECT_TRUE(PairForce<General>(General{}, 1.0, 0.1).potential_energy(view).has_value());
+  // 0.5 J for each pair of the scene's particles closer than 1 m.
+  const auto& x = view.x;
+  int close = 0;
+  for (Index i = 0; i < x.cols(); ++i) {
+    for (Index j = i + 1; j < x.cols(); ++j) close += (x.col(i) - x.col(j)).norm() < 1.0;
+  }
+  EXPECT_EQ(*central, 0.5 * close);
 }
 
 // README's "Shipped plugins" table lists exactly the shipped plugins, each

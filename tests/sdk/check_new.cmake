@@ -73,6 +73,25 @@ foreach(kind force solver collider pair writer)
     message(FATAL_ERROR "installed pdyn run of ${project}/scene.yaml failed (${rc}):\n${err}")
   endif()
   check_schema("${project}/scene.yaml" "${project}/build" "${project}/build")
+  if(kind STREQUAL "pair")
+    # pairs.md gives the scene's force evaluations with verlet and no option:
+    # one per step, and one more after each step whose wrap moved a particle
+    # (PairForce declares a central law independent of velocity and time).
+    file(READ "${PREFIX}/share/doc/pdyn/pairs.md" pairs_md)
+    string(REGEX REPLACE "[ \n]+" " " pairs_md "${pairs_md}")
+    if(NOT pairs_md MATCHES "the project of `pdyn new pair`: ([0-9]+) evaluations in its scene's ([0-9]+) steps")
+      message(FATAL_ERROR "pairs.md no longer gives the pair project's force evaluations")
+    endif()
+    set(documented "${CMAKE_MATCH_1} force evaluations")
+    set(steps "${CMAKE_MATCH_2} steps")
+    execute_process(COMMAND "${pdyn}" run "${project}/scene.yaml" --plugin-path "${project}/build"
+                    WORKING_DIRECTORY "${project}" RESULT_VARIABLE rc OUTPUT_VARIABLE out
+                    ERROR_VARIABLE err)
+    if(NOT rc EQUAL 0 OR NOT out MATCHES "pdyn: ${steps} of " OR NOT out MATCHES "pdyn: ${documented},")
+      message(FATAL_ERROR "${project}/scene.yaml: pairs.md says ${steps}, ${documented}; "
+                          "pdyn run says (${rc}):\n${out}${err}")
+    endif()
+  endif()
   run("ctest in ${project}" ${CMAKE_CTEST_COMMAND} --test-dir "${project}/build"
       --output-on-failure)
   # The scaffold's own GoogleTest program ran among them.
