@@ -44,6 +44,9 @@ command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 # The Python module's tests and examples: pytest, dask.distributed for the
 # sweep across workers, matplotlib for the examples' plots.
 [[ "$what" == test ]] && packages+=(python3-pytest python3-distributed python3-matplotlib)
+# CI then builds the Debian packages (scripts/ci-extra.sh, scripts/package.sh):
+# dpkg-shlibdeps finds their dependencies, help2man writes pdyn's manual page.
+[[ "$what" == test ]] && packages+=(dpkg-dev help2man)
 sudo=""
 [[ $(id -u) -ne 0 ]] && sudo="sudo"
 missing=()
