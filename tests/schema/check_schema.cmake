@@ -1,6 +1,7 @@
 # `pdyn schema` against real scenes: the generated schema must be a valid
 # draft 2020-12 schema, accept every configs/*.yaml and tests/scenes/shared/*.yaml
-# and refuse the bad scenes of tests/scenes/bad/ that a schema can express.
+# and tests/scenes/import/*.yaml, and refuse the bad scenes of tests/scenes/bad/ that a
+# schema can express.
 #   cmake -DPDYN=... -DSOURCE_DIR=... -DWORK=... -P check_schema.cmake
 cmake_minimum_required(VERSION 3.25)
 file(REMOVE_RECURSE "${WORK}")
@@ -26,7 +27,8 @@ set(beyond_a_schema
   set_steps_with_duration set_unknown_section set_without_value spring_index_out_of_range
   spring_rest_count spring_self velocity_nan sim_box_min_not_below_max sim_box_not_finite
   sim_box_particle_outside)
-file(GLOB good "${SOURCE_DIR}/configs/*.yaml" "${SOURCE_DIR}/tests/scenes/shared/*.yaml")
+file(GLOB good "${SOURCE_DIR}/configs/*.yaml" "${SOURCE_DIR}/tests/scenes/shared/*.yaml"
+               "${SOURCE_DIR}/tests/scenes/import/*.yaml")
 file(GLOB all_bad "${SOURCE_DIR}/tests/scenes/bad/*.yaml")
 set(bad "")
 foreach(scene IN LISTS all_bad)
