@@ -177,6 +177,41 @@ std::optional<double> parse_size(const Field& f, std::size_t line, std::string_v
   return s;
 }
 
+std::optional<std::int32_t> parse_image(const Field& f, std::size_t line, int axis,
+                                        Problems& problems) {
+  const auto n = text_file::to_number<std::int32_t>(f.text);
+  if (!n) {
+    problems.add(line, f.column,
+                 fmt::format("image flag {}: {} is not a whole number (expected the count of box "
+                             "lengths the atom has crossed along {})",
+                             "xyz"[axis], quoted(f.text), "xyz"[axis]));
+  }
+  return n;
+}
+
+bool read_more(const std::vector<Field>& f, std::size_t line, const MoreColumns& c, Atom& a,
+               Problems& problems) {
+  auto field = [&](int k) -> const Field& { return f[static_cast<std::size_t>(k)]; };
+  bool ok = true;
+  for (int k = 0; k < 3; ++k) {
+    if (c.v[k] < 0) continue;
+    const auto v = parse_real(field(c.v[k]), line, std::string("v") + "xyz"[k], problems);
+    ok = ok && v;
+    a.v[k] = v.value_or(0.0);
+  }
+  if (c.mass >= 0) {
+    const auto m = parse_mass(field(c.mass), line, problems);
+    ok = ok && m;
+    a.mass = m.value_or(0.0);
+  }
+  if (c.radius >= 0) {
+    const auto s = parse_size(field(c.radius), line, c.diameter ? "diameter" : "radius", problems);
+    ok = ok && s;
+    a.radius = s.value_or(0.0) * (c.diameter ? 0.5 : 1.0);
+  }
+  return ok;
+}
+
 }  // namespace detail
 
 }  // namespace pdyn::import_files

@@ -266,13 +266,7 @@ void read_atom_row(const Line& r, DataFile& d, Problems& problems) {
     if (x) a.x[c] = *x;
   }
   for (std::size_t c = 0; c < 3 && f.size() == width + 3; ++c) {
-    const auto n = text_file::to_number<std::int32_t>(f[width + c].text);
-    if (!n) {
-      problems.add(r.number, f[width + c].column,
-                   fmt::format("image flag {}: {} is not a whole number (expected the count of "
-                               "box lengths the atom has crossed along {})",
-                               "xyz"[c], quoted(f[width + c].text), "xyz"[c]));
-    }
+    const auto n = parse_image(f[width + c], r.number, static_cast<int>(c), problems);
     ok = ok && n;
     a.image[c] = n.value_or(0);
   }

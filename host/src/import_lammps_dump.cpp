@@ -91,9 +91,9 @@ bool read_bounds(const std::vector<Line>& lines, std::size_t k, std::size_t end,
 // wrapped (x), unwrapped (xu), scaled (xs) or scaled and unwrapped (xsu),
 // the first of these the dump has.
 struct Columns {
-  int id = -1, type = -1, mass = -1, radius = -1;
-  bool diameter = false;
-  std::array<int, 3> x{-1, -1, -1}, v{-1, -1, -1}, image{-1, -1, -1};
+  int id = -1, type = -1;
+  MoreColumns more;
+  std::array<int, 3> x{-1, -1, -1}, image{-1, -1, -1};
   std::array<bool, 3> scaled{}, unwrapped{};
   std::size_t width = 0;
 };
@@ -110,9 +110,9 @@ bool read_columns(const Line& l, Columns& c, Problems& problems) {
   };
   c.id = find("id");
   c.type = find("type");
-  c.mass = find("mass");
-  c.radius = find("radius");
-  if (c.radius < 0 && (c.radius = find("diameter")) >= 0) c.diameter = true;
+  c.more.mass = find("mass");
+  c.more.radius = find("radius");
+  if (c.more.radius < 0 && (c.more.radius = find("diameter")) >= 0) c.more.diameter = true;
   for (int k = 0; k < 3; ++k) {
     const std::string a(1, "xyz"[k]);
     for (const auto& [suffix, scaled, unwrapped] : {std::tuple{"", false, false},
@@ -124,7 +124,7 @@ bool read_columns(const Line& l, Columns& c, Problems& problems) {
       c.scaled[k] = scaled;
       c.unwrapped[k] = unwrapped;
     }
-    c.v[k] = find("v" + a);
+    c.more.v[k] = find("v" + a);
     c.image[k] = find("i" + a);
   }
   if (c.id < 0 || c.x[0] < 0 || c.x[1] < 0 || c.x[2] < 0) {
@@ -159,33 +159,13 @@ void read_dump_row(const Line& row, const Columns& c, const Bounds& b, Atoms& at
     // Scaled coordinates are fractions of the box (dump's xs = (x - lo) / L).
     a.x[k] = c.scaled[k] ? b.lo[k] + p.value_or(0.0) * (b.hi[k] - b.lo[k]) : p.value_or(0.0);
     ok = ok && p;
-    if (c.v[k] >= 0) {
-      const auto s = parse_real(field(c.v[k]), row.number, std::string("v") + "xyz"[k], problems);
-      ok = ok && s;
-      a.v[k] = s.value_or(0.0);
-    }
     if (c.image[k] >= 0) {
-      const auto n = text_file::to_number<std::int32_t>(field(c.image[k]).text);
-      if (!n) {
-        problems.add(row.number, field(c.image[k]).column,
-                     fmt::format("i{}: {} is not a whole number (expected an image flag)", "xyz"[k],
-                                 quoted(field(c.image[k]).text)));
-      }
+      const auto n = parse_image(field(c.image[k]), row.number, k, problems);
       ok = ok && n;
       a.image[k] = n.value_or(0);
     }
   }
-  if (c.mass >= 0) {
-    const auto m = parse_mass(field(c.mass), row.number, problems);
-    ok = ok && m;
-    a.mass = m.value_or(0.0);
-  }
-  if (c.radius >= 0) {
-    const auto s =
-        parse_size(field(c.radius), row.number, c.diameter ? "diameter" : "radius", problems);
-    ok = ok && s;
-    a.radius = s.value_or(0.0) * (c.diameter ? 0.5 : 1.0);
-  }
+  ok = read_more(f, row.number, c.more, a, problems) && ok;
   if (!ok) return;
   a.id = *id;
   atoms.add(a, row.number);
@@ -236,7 +216,7 @@ std::optional<Imported> read_frame(const std::vector<Line>& lines, std::size_t b
       }
       Imported out;
       out.box = orthogonal_box(box.lo, box.hi, box.periodic);
-      out.has_mass = c.mass >= 0;
+      out.has_mass = c.more.mass >= 0;
       lammps_kinds(atoms, 0, out);
       // An unwrapped position holds its images already.
       bool images = false;

@@ -44,6 +44,22 @@ struct Atoms {
   }
 };
 
+/// An image flag along `axis` (0, 1, 2: x, y, z) read from `f`, or a problem at it.
+std::optional<std::int32_t> parse_image(const Field& f, std::size_t line, int axis,
+                                        Problems& problems);
+
+/// Where a row of a dump or XYZ file has the columns besides its id, type
+/// and position (-1: absent): velocity, mass, radius or diameter.
+struct MoreColumns {
+  std::array<int, 3> v{-1, -1, -1};
+  int mass = -1, radius = -1;
+  bool diameter = false;  ///< the radius column holds the diameter
+};
+
+/// Reads those columns of `fields` into `a`; false after a problem.
+bool read_more(const std::vector<Field>& fields, std::size_t line, const MoreColumns& c, Atom& a,
+               Problems& problems);
+
 /// Gives LAMMPS atoms their kinds: the types 1..declared (a data file's
 /// header) and any other type present, in numeric order, as text.
 void lammps_kinds(Atoms& atoms, long long declared, Imported& out);

@@ -62,7 +62,8 @@ std::optional<KeyValues> key_values(const Line& l, Problems& problems) {
 
 // Where the columns pdyn reads are in a row (-1: absent).
 struct Properties {
-  int pos = -1, velo = -1, mass = -1, species = -1, radius = -1, id = -1;
+  int pos = -1, species = -1, id = -1;
+  MoreColumns more;
   std::size_t width = 0;
 };
 
@@ -92,10 +93,11 @@ bool read_properties(const KeyValues& kv, std::size_t line, Properties& p, Probl
     const int at = static_cast<int>(p.width);
     const bool real = parts[k + 1] == "R";
     if (name == "pos" && *count == 3 && real) p.pos = at;
-    if ((name == "velo" || name == "vel" || name == "velocities") && *count == 3 && real)
-      p.velo = at;
-    if ((name == "mass" || name == "masses") && *count == 1 && real) p.mass = at;
-    if ((name == "radius" || name == "radii") && *count == 1 && real) p.radius = at;
+    if ((name == "velo" || name == "vel" || name == "velocities") && *count == 3 && real) {
+      p.more.v = {at, at + 1, at + 2};
+    }
+    if ((name == "mass" || name == "masses") && *count == 1 && real) p.more.mass = at;
+    if ((name == "radius" || name == "radii") && *count == 1 && real) p.more.radius = at;
     if ((name == "species" || name == "element") && *count == 1) p.species = at;
     if (name == "id" && *count == 1 && parts[k + 1] == "I") p.id = at;
     p.width += static_cast<std::size_t>(*count);
@@ -190,23 +192,8 @@ void read_xyz_row(const Line& row, long long index, const Properties& p,
     const auto x = parse_real(field(p.pos + c), row.number, std::string(1, "xyz"[c]), problems);
     ok = ok && x;
     a.x[c] = x.value_or(0.0);
-    if (p.velo >= 0) {
-      const auto s =
-          parse_real(field(p.velo + c), row.number, std::string("v") + "xyz"[c], problems);
-      ok = ok && s;
-      a.v[c] = s.value_or(0.0);
-    }
   }
-  if (p.mass >= 0) {
-    const auto m = parse_mass(field(p.mass), row.number, problems);
-    ok = ok && m;
-    a.mass = m.value_or(0.0);
-  }
-  if (p.radius >= 0) {
-    const auto r = parse_size(field(p.radius), row.number, "radius", problems);
-    ok = ok && r;
-    a.radius = r.value_or(0.0);
-  }
+  ok = read_more(f, row.number, p.more, a, problems) && ok;
   if (p.id >= 0) {
     const auto id = parse_whole(field(p.id), row.number, "id", problems, 0);
     ok = ok && id;
@@ -254,7 +241,7 @@ std::optional<Imported> read_xyz_frame(const std::vector<Line>& lines, std::size
     }
     read_xyz_row(lines[k], i, p, species, atoms, out, problems);
   }
-  out.has_mass = p.mass >= 0;
+  out.has_mass = p.more.mass >= 0;
   if (problems.any() || !to_rows(atoms, false, problems, out)) return std::nullopt;
   return out;
 }

@@ -120,4 +120,12 @@ inline BadImport import_problems(const std::string& name, const std::string& tex
                               file.string() + extra + " }\n")};
 }
 
+/// `expected` with each "FILE" replaced by the path of `bad`'s file.
+inline std::string with_file(std::string expected, const BadImport& bad) {
+  for (std::size_t at; (at = expected.find("FILE")) != std::string::npos;) {
+    expected.replace(at, 4, bad.file.string());
+  }
+  return expected;
+}
+
 }  // namespace pdyn::test

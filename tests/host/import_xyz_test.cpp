@@ -108,11 +108,7 @@ class BadXyzFile : public ::testing::TestWithParam<BadXyz> {};
 TEST_P(BadXyzFile, IsReportedAtItsLineAndColumn) {
   const BadXyz& c = GetParam();
   const auto bad = import_problems(c.name, c.text, ", mass: 1");
-  std::string expected = c.expected;
-  for (std::size_t at; (at = expected.find("FILE")) != std::string::npos;) {
-    expected.replace(at, 4, bad.file.string());
-  }
-  EXPECT_EQ(bad.problems, expected);
+  EXPECT_EQ(bad.problems, test::with_file(c.expected, bad));
 }
 
 INSTANTIATE_TEST_SUITE_P(
