@@ -200,6 +200,13 @@ Json import_format_property() {
           {"description", "the file's format, when its extension does not say"}};
 }
 
+Json import_frame_property() {
+  return {
+      {"type", "integer"},
+      {"default", -1},
+      {"description", "the frame of a LAMMPS dump or extended XYZ file: 0 the first, -1 the last"}};
+}
+
 Json make_schema(const PluginRegistry& registry) {
   Json defs = Json::object();
   for (const auto& r : registry.plugins()) {
@@ -237,6 +244,7 @@ Json make_schema(const PluginRegistry& registry) {
                                               {"properties",
                                                {{"file", import_file_property()},
                                                 {"format", import_format_property()},
+                                                {"frame", import_frame_property()},
                                                 {"periodic", periodic}}},
                                               {"required", {"file"}},
                                               {"additionalProperties", false}}})}};
@@ -307,12 +315,25 @@ Json make_schema(const PluginRegistry& registry) {
                    {"properties",
                     {{"file", import_file_property()},
                      {"format", import_format_property()},
+                     {"frame", import_frame_property()},
                      {"mass",
                       {{"type", "number"},
                        {"exclusiveMinimum", 0},
                        {"description",
                         "kg: every particle's mass (needed where the file has "
-                        "none)"}}}}},
+                        "none)"}}},
+                     {"masses",
+                      {{"type", "object"},
+                       {"additionalProperties", {{"type", "number"}, {"exclusiveMinimum", 0}}},
+                       {"description",
+                        "kg per LAMMPS type ({ 1: 39.948 }) or per XYZ species ({ Ar: 39.948 "
+                        "})"}}},
+                     {"types",
+                      {{"type", "object"},
+                       {"additionalProperties", {{"type", "integer"}, {"minimum", 0}}},
+                       {"description",
+                        "an extended XYZ file's species as particle types ({ Ar: 1, Kr: 2 }); "
+                        "default 0, 1, ... in order of first appearance"}}}}},
                    {"required", {"file"}},
                    {"additionalProperties", false}});
 

@@ -4,8 +4,14 @@
 // own CSV side files (docs/scenes.md, "Particles from LAMMPS and extended
 // XYZ files"). Numbers are taken as written: pdyn is SI, so LAMMPS `lj`
 // units arrive as the same numbers in m, kg and s.
+//
+// One reader per format (import_lammps_data.cpp, import_lammps_dump.cpp,
+// import_xyz.cpp, sharing import_reader.hpp); this header is what the scene
+// loader sees of them.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -21,28 +27,53 @@ namespace pdyn::import_files {
 enum class Format { Csv, LammpsData, LammpsDump, ExtXyz };
 
 /// The names a scene's `format:` takes (side_files::kParticleFileFormats),
-/// for messages: "csv, lammps_data, ...".
+/// for messages: "csv, lammps_data, lammps_dump, extxyz".
 std::string format_names();
+/// The extensions that name a format, for messages: ".csv, .data, ... or .extxyz".
+std::string extension_names();
 
 /// The format named `name` (one of side_files::kParticleFileFormats), or nothing.
 std::optional<Format> parse_format(std::string_view name);
 /// The format a file's extension says: .csv; .data, .lmp; .dump, .lammpstrj;
 /// .xyz, .extxyz. Nothing for any other.
 std::optional<Format> format_of_extension(const std::filesystem::path& file);
+/// Whether the format's files hold several frames (dumps, XYZ): `frame:`.
+bool has_frames(Format format);
 
-/// What a file gives. Particles are in id order (LAMMPS ids sorted; XYZ in
-/// file order); LAMMPS types t >= 1 become pdyn types t - 1, XYZ species
-/// types 0, 1, ... in order of first appearance.
+/// What a file gives, particles in id order: LAMMPS ids sorted (a dump
+/// lists atoms in any order), extended XYZ in file order or by its `id`
+/// column. LAMMPS type t is pdyn type t; XYZ species are types 0, 1, ... in
+/// order of first appearance (the loader may map them by `types:`).
 struct Imported {
+  Format format = Format::Csv;  ///< the format it was read as
   side_files::ParticleRows rows;
-  bool has_mass = false;      ///< the file gives every particle's mass
+  bool has_mass = false;  ///< the file gives every particle's mass
+  /// Per particle, its image flags (LAMMPS ix iy iz: the unwrapped position
+  /// is x + n L); empty when the file has none.
+  std::vector<std::array<std::int32_t, 3>> images;
+  /// The kinds `masses:` is keyed by: LAMMPS types as text ("1", "2", every
+  /// type a data file's header declares) or XYZ species ("Ar"), and per
+  /// particle the index of its kind. No kinds: the file has no types.
+  std::vector<std::string> kinds;
+  std::vector<std::uint32_t> kind;
+  bool species = false;       ///< kinds are XYZ species, not LAMMPS types
   std::optional<Domain> box;  ///< the file's box (orthogonal), if it has one
 };
 
-/// Reads `file` as `format`; the last frame of a dump or XYZ file with
-/// several. Returns nothing and appends located problems
-/// (`shown:LINE:COLUMN: ...`) if anything is wrong.
-std::optional<Imported> read(const std::filesystem::path& file, Format format,
-                             const std::string& shown, std::vector<Diagnostic>& problems);
+/// The outcome of reading a file: its particles, or nothing (the problems
+/// are in the caller's list), and how many frames the file has.
+struct ReadResult {
+  std::optional<Imported> imported;
+  std::size_t frames = 0;
+  /// The frame asked for is not in the file (no problem is reported: the
+  /// loader reports it at the scene's `frame:`).
+  bool no_such_frame = false;
+};
+
+/// Reads `file` as `format`: frame `frame` of a dump or XYZ file (0 the
+/// first, -1 the last). Appends located problems (`shown:LINE:COLUMN: ...`,
+/// at most side_files::kMaxProblemsPerFile) if anything is wrong.
+ReadResult read(const std::filesystem::path& file, Format format, long long frame,
+                const std::string& shown, std::vector<Diagnostic>& problems);
 
 }  // namespace pdyn::import_files

@@ -141,14 +141,21 @@ class Loader final : public BuilderHost {
   bool read_periodic(const YAML::Node& n, const std::string& path, std::array<bool, 3>& out);
   void read_particles(const YAML::Node& n);
   void check_inside_box();
-  // ---- side files (side_files.hpp) ----
+  // ---- particles and boxes from files (scene_files.cpp) ----
   std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
                                     const char* expected,
                                     const std::vector<std::string>& keys = {"file"});
   void read_particle_file(const YAML::Node& item, const std::string& path);
-  // ---- imported files (import_files.hpp): a file's format and contents ----
+  /// A file's format (`format`, or its extension) and its contents (frame
+  /// `frame`); `for_box`: the keys of simulation.box's, else a particle entry's.
   std::optional<import_files::Imported> import_file(const YAML::Node& map, const std::string& path,
-                                                    const std::vector<std::string>& keys);
+                                                    bool for_box);
+  std::optional<import_files::Format> file_format(const YAML::Node& map, const std::string& path);
+  std::optional<long long> read_frame(const YAML::Node& n, const std::string& path);
+  bool apply_masses(const YAML::Node& item, const std::string& path, import_files::Imported& in);
+  bool masses_by_kind(const YAML::Node& per, const std::string& at, import_files::Imported& in);
+  bool apply_types(const YAML::Node& item, const std::string& path, import_files::Imported& in);
+  bool wrap_imported(const YAML::Node& item, const std::string& path, import_files::Imported& in);
   void read_box_file(const YAML::Node& n, const std::string& path);
   const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path, PluginKind kind);
   void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
@@ -183,12 +190,18 @@ class Loader final : public BuilderHost {
   // particle declared so far (0 for the others), filled up to N at assembly.
   std::vector<double> radius_;
   std::vector<std::int32_t> type_;
+  // Image counts (per axis, the box lengths a particle has crossed): empty
+  // until a file gives some, then one per particle declared so far.
+  std::vector<std::array<std::int32_t, 3>> images_;
   std::vector<ParticleEntry> entries_;
   std::optional<Domain> box_;  // simulation.box, when given and valid
   std::map<std::string, std::vector<Index>> groups_;
   std::vector<PendingPlugin> builder_forces_;  // springs made by builders
   bool particles_ok_ = true;
   std::vector<NamedPath> read_files_;  // side files: no output may overwrite them
+  // What a file read for simulation.box gave, kept for a particle entry of
+  // the same file, frame and format: read once, its problems said once.
+  std::map<std::string, import_files::ReadResult> box_files_;
   // Where each writer's path and the checkpoint path were given (node, key).
   std::vector<std::pair<YAML::Node, std::string>> writer_nodes_;
   std::size_t beside_ = 0;  // the writer whose path gives the default checkpoint's

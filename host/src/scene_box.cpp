@@ -1,8 +1,9 @@
 // The loader's simulation box and per-particle properties: reading
 // simulation.box into the kernel's Domain, checking that particles start
 // inside it along open axes (periodic ones are wrapped), and recording the
-// radii and types that particles, builders and side files give. Members of
-// Loader (loader.hpp), apart from scene_loader.cpp for size.
+// radii and types that particles, builders and side files give (a box
+// taken from a file is scene_files.cpp's). Members of Loader (loader.hpp),
+// apart from scene_loader.cpp for size.
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
@@ -41,25 +42,6 @@ void Loader::read_box(const YAML::Node& n) {
   d.max = hi;
   d.periodic = periodic;
   box_ = d;
-}
-
-// `box: { file: melt.data }`: the box of a LAMMPS data or dump file or an
-// extended XYZ file's Lattice; `periodic` beside it replaces the file's
-// (a data file says nothing, and is taken as periodic along every axis).
-void Loader::read_box_file(const YAML::Node& n, const std::string& path) {
-  std::array<bool, 3> periodic{};
-  if (!read_periodic(n["periodic"], path + ".periodic", periodic)) return;
-  const auto imported = import_file(n, path, {"file", "format", "periodic"});
-  if (!imported) return;
-  if (!imported->box) {
-    error(n["file"], path + ".file",
-          fmt::format("{}.file: the file has no box (expected a LAMMPS data or dump file, or an "
-                      "extended XYZ file with a Lattice)",
-                      path));
-    return;
-  }
-  box_ = imported->box;
-  if (n["periodic"].IsDefined() && !n["periodic"].IsNull()) box_->periodic = periodic;
 }
 
 // `periodic: [x, y, z]`, each written as a boolean is anywhere in a scene

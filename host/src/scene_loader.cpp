@@ -12,8 +12,8 @@
 // The generic reader is yaml_reader.cpp, --set is overrides.cpp, the
 // sections' specs are scene_specs.cpp, and the builders are
 // scene_builders.cpp and grid_builder.cpp, the simulation box and the
-// particles' radii and types scene_box.cpp (all declared in loader.hpp and
-// scene_builders.hpp).
+// particles' radii and types scene_box.cpp, particles and boxes from files
+// scene_files.cpp (all declared in loader.hpp and scene_builders.hpp).
 #include <fmt/format.h>
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
@@ -126,7 +126,7 @@ void Loader::read_particles(const YAML::Node& n) {
       const auto end = static_cast<Index>(x_.size());
       if (end > first) entries_.push_back({first, end, node, at});
     };
-    if (item["file"].IsDefined()) {  // a CSV side file (side_files.hpp)
+    if (item["file"].IsDefined()) {  // a side file or another program's (scene_files.cpp)
       read_particle_file(item, path);
       made(item["file"], path + ".file");
       continue;
@@ -173,103 +173,6 @@ void Loader::read_particles(const YAML::Node& n) {
           "particles: the scene has no particles (expected at least one "
           "particle or builder)");
     particles_ok_ = false;
-  }
-}
-
-// The `file` of a side-file mapping, relative to the scene's folder.
-std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::string& path,
-                                          const char* expected,
-                                          const std::vector<std::string>& keys) {
-  check_keys(map, path, keys);
-  // A const lookup of a missing key gives an invalid node whose Is*() throw:
-  // ask IsDefined() first (a fuzzer found `pairs: { other: 1 }`).
-  const YAML::Node f = map["file"];
-  if (!f.IsDefined() || !f.IsScalar() || f.Scalar().empty()) {
-    error(f.IsDefined() ? f : map, path + ".file",
-          fmt::format("{}.file: is not a file name (expected {})", path, expected));
-    return std::nullopt;
-  }
-  const fs::path name(f.Scalar());
-  fs::path file = name.is_absolute() ? name : fs::path(file_).parent_path() / name;
-  read_files_.push_back({path + ".file", where(f, path + ".file"), file});
-  return file;
-}
-
-// A file of another program's format, or pdyn's CSV: `file`, and `format`
-// when its extension does not say (import_files.hpp).
-std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
-                                                          const std::string& path,
-                                                          const std::vector<std::string>& keys) {
-  const auto file = side_file(map, path,
-                              "{ file: particles.csv } with header x,y,z,mass, or a LAMMPS data "
-                              "or dump file or an extended XYZ file",
-                              keys);
-  if (!file) return std::nullopt;
-  std::optional<import_files::Format> format;
-  if (const YAML::Node f = map["format"]; f.IsDefined()) {
-    if (f.IsScalar()) format = import_files::parse_format(f.Scalar());
-    if (!format) {
-      error(f, path + ".format",
-            fmt::format("{}.format: '{}' is not a format pdyn reads (expected one of {})", path,
-                        shown(f), import_files::format_names()));
-      return std::nullopt;
-    }
-  } else {
-    format = import_files::format_of_extension(*file);
-    if (!format) {
-      error(map["file"], path + ".file",
-            fmt::format("{}.file: '{}' has an extension that names no format (expected .csv, "
-                        ".data, .lmp, .dump, .lammpstrj, .xyz or .extxyz, or a format: key, one "
-                        "of {})",
-                        path, file->filename().string(), import_files::format_names()));
-      return std::nullopt;
-    }
-  }
-  return import_files::read(*file, *format, file->string(), diags_);
-}
-
-void Loader::read_particle_file(const YAML::Node& item, const std::string& path) {
-  auto imported = import_file(item, path, {"file", "format", "mass"});
-  if (!imported) return;
-  auto& rows = imported->rows;
-  // `mass` gives every particle of the file its mass: needed where the file
-  // has none (a dump without a mass column, an XYZ file without masses).
-  if (const YAML::Node m = item["mass"]; m.IsDefined()) {
-    double mass = 0.0;
-    if (!m.IsScalar() || !YAML::convert<double>::decode(m, mass) || !(mass > 0.0) ||
-        !std::isfinite(mass)) {
-      error(m, path + ".mass",
-            fmt::format("{}.mass: '{}' is not a mass (expected a number > 0, kg)", path, shown(m)));
-      return;
-    }
-    std::fill(rows.mass.begin(), rows.mass.end(), mass);
-  } else if (!imported->has_mass) {
-    error(item["file"], path + ".file",
-          fmt::format("{}.file: the file gives no masses (expected mass: KG beside file, or a "
-                      "Masses section or mass column in the file)",
-                      path));
-    return;
-  }
-  if (static_cast<std::int64_t>(x_.size() + rows.x.size()) > kMaxParticles) {
-    error(item, path,
-          fmt::format("{}: {} particles is too many (expected at most {} particles "
-                      "in a scene)",
-                      path, x_.size() + rows.x.size(), kMaxParticles));
-    return;
-  }
-  x_.insert(x_.end(), rows.x.begin(), rows.x.end());
-  v_.insert(v_.end(), rows.v.begin(), rows.v.end());
-  m_.insert(m_.end(), rows.mass.begin(), rows.mass.end());
-  fixed_.insert(fixed_.end(), rows.fixed.begin(), rows.fixed.end());
-  // The columns radius and type, if the file has them (others get 0).
-  const auto first = static_cast<std::ptrdiff_t>(x_.size() - rows.x.size());
-  if (!rows.radius.empty()) {
-    radius_.resize(x_.size(), 0.0);
-    std::copy(rows.radius.begin(), rows.radius.end(), radius_.begin() + first);
-  }
-  if (!rows.type.empty()) {
-    type_.resize(x_.size(), 0);
-    std::copy(rows.type.begin(), rows.type.end(), type_.begin() + first);
   }
 }
 
@@ -710,6 +613,10 @@ Scene Loader::load(const std::string& text) {
   }
   scene.system = std::make_unique<System>();
   scene.system->set_particles(x, v, m, fixed_);
+  if (!images_.empty()) {  // a LAMMPS file's image flags (scene_files.cpp)
+    images_.resize(static_cast<std::size_t>(n), {0, 0, 0});
+    scene.system->set_images(std::move(images_));
+  }
   // Before any force or collider exists: their factories see the box, the
   // radii and the types in SceneContext::particles.
   if (box_) scene.system->set_domain(*box_);

@@ -5,7 +5,6 @@
 
 #include <fmt/format.h>
 
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -163,13 +162,8 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
     std::int32_t type = 0;
     if (at[TYPE] >= 0) {
       const Field& f = fields[static_cast<std::size_t>(at[TYPE])];
-      long long t = 0;
-      const char* b = f.text.data();
-      const char* e = b + f.text.size();
-      if (!f.text.empty() && *b == '+') ++b;
-      const auto [end, ec] = std::from_chars(b, e, t);
-      if (ec != std::errc() || end != e || f.text.empty() || t < 0 ||
-          t > std::numeric_limits<std::int32_t>::max()) {
+      const long long t = text_file::to_number<long long>(f.text).value_or(-1);
+      if (t < 0 || t > std::numeric_limits<std::int32_t>::max()) {
         problems.add(line, f.column,
                      fmt::format("type: {} is not a particle type (expected a whole number in "
                                  "[0, {}])",
@@ -245,14 +239,14 @@ std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesyst
     std::array<Index, K> t{};
     for (std::size_t k = 0; k < K; ++k) {
       const Field& f = fields[k];
-      long long i = 0;
-      const auto [end, ec] = std::from_chars(f.text.data(), f.text.data() + f.text.size(), i);
-      if (ec != std::errc() || end != f.text.data() + f.text.size() || f.text.empty()) {
+      const auto index = text_file::to_number<long long>(f.text);
+      if (!index) {
         problems.add(line, f.column,
                      fmt::format("{}: {} is not a particle index (expected a whole number)",
                                  kNames[k], quoted(f.text)));
         return;
       }
+      const long long i = *index;
       if (n_particles >= 0 && (i < 0 || i >= n_particles)) {
         problems.add(line, f.column,
                      fmt::format("{}: particle index {} is out of range (expected 0..{}: the "

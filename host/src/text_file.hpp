@@ -1,11 +1,13 @@
 // What the host's readers of text files share (side_files.cpp for CSV,
-// import_files.cpp for LAMMPS and extended XYZ): the file in memory, fields
-// located by line and column, numbers parsed exactly with std::from_chars,
-// and the file's problems, capped at kMaxProblemsPerFile.
+// import_lammps_data.cpp, import_lammps_dump.cpp and import_xyz.cpp for
+// other programs' files): the file in memory, fields located by line and
+// column, numbers parsed exactly with std::from_chars (C locale, exact round
+// trip), and the file's problems, capped at kMaxProblemsPerFile.
 #pragma once
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstddef>
@@ -77,25 +79,81 @@ inline std::string quoted(std::string_view s) {
   return s.empty() ? std::string("an empty field") : fmt::format("'{}'", s);
 }
 
+// The number `text` is, all of it, or nothing. from_chars refuses a leading
+// '+', which C's strtod (and so LAMMPS, Python) accepts: it is skipped.
+template <class Number>
+std::optional<Number> to_number(std::string_view text) {
+  Number x{};
+  const char* b = text.data();
+  const char* e = b + text.size();
+  if (!text.empty() && *b == '+') ++b;
+  const auto [end, ec] = std::from_chars(b, e, x);
+  if (ec != std::errc() || end != e || b == e) return std::nullopt;
+  return x;
+}
+
+// A whole number >= `least`, or a located problem naming the field.
+inline std::optional<long long> parse_whole(const Field& f, std::size_t line, std::string_view name,
+                                            Problems& problems, long long least) {
+  const auto n = to_number<long long>(f.text);
+  if (!n || *n < least) {
+    problems.add(line, f.column,
+                 fmt::format("{}: {} is not a whole number >= {} (expected one)", name,
+                             quoted(f.text), least));
+    return std::nullopt;
+  }
+  return n;
+}
+
 inline std::optional<double> parse_real(const Field& f, std::size_t line, std::string_view name,
                                         Problems& problems) {
-  double x = 0.0;
-  const char* b = f.text.data();
-  const char* e = b + f.text.size();
-  if (!f.text.empty() && *b == '+') ++b;  // from_chars refuses a leading '+'
-  const auto [end, ec] = std::from_chars(b, e, x);
-  if (ec != std::errc() || end != e || f.text.empty()) {
+  const auto x = to_number<double>(f.text);
+  if (!x) {
     problems.add(line, f.column,
                  fmt::format("{}: {} is not a number (expected a real number, e.g. 0.25)", name,
                              quoted(f.text)));
     return std::nullopt;
   }
-  if (!std::isfinite(x)) {
+  if (!std::isfinite(*x)) {
     problems.add(line, f.column,
                  fmt::format("{}: {} is not finite (expected a finite number)", name, f.text));
     return std::nullopt;
   }
   return x;
+}
+
+// One line of a file whose fields are separated by blanks (LAMMPS, XYZ).
+struct Line {
+  std::size_t number = 0;     // 1-based
+  std::string_view raw;       // the whole line, without its '\n'
+  std::vector<Field> fields;  // split at blanks, before any '#' when comments count
+};
+
+// The blank-separated fields of `s`, columns counted from 1 at s's start.
+inline std::vector<Field> split_blanks(std::string_view s) {
+  std::vector<Field> out;
+  for (std::size_t k = 0; k < s.size();) {
+    while (k < s.size() && std::isspace(static_cast<unsigned char>(s[k]))) ++k;
+    const std::size_t start = k;
+    while (k < s.size() && !std::isspace(static_cast<unsigned char>(s[k]))) ++k;
+    if (k > start) out.push_back({s.substr(start, k - start), start + 1});
+  }
+  return out;
+}
+
+// The lines of `text`, each split at blanks; with `comments`, a '#' starts
+// a comment that runs to the end of the line (LAMMPS data files).
+inline std::vector<Line> split_lines(const std::string& text, bool comments) {
+  std::vector<Line> out;
+  std::size_t pos = 0, number = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view raw(text.data() + pos, end - pos);
+    out.push_back({++number, raw, split_blanks(comments ? raw.substr(0, raw.find('#')) : raw)});
+    pos = end + 1;
+  }
+  return out;
 }
 
 }  // namespace pdyn::text_file

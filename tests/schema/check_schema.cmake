@@ -1,6 +1,7 @@
 # `pdyn schema` against real scenes: the generated schema must be a valid
 # draft 2020-12 schema, accept every configs/*.yaml and tests/scenes/shared/*.yaml
-# and refuse the bad scenes of tests/scenes/bad/ that a schema can express.
+# and tests/scenes/import/*.yaml, and refuse the bad scenes of tests/scenes/bad/ that a
+# schema can express.
 #   cmake -DPDYN=... -DSOURCE_DIR=... -DWORK=... -P check_schema.cmake
 cmake_minimum_required(VERSION 3.25)
 file(REMOVE_RECURSE "${WORK}")
@@ -17,7 +18,8 @@ endif()
 # name resolved against the builders, group and ids together), a builder's
 # cross-key rules (a cloud's one region, whole lattice sizes), the
 # simulation box's (max above min, the particles inside it along open axes),
-# files and folders, NaN and infinity (numbers to JSON Schema).
+# files and folders and what a particle file holds (its frames, types and
+# format), NaN and infinity (numbers to JSON Schema).
 set(beyond_a_schema
   box_min_above_max cloud_without_region field_constant_named_x field_invalid_expression
   field_unknown_function field_unknown_variable group_unknown lattice_n_not_whole selection_group_and_ids
@@ -25,8 +27,9 @@ set(beyond_a_schema
   output_same_file set_bad_value set_into_missing_list set_missing_element
   set_steps_with_duration set_unknown_section set_without_value spring_index_out_of_range
   spring_rest_count spring_self velocity_nan sim_box_min_not_below_max sim_box_not_finite
-  sim_box_particle_outside)
-file(GLOB good "${SOURCE_DIR}/configs/*.yaml" "${SOURCE_DIR}/tests/scenes/shared/*.yaml")
+  sim_box_particle_outside import_frame_missing import_masses_missing import_unknown_extension)
+file(GLOB good "${SOURCE_DIR}/configs/*.yaml" "${SOURCE_DIR}/tests/scenes/shared/*.yaml"
+               "${SOURCE_DIR}/tests/scenes/import/*.yaml")
 file(GLOB all_bad "${SOURCE_DIR}/tests/scenes/bad/*.yaml")
 set(bad "")
 foreach(scene IN LISTS all_bad)
