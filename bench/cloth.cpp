@@ -44,7 +44,8 @@
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/side_files.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/stepper.hpp"
+#include "pdyn/host/threads.hpp"
 
 namespace {
 

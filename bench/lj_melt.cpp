@@ -14,12 +14,14 @@
 #include <sstream>
 #include <string>
 
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/registry.hpp"
+#include "pdyn/host/resolve.hpp"
+#include "pdyn/host/stepper.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/pair.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/plugin.hpp"
-#include "pdyn/resolve.hpp"
-#include "pdyn/stepper.hpp"
 #include "pdyn/system.hpp"
 
 namespace {
@@ -111,11 +113,12 @@ int main(int argc, char** argv) {
   // memory allocation" counts its own arrays.
   const double rss_before = status_bytes("VmRSS");
   pdyn::System sys;
-  sys.set_particles(dump.x, dump.v, Eigen::VectorXd::Ones(dump.x.cols()),
-                    std::vector<std::uint8_t>(static_cast<std::size_t>(dump.x.cols()), 0));
-  sys.set_domain(dump.box);
-  sys.wrap_positions();
-  sys.add_force(make_force(registry, sys), "lennard_jones");
+  pdyn::SystemAssembly(sys).set_particles(
+      dump.x, dump.v, Eigen::VectorXd::Ones(dump.x.cols()),
+      std::vector<std::uint8_t>(static_cast<std::size_t>(dump.x.cols()), 0));
+  pdyn::SystemAssembly(sys).set_domain(dump.box);
+  pdyn::SystemAssembly(sys).wrap_positions();
+  pdyn::SystemAssembly(sys).add_force(make_force(registry, sys), "lennard_jones");
   const auto& sd = *registry.find(pdyn::PluginKind::Solver, "verlet")->descriptor;
   pdyn::Params solver_params;
   solver_params.set("reuse_forces", true);  // LJ depends on positions only: one evaluation per step

@@ -11,6 +11,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <pdyn/host/threads.hpp>
 #include <pdyn/neighbors.hpp>
 #include <pdyn/parallel.hpp>
 

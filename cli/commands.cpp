@@ -13,10 +13,10 @@
 
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/registry.hpp"
+#include "pdyn/host/resolve.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/version.hpp"
-#include "pdyn/resolve.hpp"
 #include "pdyn/text.hpp"
 #include "render.hpp"
 #include "sdk_commands.hpp"

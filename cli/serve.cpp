@@ -11,6 +11,7 @@
 
 #include "commands.hpp"
 #include "pdyn/host/registry.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/parallel.hpp"
 #include "sdk_commands.hpp"
 #include "server.hpp"

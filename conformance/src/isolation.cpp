@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "pdyn/host/crash_report.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/parallel.hpp"
 
 namespace pdyn::conformance::detail {

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "pdyn/resolve.hpp"
+#include "pdyn/host/resolve.hpp"
 
 namespace pdyn::conformance {
 

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "checks.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/system.hpp"
 #include "sample.hpp"
 
@@ -23,8 +24,8 @@ const Vec3 kX0(1.0, 0.5, -0.25), kV0(0.0, 0.75, 0.5);
 
 std::unique_ptr<System> oscillator() {
   auto sys = std::make_unique<System>();
-  sys->add_particle(kX0, kV0, 1.0);
-  sys->add_force(std::make_shared<Anchor>(), "conformance anchor");
+  SystemAssembly(*sys).add_particle(kX0, kV0, 1.0);
+  SystemAssembly(*sys).add_force(std::make_shared<Anchor>(), "conformance anchor");
   return sys;
 }
 
@@ -59,9 +60,10 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
     std::mt19937_64 r(seed);
     const State s = random_state(r);
     auto sys = std::make_unique<System>();
-    sys->set_particles(s.x, s.v, s.mass, s.fixed);
-    sys->add_force(std::make_shared<Anchor>(), "conformance anchor");
-    sys->add_force(std::make_shared<Constant>(Vec3(0, 0, -9.81)), "conformance gravity");
+    SystemAssembly(*sys).set_particles(s.x, s.v, s.mass, s.fixed);
+    SystemAssembly(*sys).add_force(std::make_shared<Anchor>(), "conformance anchor");
+    SystemAssembly(*sys).add_force(std::make_shared<Constant>(Vec3(0, 0, -9.81)),
+                                   "conformance gravity");
     return sys;
   };
 
@@ -84,8 +86,8 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
     auto sys = std::make_unique<System>();
     Matrix3X x = Matrix3X::Zero(3, 4);
     x.colwise() = Vec3(1e6, -1e6, 1e6);
-    sys->set_particles(x, Matrix3X::Zero(3, 4), Eigen::VectorXd::Ones(4),
-                       std::vector<std::uint8_t>(4, 0));
+    SystemAssembly(*sys).set_particles(x, Matrix3X::Zero(3, 4), Eigen::VectorXd::Ones(4),
+                                       std::vector<std::uint8_t>(4, 0));
     auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
     for (int s = 0; s < 10; ++s) solver->step(*sys, 0.01);
     const Eigen::VectorXd y = sys->state();
@@ -118,8 +120,8 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
     guarded(out, "solver.exact_constant_acceleration", [&] {
       const Vec3 g(0.3, -0.2, -9.81);
       auto sys = std::make_unique<System>();
-      sys->add_particle(kX0, kV0, 2.0);
-      sys->add_force(std::make_shared<Constant>(g), "conformance constant");
+      SystemAssembly(*sys).add_particle(kX0, kV0, 2.0);
+      SystemAssembly(*sys).add_force(std::make_shared<Constant>(g), "conformance constant");
       auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
       for (int s = 0; s < 10; ++s) solver->step(*sys, 0.1);
       const double t = sys->time();
@@ -136,8 +138,8 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
 
   guarded(out, "solver.fixed_particles_stay", [&] {
     auto sys = random_system(rng());
-    sys->set_fixed(1, true);
-    sys->set_fixed(4, true);
+    SystemAssembly(*sys).set_fixed(1, true);
+    SystemAssembly(*sys).set_fixed(4, true);
     const Matrix3X x0 = sys->positions();
     auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
     for (int s = 0; s < 20; ++s) solver->step(*sys, 0.01);

@@ -21,7 +21,8 @@
 #include <thread>
 
 #include "checks.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/stepper.hpp"
 #include "pdyn/system.hpp"
 #include "sample.hpp"
 
@@ -70,23 +71,27 @@ Run separate_run(const PluginDescriptor& d, const Params& params, std::uint64_t 
   State s = random_state(r);
   if (d.kind == PluginKind::Collider) s.x *= 0.5;  // near the origin, where default obstacles are
   auto sys = std::make_unique<System>();
-  sys->set_particles(s.x, s.v, s.mass, s.fixed);
-  sys->set_radii(s.radius);
+  SystemAssembly(*sys).set_particles(s.x, s.v, s.mass, s.fixed);
+  SystemAssembly(*sys).set_radii(s.radius);
   const SceneContext ctx{sys->view(), nullptr};
   std::unique_ptr<Solver> solver;
   switch (d.kind) {
     case PluginKind::Force:
-      sys->add_force(std::shared_ptr<Force>(d.create_force(params, ctx)), kUnderTest);
+      SystemAssembly(*sys).add_force(std::shared_ptr<Force>(d.create_force(params, ctx)),
+                                     kUnderTest);
       solver = std::make_unique<SymplecticEuler>();
       break;
     case PluginKind::Solver:
-      sys->add_force(std::make_shared<Anchor>(), "conformance anchor");
-      sys->add_force(std::make_shared<Constant>(Vec3(0, 0, -9.81)), "conformance gravity");
+      SystemAssembly(*sys).add_force(std::make_shared<Anchor>(), "conformance anchor");
+      SystemAssembly(*sys).add_force(std::make_shared<Constant>(Vec3(0, 0, -9.81)),
+                                     "conformance gravity");
       solver = d.create_solver(params, ctx);
       break;
     case PluginKind::Collider:
-      sys->add_force(std::make_shared<Constant>(Vec3(0.5, -0.3, -9.81)), "conformance gravity");
-      sys->add_collider(std::shared_ptr<Collider>(d.create_collider(params, ctx)), kUnderTest);
+      SystemAssembly(*sys).add_force(std::make_shared<Constant>(Vec3(0.5, -0.3, -9.81)),
+                                     "conformance gravity");
+      SystemAssembly(*sys).add_collider(std::shared_ptr<Collider>(d.create_collider(params, ctx)),
+                                        kUnderTest);
       solver = std::make_unique<SymplecticEuler>();
       break;
     case PluginKind::Writer:  // writers are not stepped (report.cpp never asks)

@@ -4,7 +4,7 @@
 //   u32 format version        Checkpoint::kFormatVersion
 //   u64 payload length        bytes that follow, before the CRC
 //   payload                   fields below, in this order
-//   u32 CRC-32 of payload     boost::crc_32_type
+//   u32 CRC-32 of payload     (ISO-HDLC, as zlib; pdyn::crc32)
 //
 // Payload: string scene_file, string scene_text, i64 step, f64 time,
 // i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
@@ -29,7 +29,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <boost/crc.hpp>
 #include <cstring>
 #include <fstream>
 #include <pdyn/output_file.hpp>
@@ -102,11 +101,10 @@ class Reader {
   std::size_t pos_ = 0;
 };
 
-std::uint32_t crc32(const std::string& s) {
-  boost::crc_32_type crc;
-  crc.process_bytes(s.data(), s.size());
-  return crc.checksum();
-}
+// The writers' CRC-32 (pdyn/output_file.hpp), the same checksum as
+// boost::crc_32_type and zlib's, so a checkpoint and its writers' marks use
+// one implementation.
+std::uint32_t crc32(const std::string& s) { return pdyn::crc32(s.data(), s.size()); }
 
 }  // namespace
 

@@ -19,8 +19,8 @@
 
 #include "import_files.hpp"
 #include "pdyn/domain.hpp"
+#include "pdyn/host/resolve.hpp"
 #include "pdyn/host/scene.hpp"
-#include "pdyn/resolve.hpp"
 #include "scene_builders.hpp"
 #include "written_paths.hpp"
 

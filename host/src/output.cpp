@@ -10,8 +10,8 @@
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene_drawables.hpp"
+#include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/output_file.hpp"
-#include "pdyn/plugin_call.hpp"
 
 namespace pdyn {
 

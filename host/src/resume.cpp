@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/text.hpp"
@@ -113,13 +114,14 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
   // set_particles clears them. The box is kept; the images are the run's.
   std::vector<double> radius = sys.radii();
   std::vector<std::int32_t> type = sys.types();
-  sys.set_particles(x, v, c.mass, c.fixed);
-  sys.set_radii(std::move(radius));
-  sys.set_types(std::move(type));
+  SystemAssembly(sys).set_particles(x, v, c.mass, c.fixed);
+  SystemAssembly(sys).set_radii(std::move(radius));
+  SystemAssembly(sys).set_types(std::move(type));
   if (c.images.empty()) {  // a checkpoint made in memory without them: nothing wrapped
-    sys.set_images(std::vector<std::array<std::int32_t, 3>>(c.mass.size(), {0, 0, 0}));
+    SystemAssembly(sys).set_images(
+        std::vector<std::array<std::int32_t, 3>>(c.mass.size(), {0, 0, 0}));
   } else {
-    sys.set_images(c.images);
+    SystemAssembly(sys).set_images(c.images);
   }
   sys.set_time(c.time);
 }

@@ -19,8 +19,10 @@
 #include <utility>
 
 #include "output.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/crash_report.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/stepper.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/text.hpp"
 
 namespace pdyn {
@@ -402,13 +404,13 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
       std::vector<std::array<std::int32_t, 3>> images_after;
       if (periodic) {
         images_after = sys.images();
-        sys.set_images(images_before);
-        sys.wrap_positions();
+        SystemAssembly(sys).set_images(images_before);
+        SystemAssembly(sys).wrap_positions();
       }
       loop.out.emit(next_frame * every, /*current=*/false);
       sys.state() = current;
       sys.set_time(t_new);
-      if (periodic) sys.set_images(std::move(images_after));
+      if (periodic) SystemAssembly(sys).set_images(std::move(images_after));
       ++next_frame;
     }
   };

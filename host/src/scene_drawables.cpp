@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include "pdyn/error.hpp"
-#include "pdyn/plugin_call.hpp"
+#include "pdyn/kernel/plugin_call.hpp"
 
 namespace pdyn {
 

@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include "loader.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/side_files.hpp"
 #include "pdyn/text.hpp"
@@ -612,21 +613,21 @@ Scene Loader::load(const std::string& text) {
     m(i) = m_[i];
   }
   scene.system = std::make_unique<System>();
-  scene.system->set_particles(x, v, m, fixed_);
+  SystemAssembly(*scene.system).set_particles(x, v, m, fixed_);
   if (!images_.empty()) {  // a LAMMPS file's image flags (scene_files.cpp)
     images_.resize(static_cast<std::size_t>(n), {0, 0, 0});
-    scene.system->set_images(std::move(images_));
+    SystemAssembly(*scene.system).set_images(std::move(images_));
   }
   // Before any force or collider exists: their factories see the box, the
   // radii and the types in SceneContext::particles.
-  if (box_) scene.system->set_domain(*box_);
+  if (box_) SystemAssembly(*scene.system).set_domain(*box_);
   if (!radius_.empty()) {
     radius_.resize(static_cast<std::size_t>(n), 0.0);
-    scene.system->set_radii(std::move(radius_));
+    SystemAssembly(*scene.system).set_radii(std::move(radius_));
   }
   if (!type_.empty()) {
     type_.resize(static_cast<std::size_t>(n), 0);
-    scene.system->set_types(std::move(type_));
+    SystemAssembly(*scene.system).set_types(std::move(type_));
   }
   scene.groups = groups_;
   const SceneContext ctx{scene.system->view(), &scene.groups};
@@ -642,7 +643,7 @@ Scene Loader::load(const std::string& text) {
     for (auto& p : *list) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
       if (!f) continue;
-      scene.system->add_force(std::move(f), label(p));
+      SystemAssembly(*scene.system).add_force(std::move(f), label(p));
       scene.libraries[label(p)] = p.record->library;
       scene.force_traits[label(p)] = p.record->descriptor->force_traits;
       keep(p, PluginKind::Force);
@@ -651,7 +652,7 @@ Scene Loader::load(const std::string& text) {
   for (auto& p : colliders) {
     auto c = create(p, [&] { return registry_.create_collider(*p.record, p.params, ctx); });
     if (!c) continue;
-    scene.system->add_collider(std::move(c), label(p));
+    SystemAssembly(*scene.system).add_collider(std::move(c), label(p));
     scene.libraries[label(p)] = p.record->library;
     keep(p, PluginKind::Collider);
   }
@@ -694,14 +695,14 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
     case PluginKind::Force: {
       auto f = create(p, [&] { return registry_.create_force(*rec, p.params, ctx); });
       if (!f) fail();
-      sys.add_force(std::move(f), label);
+      SystemAssembly(sys).add_force(std::move(f), label);
       scene.force_traits[label] = rec->descriptor->force_traits;
       break;
     }
     case PluginKind::Collider: {
       auto c = create(p, [&] { return registry_.create_collider(*rec, p.params, ctx); });
       if (!c) fail();
-      sys.add_collider(std::move(c), label);
+      SystemAssembly(sys).add_collider(std::move(c), label);
       break;
     }
     case PluginKind::Solver: {

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/parallel.hpp"
 
 namespace pdyn {
@@ -177,24 +179,25 @@ std::unique_ptr<System> Simulation::add_particles(const Matrix3X& x, const Matri
   std::vector<std::uint8_t> f = old.fixed();
   f.insert(f.end(), fixed.begin(), fixed.end());
   auto sys = std::make_unique<System>();
-  sys->set_particles(xs, vs, m, f);
+  SystemAssembly(*sys).set_particles(xs, vs, m, f);
   sys->set_time(old.time());
-  sys->set_domain(old.domain());
+  SystemAssembly(*sys).set_domain(old.domain());
   if (!old.radii().empty()) {
     auto r = old.radii();
     r.resize(static_cast<std::size_t>(n + added), 0.0);
-    sys->set_radii(std::move(r));
+    SystemAssembly(*sys).set_radii(std::move(r));
   }
   if (!old.types().empty()) {
     auto t = old.types();
     t.resize(static_cast<std::size_t>(n + added), 0);
-    sys->set_types(std::move(t));
+    SystemAssembly(*sys).set_types(std::move(t));
   }
   auto images = old.images();
   images.resize(static_cast<std::size_t>(n + added), {0, 0, 0});
-  sys->set_images(std::move(images));
-  for (const auto& e : old.force_objects()) sys->add_force(e.force, e.label);
-  for (const auto& c : old.collider_objects()) sys->add_collider(c.collider, c.label);
+  SystemAssembly(*sys).set_images(std::move(images));
+  for (const auto& e : old.force_objects()) SystemAssembly(*sys).add_force(e.force, e.label);
+  for (const auto& c : old.collider_objects())
+    SystemAssembly(*sys).add_collider(c.collider, c.label);
   std::swap(scene_.system, sys);
   stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
   return sys;

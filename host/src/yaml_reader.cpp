@@ -1,6 +1,6 @@
 // The generic YAML reader of scenes: diagnostics located at FILE:LINE:COLUMN,
 // key checks, and the conversion of YAML values to the types of ParamSpecs.
-// Defaults, bounds and required keys are resolve()'s (pdyn/resolve.hpp):
+// Defaults, bounds and required keys are resolve()'s (pdyn/host/resolve.hpp):
 // read_params() converts, resolves, and reports each problem where the value
 // was written, as the user spelled it.
 #include <fmt/format.h>
@@ -222,7 +222,7 @@ void Loader::check_keys(const YAML::Node& map, const std::string& path,
 }
 
 // Readers convert YAML to values of the spec's type and report what is not
-// of it; finiteness, bounds and defaults are resolve()'s (pdyn/resolve.hpp),
+// of it; finiteness, bounds and defaults are resolve()'s (pdyn/host/resolve.hpp),
 // whose problems read_params() locates.
 std::optional<double> Loader::read_number(const YAML::Node& n, const std::string& path,
                                           const ParamSpec& spec) {

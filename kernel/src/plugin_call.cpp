@@ -1,5 +1,5 @@
-// The calling thread's innermost plugin call (see pdyn/plugin_call.hpp).
-#include "pdyn/plugin_call.hpp"
+// The calling thread's innermost plugin call (see pdyn/kernel/plugin_call.hpp).
+#include "pdyn/kernel/plugin_call.hpp"
 
 namespace pdyn::crash {
 

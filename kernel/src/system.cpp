@@ -8,9 +8,9 @@
 #include <utility>
 
 #include "pdyn/error.hpp"
+#include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/local_force.hpp"
 #include "pdyn/parallel.hpp"
-#include "pdyn/plugin_call.hpp"
 
 namespace pdyn {
 

@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <pdyn/host/assembly.hpp>
 #include <pdyn/host/registry.hpp>
 #include <pdyn/host/simulation.hpp>
 
@@ -187,7 +188,7 @@ class PySimulation {
     py::handle cls = py::type::handle_of(instance);
     const PluginDescriptor& d = python_descriptor(cls);
     const std::string label = fmt::format("{} (add_force #{})", d.name, ++calls_);
-    sys().add_force(make_python_force(std::move(instance)), label);
+    SystemAssembly(sys()).add_force(make_python_force(std::move(instance)), label);
     sim_.scene().force_traits[label] = d.force_traits;
     return label;
   }
@@ -195,7 +196,7 @@ class PySimulation {
     Scene& scene = sim_.scene();
     for (const auto& f : sys().force_objects()) {
       if (f.label == label) {
-        sys().remove_force(f.force.get());
+        SystemAssembly(sys()).remove_force(f.force.get());
         scene.force_traits.erase(label);
         forget(label);
         return;
@@ -203,7 +204,7 @@ class PySimulation {
     }
     for (const auto& c : sys().collider_objects()) {
       if (c.label == label) {
-        sys().remove_collider(c.collider.get());
+        SystemAssembly(sys()).remove_collider(c.collider.get());
         forget(label);
         return;
       }
@@ -248,16 +249,16 @@ class PySimulation {
     auto radius = s.radii();
     auto type = s.types();
     auto images = s.images();
-    s.set_particles(x, v, masses, s.fixed());
-    s.set_radii(std::move(radius));
-    s.set_types(std::move(type));
-    s.set_images(std::move(images));
+    SystemAssembly(s).set_particles(x, v, masses, s.fixed());
+    SystemAssembly(s).set_radii(std::move(radius));
+    SystemAssembly(s).set_types(std::move(type));
+    SystemAssembly(s).set_images(std::move(images));
   }
   void set_fixed(Index i, bool on) {
     if (i < 0 || i >= sys().size()) {
       throw py::index_error(fmt::format("particle {} (expected 0 <= i < {})", i, sys().size()));
     }
-    sys().set_fixed(i, on);
+    SystemAssembly(sys()).set_fixed(i, on);
   }
   void evaluate_forces() {
     if (sys().size() == 0) return;

@@ -17,9 +17,11 @@
 #include <pdyn/parallel.hpp>
 #include <random>
 
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/host/threads.hpp"
 
 extern "C" {
 void* __libc_malloc(std::size_t);
@@ -157,14 +159,14 @@ long allocations_after_the_first_step(Scene& scene, int threads, int steps) {
   set_threads(threads);
   System& sys = *scene.system;
   scene.solver->step(sys, scene.dt);  // may size its scratch vectors
-  sys.respond_to_collisions(scene.dt);
+  SystemAssembly(sys).respond_to_collisions(scene.dt);
   const Eigen::VectorXd after_one = sys.state();
   long count = 0;
   {
     AllocationWindow window;
     for (int k = 0; k < steps; ++k) {
       scene.solver->step(sys, scene.dt);
-      sys.respond_to_collisions(scene.dt);
+      SystemAssembly(sys).respond_to_collisions(scene.dt);
     }
     count = window.count();
   }

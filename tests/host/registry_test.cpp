@@ -23,6 +23,7 @@
 #include <set>
 #include <sstream>
 
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/system.hpp"
 #include "pdyn/text.hpp"
 #include "pdyn/version.hpp"
@@ -428,8 +429,8 @@ TEST(Registry, CreatedObjectsKeepTheirLibraryLoaded) {
   const fs::path lib = fixture("push") / "pdyn_force_test_push.so";
   ASSERT_FALSE(is_loaded(lib)) << "another test left the fixture loaded";
   System sys;
-  sys.add_particle(Vec3(0, 0, 0), Vec3::Zero(), 1.0);
-  sys.add_particle(Vec3(1, 0, 0), Vec3::Zero(), 2.0);
+  SystemAssembly(sys).add_particle(Vec3(0, 0, 0), Vec3::Zero(), 1.0);
+  SystemAssembly(sys).add_particle(Vec3(1, 0, 0), Vec3::Zero(), 2.0);
   std::shared_ptr<Force> force;
   {
     auto registry = std::make_unique<PluginRegistry>();

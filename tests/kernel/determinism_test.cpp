@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <pdyn/host/threads.hpp>
 #include <pdyn/parallel.hpp>
 
 #include "support/test_support.hpp"

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <pdyn/host/threads.hpp>
 #include <pdyn/neighbors.hpp>
 #include <pdyn/parallel.hpp>
 #include <random>

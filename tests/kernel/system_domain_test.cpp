@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn {
@@ -14,7 +15,7 @@ void three_particles(System& s) {
   x << 0.5, 2.5, -7.25,  //
       0.5, 0.5, 0.5,     //
       9.0, -1.0, 0.0;
-  s.set_particles(x, v, Eigen::VectorXd::Ones(3), {0, 0, 0});
+  SystemAssembly(s).set_particles(x, v, Eigen::VectorXd::Ones(3), {0, 0, 0});
 }
 
 Domain box_xy() {
@@ -28,9 +29,9 @@ Domain box_xy() {
 TEST(SystemDomain, WrapBringsParticlesIntoThePeriodicAxesAndCountsImages) {
   System s;
   three_particles(s);
-  s.set_domain(box_xy());
+  SystemAssembly(s).set_domain(box_xy());
   const Matrix3X before = s.positions();
-  s.wrap_positions();
+  SystemAssembly(s).wrap_positions();
   const Matrix3X after = s.positions();
   // x: 0.5 stays, 2.5 -> 0.5 (one length), -7.25 -> 0.75 (-4 lengths); y stays; z is open.
   EXPECT_EQ(after.row(0), Eigen::RowVector3d(0.5, 0.5, 0.75));
@@ -48,7 +49,7 @@ TEST(SystemDomain, WrapBringsParticlesIntoThePeriodicAxesAndCountsImages) {
   // Open space: nothing moves.
   System open;
   three_particles(open);
-  open.wrap_positions();
+  SystemAssembly(open).wrap_positions();
   EXPECT_EQ(Matrix3X(open.positions()), before);
 }
 
@@ -58,9 +59,9 @@ TEST(SystemDomain, ForcesSeeTheBoxRadiiAndTypes) {
   EXPECT_FALSE(s.view().domain.any_periodic());
   EXPECT_TRUE(s.view().radius.empty());
   EXPECT_TRUE(s.view().type.empty());
-  s.set_domain(box_xy());
-  s.set_radii({0.1, 0.2, 0.3});
-  s.set_types({0, 2, 1});
+  SystemAssembly(s).set_domain(box_xy());
+  SystemAssembly(s).set_radii({0.1, 0.2, 0.3});
+  SystemAssembly(s).set_types({0, 2, 1});
   const ParticleView v = s.view();
   EXPECT_TRUE(v.domain == box_xy());
   ASSERT_EQ(v.radius.size(), 3u);
@@ -69,11 +70,12 @@ TEST(SystemDomain, ForcesSeeTheBoxRadiiAndTypes) {
   EXPECT_EQ(v.type[1], 2);
   // A particle added interactively gets radius 0 and type 0; replacing all
   // particles clears both.
-  EXPECT_EQ(s.add_particle(Vec3(1, 0.5, 0), Vec3::Zero(), 1.0), 3);
+  EXPECT_EQ(SystemAssembly(s).add_particle(Vec3(1, 0.5, 0), Vec3::Zero(), 1.0), 3);
   EXPECT_EQ(s.radii(), (std::vector<double>{0.1, 0.2, 0.3, 0.0}));
   EXPECT_EQ(s.types(), (std::vector<std::int32_t>{0, 2, 1, 0}));
   EXPECT_EQ(s.images().size(), 4u);
-  s.set_particles(Matrix3X::Zero(3, 2), Matrix3X::Zero(3, 2), Eigen::VectorXd::Ones(2), {0, 0});
+  SystemAssembly(s).set_particles(Matrix3X::Zero(3, 2), Matrix3X::Zero(3, 2),
+                                  Eigen::VectorXd::Ones(2), {0, 0});
   EXPECT_TRUE(s.radii().empty() && s.types().empty());
 }
 
@@ -90,21 +92,22 @@ TEST(SystemDomain, BadValuesAreRefusedWithTheirReason) {
   };
   Domain flat = box_xy();
   flat.max.y() = 0;
-  EXPECT_EQ(message([&] { s.set_domain(flat); }),
+  EXPECT_EQ(message([&] { SystemAssembly(s).set_domain(flat); }),
             "System::set_domain: periodic axis y runs from 0 to 0 m (expected finite min < max)");
   EXPECT_EQ(message([&] {
-              s.set_radii({0.1, 0.2});
+              SystemAssembly(s).set_radii({0.1, 0.2});
             }),
             "System::set_radii: 2 radii for 3 particles");
   EXPECT_EQ(message([&] {
-              s.set_radii({0.1, -0.2, 0.1});
+              SystemAssembly(s).set_radii({0.1, -0.2, 0.1});
             }),
             "System::set_radii: particle 1 has radius -0.2 (expected >= 0 m)");
   EXPECT_EQ(message([&] {
-              s.set_types({0, 0, -1});
+              SystemAssembly(s).set_types({0, 0, -1});
             }),
             "System::set_types: particle 2 has type -1 (expected >= 0)");
-  EXPECT_EQ(message([&] { s.set_images({}); }), "System::set_images: 0 entries for 3 particles");
+  EXPECT_EQ(message([&] { SystemAssembly(s).set_images({}); }),
+            "System::set_images: 0 entries for 3 particles");
   // A refused value changes nothing.
   EXPECT_FALSE(s.domain().any_periodic());
   EXPECT_TRUE(s.radii().empty());

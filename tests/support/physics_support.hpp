@@ -13,6 +13,7 @@
 #include <string>
 
 #include "pdyn/force.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
@@ -67,8 +68,8 @@ inline void TakeStep(Scene& scene, std::int64_t k, double h) {
                            " ended at t = " + Num(scene.system->time()) + " (expected t + h)");
   }
   scene.system->set_time(static_cast<double>(k) * h);
-  scene.system->respond_to_collisions(h);
-  scene.system->wrap_positions();  // as the Stepper does after a good step
+  SystemAssembly(*scene.system).respond_to_collisions(h);
+  SystemAssembly(*scene.system).wrap_positions();  // as the Stepper does after a good step
 }
 
 }  // namespace pdyn::test

@@ -25,6 +25,7 @@
 #include <sstream>
 #include <thread>
 
+#include "pdyn/host/threads.hpp"
 #include "pdyn/parallel.hpp"
 
 namespace pdyn::viewer {

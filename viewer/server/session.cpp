@@ -9,9 +9,10 @@
 #include <numbers>
 #include <sstream>
 
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/resolve.hpp"
 #include "pdyn/host/scene_drawables.hpp"
-#include "pdyn/resolve.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/stepper.hpp"
 #include "pdyn/targets.hpp"
 
 namespace pdyn::viewer {
@@ -324,7 +325,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
     case Op::Drag: {
       check_particle(c, "id", *c.id);
       if (auto it = drags_.find(client); it != drags_.end()) {
-        sys.remove_force(it->second.force.get());
+        SystemAssembly(sys).remove_force(it->second.force.get());
         drags_.erase(it);
       }
       const auto [ks0, kd0] = default_mouse_spring(*c.id);
@@ -340,7 +341,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
             "drag: the 'anchor' plugin on the plugin path cannot move its target "
             "(expected it to implement pdyn::MovableTargets)");
       }
-      sys.add_force(force, label);
+      SystemAssembly(sys).add_force(force, label);
       drags_[client] = {force, *c.id};
       refresh_solver();
       break;
@@ -353,7 +354,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       break;
     case Op::Release:
       if (auto it = drags_.find(client); it != drags_.end()) {
-        sys.remove_force(it->second.force.get());
+        SystemAssembly(sys).remove_force(it->second.force.get());
         drags_.erase(it);
         refresh_solver();
       }
@@ -361,13 +362,13 @@ std::optional<Index> Session::apply(const Command& c, int client) {
     case Op::Nail: {
       check_particle(c, "id", *c.id);
       const auto i = static_cast<std::size_t>(*c.id);
-      sys.set_fixed(*c.id, sys.fixed()[i] == 0);
+      SystemAssembly(sys).set_fixed(*c.id, sys.fixed()[i] == 0);
       ++topology_;
       refresh_solver();
       break;
     }
     case Op::Create:
-      created = sys.add_particle(*c.point, Vec3::Zero(), *c.mass, false);
+      created = SystemAssembly(sys).add_particle(*c.point, Vec3::Zero(), *c.mass, false);
       ++topology_;
       refresh_solver();
       break;
@@ -388,7 +389,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       p.set("rest", std::vector<double>{rest});
       const std::string label = fmt::format("spring (attached in the viewer, #{})", ++attached_);
       auto force = make_force("spring", p, label);
-      sys.add_force(force, label);
+      SystemAssembly(sys).add_force(force, label);
       scene_.uses.push_back({PluginKind::Force, "spring", label, std::move(p)});
       ++topology_;
       refresh_solver();
@@ -402,7 +403,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
 void Session::forget_client(int client) {
   const std::lock_guard lock(mutex_);
   if (auto it = drags_.find(client); it != drags_.end()) {
-    scene_.system->remove_force(it->second.force.get());
+    SystemAssembly(*scene_.system).remove_force(it->second.force.get());
     drags_.erase(it);
     refresh_solver();
     ++version_;

@@ -1,12 +1,11 @@
 // pdyn/parallel.hpp — splitting per-particle and per-element loops over threads.
 //
 // pdyn runs with OpenMP (GCC's libgomp). The thread count is set once per
-// process by the host: pdyn::set_threads (the runner calls it with the
-// scene's `simulation.threads` or `pdyn run --threads N`), which calls
-// omp_set_num_threads. A plugin built with -fopenmp (every shipped one is)
-// sees that count through OpenMP's own default team size, so nothing needs
-// to be passed to it; a plugin built without OpenMP runs its loops on one
-// thread and is still correct.
+// process by the host (pdyn::set_threads in pdyn/host/threads.hpp: the
+// runner calls it with the scene's `simulation.threads` or `pdyn run
+// --threads N`), which calls omp_set_num_threads. A plugin built with -fopenmp (every shipped one
+// is) sees that count through OpenMP's own default team size, so nothing needs to be passed to it;
+// a plugin built without OpenMP runs its loops on one thread and is still correct.
 //
 // Determinism: results must be bit-identical for every thread count. The
 // helpers below are for loops whose iterations are independent and write
@@ -34,35 +33,9 @@ namespace pdyn {
 inline constexpr Index kParallelMinElements = 4096;
 
 /// Number of threads parallel loops use: the process's OpenMP default team
-/// size, as set by set_threads (answered by the kernel, so it is right even
+/// size, as the host set it (answered by the kernel, so it is right even
 /// in code built without OpenMP).
 int max_threads() noexcept;
-
-/// Host side: sets the number of threads (>= 1) every later parallel loop in
-/// the process uses, kernel and plugins alike (omp_set_num_threads). Without
-/// OpenMP it does nothing. The runner calls it; plugins never need to.
-void set_threads(int n);
-
-/// The number of cores this process may use (omp_get_num_procs).
-int available_threads() noexcept;
-
-/// The thread count for `particles` particles on a machine with
-/// `free_cores` cores not busy with other work: one thread per
-/// kParallelMinElements particles, at least 1 and at most max(1,
-/// free_cores). Below that a second thread has too little to do: on the
-/// 2-core machine the cloth with rk4 ran 1.06x slower on 2 threads than on
-/// 1 at 2,500 particles, even at 4,900 and 1.22x faster at 10,000. And a
-/// thread on a core another process keeps busy stalls the others at every
-/// barrier: with a CPU-bound process on each core, 2 threads took 1.8x the
-/// time of 1 (docs/performance.md, "Threads and determinism").
-int threads_for(Index particles, int free_cores) noexcept;
-
-/// The thread count a host uses when the scene and the user name none:
-/// threads_for(particles, the cores left idle by other processes, sampled
-/// from /proc/stat over 20 ms when more than one thread would be worth it;
-/// every core where that cannot be read). Results are bit-identical for
-/// every count, so this changes only the speed.
-int default_threads(Index particles) noexcept;
 
 /// Calls body(begin, end) on contiguous, disjoint ranges that cover [0, n),
 /// one per thread (one range, on the calling thread, when n is small, when

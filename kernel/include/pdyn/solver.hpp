@@ -24,7 +24,7 @@ class Solver : public PluginObject {
  public:
   /// Advances `sys` by one step of `h` seconds: on return its state is the
   /// solution at time() + h and its time has been advanced by h. Hosts step
-  /// through pdyn::Stepper (pdyn/stepper.hpp), which owns time: it then sets
+  /// through pdyn::Stepper (pdyn/host/stepper.hpp), which owns time: it then sets
   /// the time to the step's exact end, applies the collider responses and
   /// checks the state, so a solver does none of that. Scratch
   /// vectors should be members sized on the first call, so that later steps

@@ -33,36 +33,6 @@ class System {
   System(const System&) = delete;
   System& operator=(const System&) = delete;
 
-  // ---- assembly (done by the scene loader or a host program) ----
-
-  /// Replaces all particles. `x`, `v` are 3 x N (m, m/s), `mass` N (kg, > 0),
-  /// `fixed` N flags; a fixed particle's velocity is set to zero.
-  void set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::VectorXd& mass,
-                     const std::vector<std::uint8_t>& fixed);
-  /// Appends one particle and returns its index. O(N): for interactive use.
-  Index add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed = false);
-  /// Nails (or frees) particle i; nailing zeroes its velocity.
-  void set_fixed(Index i, bool fixed);
-  /// Adds a force object; `label` names it in messages (e.g. "spring (scene.yaml:12)").
-  void add_force(std::shared_ptr<Force> force, std::string label);
-  /// Removes a force object added with add_force (an interactive host's
-  /// mouse spring, when the button is released); false if it is not held.
-  bool remove_force(const Force* force);
-  /// Adds a collider; `label` names it in messages.
-  void add_collider(std::shared_ptr<Collider> collider, std::string label);
-  /// Removes a collider added with add_collider; false if it is not held.
-  bool remove_collider(const Collider* collider);
-  /// Sets the simulation box (default: open space). Throws Error unless
-  /// min < max, both finite, along every periodic axis.
-  void set_domain(const Domain& domain);
-  /// Sets every particle's radius, m (N values, each finite and >= 0), or
-  /// none (empty). set_particles clears them; add_particle gives the new
-  /// particle radius 0.
-  void set_radii(std::vector<double> radius);
-  /// Sets every particle's type (N values, each >= 0), or none (empty: all
-  /// of type 0). set_particles clears them; add_particle gives type 0.
-  void set_types(std::vector<std::int32_t> type);
-
   // ---- Witkin's solver interface ----
 
   /// Number of particles N.
@@ -142,26 +112,12 @@ class System {
   /// Per particle, how many box lengths it has been wrapped by along each
   /// axis: the unwrapped position is x + images * L (0 along open axes).
   const std::vector<std::array<std::int32_t, 3>>& images() const noexcept { return images_; }
-  /// Restores the image counts (a checkpoint's), N entries.
-  void set_images(std::vector<std::array<std::int32_t, 3>> images);
-  /// Brings every particle back into the box along periodic axes (counting
-  /// the box lengths in images()); nothing without a periodic axis. The
-  /// Stepper calls it after each accepted step.
-  void wrap_positions();
   /// Read-only view of the current state, as forces see it.
   ParticleView view() const noexcept;
   /// Kinetic energy sum(m v^2 / 2), J.
   double kinetic_energy() const;
   /// Sum of the potential energies (J) that force objects report.
   double potential_energy() const;
-  /// Runs every collider's collision response; the kernel's runner calls it
-  /// after each accepted step of length `h`.
-  void respond_to_collisions(double h);
-  /// When on, every force evaluation checks each force object's output and
-  /// throws an error naming the first object that produced a NaN or infinite
-  /// force. Off by default (it costs a pass over f per force object); the
-  /// runner turns it on to replay a step that blew up.
-  void set_finite_checks(bool on) noexcept { finite_checks_ = on; }
 
   struct ForceEntry {
     std::shared_ptr<Force> force;
@@ -175,6 +131,56 @@ class System {
   const std::vector<ColliderEntry>& collider_objects() const noexcept { return colliders_; }
 
  private:
+  // ---- assembly and the step's bookkeeping: the host's, not a plugin's ----
+  // Called through pdyn::SystemAssembly (pdyn/host/assembly.hpp, which
+  // documents them). Private since 0.6.0 so that a solver, which gets a
+  // System&, sees Witkin's solver interface and not the host's mutators; the
+  // symbols are unchanged, so binaries built before keep loading.
+  friend class SystemAssembly;
+
+  /// Replaces all particles. `x`, `v` are 3 x N (m, m/s), `mass` N (kg, > 0),
+  /// `fixed` N flags; a fixed particle's velocity is set to zero.
+  void set_particles(const Matrix3X& x, const Matrix3X& v, const Eigen::VectorXd& mass,
+                     const std::vector<std::uint8_t>& fixed);
+  /// Appends one particle and returns its index. O(N): for interactive use.
+  Index add_particle(const Vec3& x, const Vec3& v, double mass, bool fixed = false);
+  /// Nails (or frees) particle i; nailing zeroes its velocity.
+  void set_fixed(Index i, bool fixed);
+  /// Adds a force object; `label` names it in messages (e.g. "spring (scene.yaml:12)").
+  void add_force(std::shared_ptr<Force> force, std::string label);
+  /// Removes a force object added with add_force (an interactive host's
+  /// mouse spring, when the button is released); false if it is not held.
+  bool remove_force(const Force* force);
+  /// Adds a collider; `label` names it in messages.
+  void add_collider(std::shared_ptr<Collider> collider, std::string label);
+  /// Removes a collider added with add_collider; false if it is not held.
+  bool remove_collider(const Collider* collider);
+  /// Sets the simulation box (default: open space). Throws Error unless
+  /// min < max, both finite, along every periodic axis.
+  void set_domain(const Domain& domain);
+  /// Sets every particle's radius, m (N values, each finite and >= 0), or
+  /// none (empty). set_particles clears them; add_particle gives the new
+  /// particle radius 0.
+  void set_radii(std::vector<double> radius);
+  /// Sets every particle's type (N values, each >= 0), or none (empty: all
+  /// of type 0). set_particles clears them; add_particle gives type 0.
+  void set_types(std::vector<std::int32_t> type);
+
+  /// Restores the image counts (a checkpoint's), N entries.
+  void set_images(std::vector<std::array<std::int32_t, 3>> images);
+  /// Brings every particle back into the box along periodic axes (counting
+  /// the box lengths in images()); nothing without a periodic axis. The
+  /// Stepper calls it after each accepted step.
+  void wrap_positions();
+  /// Runs every collider's collision response; the kernel's runner calls it
+  /// after each accepted step of length `h`.
+  void respond_to_collisions(double h);
+  /// When on, every force evaluation checks each force object's output and
+  /// throws an error naming the first object that produced a NaN or infinite
+  /// force. Off by default (it costs a pass over f per force object); the
+  /// runner turns it on to replay a step that blew up.
+  void set_finite_checks(bool on) noexcept { finite_checks_ = on; }
+
   std::size_t evaluate_forces();
   void add_local_forces(std::size_t first, Index begin, Index end);
   void update_inverse_mass();

@@ -1,4 +1,7 @@
-// Small text helpers shared by the loader and the command line.
+// pdyn/text.hpp — small text helpers for messages: a plugin's (the field
+// force's "did you mean" for a function name, soft_contact's list of models), the
+// kernel's and the host's, so that every message spells counts, lists and
+// suggestions the same way.
 #pragma once
 
 #include <string>

@@ -22,6 +22,7 @@
 #include <memory>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
+#include <pdyn/text.hpp>
 #include <string>
 #include <vector>
 
@@ -41,22 +42,6 @@ bool is_name(const std::string& s) {
          });
 }
 
-// Levenshtein distance, for suggesting a function name.
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
 // "did you mean 'sin' or 'sinh'? ": the known names nearest to `word`, if
 // close enough to be a typo (one edit per three letters, at least two, and
 // fewer than the word's letters).
@@ -65,7 +50,7 @@ std::string suggestion(const std::string& word, const std::vector<std::string>& 
   std::size_t best = limit + 1;
   std::vector<std::string> nearest;
   for (const auto& k : known) {
-    const std::size_t d = edit_distance(word, k);
+    const std::size_t d = pdyn::edit_distance(word, k);
     if (d < best) {
       best = d;
       nearest.clear();

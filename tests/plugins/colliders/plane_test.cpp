@@ -16,6 +16,7 @@
 #include <iostream>
 #include <numbers>
 
+#include "pdyn/host/assembly.hpp"
 #include "plugins/colliders/collider_support.hpp"
 
 namespace pdyn {
@@ -172,8 +173,9 @@ forces:
                       "colliders:\n  - { type: plane, point: [0, 0, 0.1], normal: [0, 0.1, 1], "
                       "restitution: 0.6, friction: 0, epsilon: 0.0001 }\n");
   Scene seed = test::load_text(body);
-  seed.system->add_collider(
-      std::make_shared<SeedPlane>(Vec3(0, 0, 0.1), Vec3(0, 0.1, 1), 0.6, 1e-4), "seed plane");
+  SystemAssembly(*seed.system)
+      .add_collider(std::make_shared<SeedPlane>(Vec3(0, 0, 0.1), Vec3(0, 0.1, 1), 0.6, 1e-4),
+                    "seed plane");
   int differing = 0;
   for (int k = 1; k <= 1500; ++k) {
     test::TakeStep(ours, k, 2e-3);

@@ -16,9 +16,11 @@
 #include <utility>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/resolve.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/pair.hpp"
 #include "pdyn/parallel.hpp"
-#include "pdyn/resolve.hpp"
 #include "pdyn/system.hpp"
 #include "plugins/forces/force_support.hpp"
 #include "support/physics_support.hpp"
@@ -39,8 +41,9 @@ std::unique_ptr<Force> make(const System& sys, const Params& given) {
 }
 
 void set(System& sys, const Matrix3X& x) {
-  sys.set_particles(x, Matrix3X::Zero(3, x.cols()), Eigen::VectorXd::Ones(x.cols()),
-                    std::vector<std::uint8_t>(static_cast<std::size_t>(x.cols()), 0));
+  SystemAssembly(sys).set_particles(
+      x, Matrix3X::Zero(3, x.cols()), Eigen::VectorXd::Ones(x.cols()),
+      std::vector<std::uint8_t>(static_cast<std::size_t>(x.cols()), 0));
 }
 
 Matrix3X forces(Force& f, const System& sys) {
@@ -128,7 +131,7 @@ TEST(LennardJones, NeighborListSumEqualsTheBruteForceSum) {
       d.min = Vec3::Zero();
       d.max = Vec3::Constant(side * spacing);
       d.periodic = {true, true, true};
-      sys.set_domain(d);
+      SystemAssembly(sys).set_domain(d);
     }
     Params given;
     given.set("shift", true);
@@ -144,7 +147,7 @@ TEST(LennardJones, NeighborListSumEqualsTheBruteForceSum) {
       for (Index i = 0; i < sys.size(); ++i) {
         sys.positions().col(i) += Vec3(move(rng), move(rng), move(rng));
       }
-      sys.wrap_positions();
+      SystemAssembly(sys).wrap_positions();
     }
   }
 }
@@ -160,12 +163,12 @@ void ExpectBitIdenticalForOneToFourThreads(std::uint64_t seed, const Params& giv
   if (two_types) {
     std::vector<std::int32_t> type(static_cast<std::size_t>(sys.size()));
     for (std::size_t i = 0; i < type.size(); ++i) type[i] = static_cast<std::int32_t>(i % 3 == 0);
-    sys.set_types(type);
+    SystemAssembly(sys).set_types(type);
   }
   Domain d;
   d.max = Vec3::Constant(28 * 1.1);
   d.periodic = {true, true, true};
-  sys.set_domain(d);
+  SystemAssembly(sys).set_domain(d);
   Matrix3X reference;
   for (const int threads : {1, 2, 3, 4}) {
     set_threads(threads);
@@ -219,7 +222,7 @@ double worst_energy_error(double dt, int steps) {
   Domain d;
   d.max = Vec3::Constant(cells * a);
   d.periodic = {true, true, true};
-  sys.set_domain(d);
+  SystemAssembly(sys).set_domain(d);
   const double e0 = sys.kinetic_energy() + sys.potential_energy();
   double worst = 0.0;
   for (int k = 1; k <= steps; ++k) {
@@ -253,11 +256,11 @@ TEST(LennardJones, AnalyticJacobiansMatchCentralDifferences) {
     set(sys, lattice(5, 1.15, 5));
     std::vector<std::int32_t> type(125);
     for (std::size_t i = 0; i < type.size(); ++i) type[i] = static_cast<std::int32_t>(i % 3 == 0);
-    sys.set_types(type);
+    SystemAssembly(sys).set_types(type);
     Domain d;
     d.max = Vec3::Constant(5 * 1.15);  // 5.75 >= 2 (2.5 + 0.3)
     d.periodic = {true, true, true};
-    sys.set_domain(d);
+    SystemAssembly(sys).set_domain(d);
     auto force = make(sys, given);
     test::DenseSink sink(sys.size());
     ASSERT_TRUE(force->add_jacobians(sys.view(), sink));
@@ -288,7 +291,7 @@ TEST(LennardJones, ACutoffThatDoesNotFitThePeriodicBoxIsRefused) {
   Domain d;
   d.max = Vec3(10, 5, 10);
   d.periodic = {true, true, false};
-  sys.set_domain(d);
+  SystemAssembly(sys).set_domain(d);
   try {
     make(sys, Params{});
     ADD_FAILURE() << "no error";
@@ -324,7 +327,7 @@ std::pair<double, double> two_of_types(const Params& given, std::int32_t ta, std
   const Vec3 n(0.48, 0.6, 0.64);
   x.col(1) = r * n;
   set(sys, x);
-  sys.set_types({ta, tb});
+  SystemAssembly(sys).set_types({ta, tb});
   auto force = make(sys, given);
   const Matrix3X f = forces(*force, sys);
   EXPECT_EQ(Vec3(f.col(0) + f.col(1)), Vec3::Zero());
@@ -431,12 +434,12 @@ TEST(LennardJones, MixtureNeighborListSumEqualsTheBruteForceSum) {
     std::mt19937 rng(5);
     std::vector<std::int32_t> type(static_cast<std::size_t>(sys.size()));
     for (auto& t : type) t = std::bernoulli_distribution(0.3)(rng) ? 1 : 0;
-    sys.set_types(type);
+    SystemAssembly(sys).set_types(type);
     Domain d;
     if (periodic) {
       d.max = Vec3::Constant(side * spacing);
       d.periodic = {true, true, true};
-      sys.set_domain(d);
+      SystemAssembly(sys).set_domain(d);
     }
     Params given;
     given.set("shift", true);
@@ -454,7 +457,7 @@ TEST(LennardJones, MixtureNeighborListSumEqualsTheBruteForceSum) {
       for (Index i = 0; i < sys.size(); ++i) {
         sys.positions().col(i) += Vec3(move(rng), move(rng), move(rng));
       }
-      sys.wrap_positions();
+      SystemAssembly(sys).wrap_positions();
     }
     const auto* pf = dynamic_cast<const PairReference*>(force.get());
     ASSERT_NE(pf, nullptr);

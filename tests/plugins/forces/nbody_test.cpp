@@ -13,9 +13,10 @@
 #include <random>
 #include <vector>
 
+#include "pdyn/host/resolve.hpp"
+#include "pdyn/host/stepper.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/parallel.hpp"
-#include "pdyn/resolve.hpp"
-#include "pdyn/stepper.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 

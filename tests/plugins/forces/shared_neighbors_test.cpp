@@ -9,8 +9,8 @@
 #include <string>
 
 #include "force_support.hpp"
+#include "pdyn/host/stepper.hpp"
 #include "pdyn/pair.hpp"
-#include "pdyn/stepper.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {

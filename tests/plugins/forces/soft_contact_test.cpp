@@ -10,8 +10,9 @@
 #include <random>
 
 #include "pdyn/error.hpp"
-#include "pdyn/resolve.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/resolve.hpp"
+#include "pdyn/host/stepper.hpp"
 #include "pdyn/system.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
@@ -48,9 +49,9 @@ double head_on(double e) {
   Matrix3X x(3, 2), v(3, 2);
   x << -0.06, 0.06, 0, 0, 0, 0;
   v << 1, -1, 0, 0, 0, 0;
-  sys.set_particles(x, v, Eigen::VectorXd::Ones(2), {0, 0});
-  sys.set_radii({0.05, 0.05});
-  sys.add_force(make("soft_contact", sys, contact(e, 0.3)), "soft_contact");
+  SystemAssembly(sys).set_particles(x, v, Eigen::VectorXd::Ones(2), {0, 0});
+  SystemAssembly(sys).set_radii({0.05, 0.05});
+  SystemAssembly(sys).add_force(make("soft_contact", sys, contact(e, 0.3)), "soft_contact");
   auto solver = verlet(sys);
   Stepper stepper(sys, *solver, "verlet");
   for (int k = 1; k <= 2000; ++k) EXPECT_TRUE(stepper.step_to(k * 1e-5).has_value());
@@ -75,12 +76,13 @@ Drop DropOnANailedBall(const Params& params, double height) {
   System sys;
   Matrix3X x(3, 2);
   x << 0, 0, 0, 0, 0, 0.1 + height;
-  sys.set_particles(x, Matrix3X::Zero(3, 2), Eigen::VectorXd::Constant(2, 0.2), {1, 0});
-  sys.set_radii({0.05, 0.05});
-  sys.add_force(make("soft_contact", sys, params), "soft_contact");
+  SystemAssembly(sys).set_particles(x, Matrix3X::Zero(3, 2), Eigen::VectorXd::Constant(2, 0.2),
+                                    {1, 0});
+  SystemAssembly(sys).set_radii({0.05, 0.05});
+  SystemAssembly(sys).add_force(make("soft_contact", sys, params), "soft_contact");
   Params g;
   g.set("g", Vec3(0, 0, -9.81));
-  sys.add_force(make("gravity", sys, g), "gravity");
+  SystemAssembly(sys).add_force(make("gravity", sys, g), "gravity");
   auto solver = verlet(sys);
   Stepper stepper(sys, *solver, "verlet");
   Drop b;
@@ -130,9 +132,9 @@ Bounce head_on_at(const Params& law, double speed) {
   Matrix3X x(3, 2), v(3, 2);
   x << -0.05005, 0.05005, 0, 0, 0, 0;
   v << speed / 2, -speed / 2, 0, 0, 0, 0;
-  sys.set_particles(x, v, Eigen::VectorXd::Ones(2), {0, 0});
-  sys.set_radii({0.05, 0.05});
-  sys.add_force(make("soft_contact", sys, law), "soft_contact");
+  SystemAssembly(sys).set_particles(x, v, Eigen::VectorXd::Ones(2), {0, 0});
+  SystemAssembly(sys).set_radii({0.05, 0.05});
+  SystemAssembly(sys).add_force(make("soft_contact", sys, law), "soft_contact");
   auto solver = verlet(sys);
   Stepper stepper(sys, *solver, "verlet");
   const double h = 1e-5;
@@ -235,7 +237,8 @@ TEST(SoftContact, AnUnknownModelIsALocatedSceneError) {
 
 TEST(SoftContact, WithoutRadiiTheForceIsRefusedNamingTheKey) {
   System sys;
-  sys.set_particles(Matrix3X::Zero(3, 2), Matrix3X::Zero(3, 2), Eigen::VectorXd::Ones(2), {0, 0});
+  SystemAssembly(sys).set_particles(Matrix3X::Zero(3, 2), Matrix3X::Zero(3, 2),
+                                    Eigen::VectorXd::Ones(2), {0, 0});
   try {
     make("soft_contact", sys, Params{});
     ADD_FAILURE() << "no error";

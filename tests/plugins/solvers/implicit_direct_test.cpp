@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/runner.hpp"
 #include "plugins/solvers/solver_support.hpp"
 
@@ -80,7 +81,7 @@ TEST(ImplicitEuler, DirectRefusesForcesWithoutJacobiansAndAutoFallsBackToCg) {
   ASSERT_EQ(run_scene(analytic).exit_code, 0);
 
   Scene automatic = test::load_text(SmallCloth("auto"));
-  automatic.system->add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
+  SystemAssembly(*automatic.system).add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
   const RunResult ra = run_scene(automatic);
   ASSERT_EQ(ra.exit_code, 0) << ra.message;
   const double diff =
@@ -90,7 +91,7 @@ TEST(ImplicitEuler, DirectRefusesForcesWithoutJacobiansAndAutoFallsBackToCg) {
   EXPECT_LT(diff, 1e-8);
 
   Scene direct = test::load_text(SmallCloth("direct"));
-  direct.system->add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
+  SystemAssembly(*direct.system).add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
   const RunResult rd = run_scene(direct);
   EXPECT_EQ(rd.exit_code, 3);
   EXPECT_NE(rd.message.find("implicit_euler: linear_solver: direct needs every force's Jacobian, "
@@ -122,7 +123,8 @@ class AntiSpring final : public Force {
 TEST(ImplicitEuler, DirectSolveReportsAMatrixThatIsNotPositiveDefinite) {
   for (const std::string linear_solver : {"direct", "cg"}) {
     Scene s = test::load_text(SmallCloth(linear_solver));
-    s.system->add_force(std::make_shared<AntiSpring>(1000.0), "anti-spring");  // h^2 k / m = 10
+    SystemAssembly(*s.system).add_force(std::make_shared<AntiSpring>(1000.0),
+                                        "anti-spring");  // h^2 k / m = 10
     const RunResult r = run_scene(s);
     std::cout << linear_solver << ": " << r.message << "\n";
     EXPECT_EQ(r.exit_code, 3) << linear_solver;

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/runner.hpp"
 #include "plugins/solvers/solver_support.hpp"
 
@@ -140,7 +141,7 @@ TEST(Rk45, ReusesTheLastStageAsTheNextFirst) {
   const test::Oscillator osc = Damped();
   Scene scene = test::load_text(osc.scene(Rk45(1e-8), "dt: 0.01, duration: 5"));
   auto counter = std::make_shared<CountingForce>();
-  scene.system->add_force(counter, "counter");
+  SystemAssembly(*scene.system).add_force(counter, "counter");
   const RunResult r = run_scene(scene);
   ASSERT_EQ(r.exit_code, 0) << r.message;
   EXPECT_EQ(counter->calls, 1 + 6 * (r.counts.accepted + r.counts.rejected));

@@ -14,6 +14,7 @@
 #include <iostream>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/host/runner.hpp"
 #include "plugins/solvers/solver_support.hpp"
 
@@ -104,7 +105,8 @@ TEST(ImplicitEuler, ForcesWithoutJacobiansAgreeWithAnalyticOnes) {
   bare.ks = 0.0;
   bare.k = 0.0;
   Scene opaque = test::load_text(bare.scene(solver, timing));
-  opaque.system->add_force(std::make_shared<OpaqueSpringAndDrag>(1, osc.ks, osc.k), "opaque");
+  SystemAssembly(*opaque.system)
+      .add_force(std::make_shared<OpaqueSpringAndDrag>(1, osc.ks, osc.k), "opaque");
   ASSERT_EQ(run_scene(opaque).exit_code, 0);
 
   const double diff = (analytic.system->state() - opaque.system->state()).lpNorm<Eigen::Infinity>();
@@ -128,7 +130,7 @@ TEST(ImplicitEuler, MixesAnalyticAndMatrixFreeForces) {
   ASSERT_EQ(run_scene(analytic).exit_code, 0);
 
   Scene mixed = test::load_text(cloth);
-  mixed.system->add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
+  SystemAssembly(*mixed.system).add_force(std::make_shared<test::OpaqueDrag>(), "opaque drag");
   ASSERT_EQ(run_scene(mixed).exit_code, 0);
   const double diff = (analytic.system->state() - mixed.system->state()).lpNorm<Eigen::Infinity>();
   std::cout << "implicit_euler on a 5 x 5 cloth, drag analytic vs matrix-free: " << diff

@@ -10,7 +10,8 @@
 
 #include <memory>
 
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/stepper.hpp"
 #include "pdyn/system.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
@@ -19,7 +20,7 @@ namespace pdyn {
 namespace {
 
 void add_nothing(Scene& scene) {
-  scene.system->add_force(std::make_shared<test::Nothing>(), "nothing");
+  SystemAssembly(*scene.system).add_force(std::make_shared<test::Nothing>(), "nothing");
 }
 
 // A Lennard-Jones cluster of 27 particles under gravity (both forces depend

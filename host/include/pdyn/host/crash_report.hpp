@@ -1,6 +1,6 @@
 // Naming the plugin that crashed: the fatal-signal handler of `pdyn run`,
 // which reads the "current plugin call" record that the kernel keeps around
-// every call into a plugin (pdyn/plugin_call.hpp).
+// every call into a plugin (pdyn/kernel/plugin_call.hpp).
 //
 // A plugin that dereferences a null pointer kills the process with SIGSEGV;
 // no exception is thrown, so the step loop's own fault handling never sees
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "pdyn/plugin_call.hpp"
+#include "pdyn/kernel/plugin_call.hpp"
 
 namespace pdyn {
 

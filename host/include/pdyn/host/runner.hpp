@@ -10,7 +10,7 @@
 
 #include "pdyn/host/checkpoint.hpp"
 #include "pdyn/host/scene.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/stepper.hpp"
 
 namespace pdyn {
 

@@ -10,7 +10,7 @@
 
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
-#include "pdyn/stepper.hpp"
+#include "pdyn/host/stepper.hpp"
 
 namespace pdyn {
 
@@ -31,7 +31,7 @@ class Simulation {
  public:
   /// Takes over a loaded scene (load_scene). Sets the thread count: `threads`
   /// if > 0, else the scene's simulation.threads, else
-  /// pdyn::default_threads(particles).
+  /// pdyn::default_threads(particles) (pdyn/host/threads.hpp).
   explicit Simulation(Scene scene, int threads = 0);
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;

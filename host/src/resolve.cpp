@@ -1,5 +1,5 @@
-// Parameter resolution: defaults, required, types, bounds (see pdyn/resolve.hpp).
-#include "pdyn/resolve.hpp"
+// Parameter resolution: defaults, required, types, bounds (see pdyn/host/resolve.hpp).
+#include "pdyn/host/resolve.hpp"
 
 #include <fmt/format.h>
 

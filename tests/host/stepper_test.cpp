@@ -1,6 +1,6 @@
 // pdyn::Stepper, the one step: exact end times, rollback to the last good
-// state, and naming the plugin object at fault (pdyn/stepper.hpp).
-#include "pdyn/stepper.hpp"
+// state, and naming the plugin object at fault (pdyn/host/stepper.hpp).
+#include "pdyn/host/stepper.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
 
@@ -70,7 +71,7 @@ std::unique_ptr<System> two_particles() {
   Matrix3X x = Matrix3X::Zero(3, 2), v = Matrix3X::Zero(3, 2);
   x(0, 0) = 1;  // particle 0 at (1, 0, 0), particle 1 at (2, 0, 0)
   x(0, 1) = 2;
-  sys->set_particles(x, v, Eigen::VectorXd::Ones(2), {0, 0});
+  SystemAssembly(*sys).set_particles(x, v, Eigen::VectorXd::Ones(2), {0, 0});
   return sys;
 }
 
@@ -78,7 +79,7 @@ const std::string kSolverLabel = "euler (test)";
 
 TEST(Stepper, AFixedStepEndsExactlyAtTheTimeAskedForAndFollowsTheOscillator) {
   auto sys = two_particles();
-  sys->add_force(std::make_shared<Spring>(1.0), "spring");
+  SystemAssembly(*sys).add_force(std::make_shared<Spring>(1.0), "spring");
   SloppyEuler solver;
   Stepper stepper(*sys, solver, kSolverLabel);
   const double dt = 1e-3;
@@ -94,7 +95,7 @@ TEST(Stepper, AFixedStepEndsExactlyAtTheTimeAskedForAndFollowsTheOscillator) {
 
 TEST(Stepper, AThrowingForceIsNamedAndTheLastGoodStateIsRestored) {
   auto sys = two_particles();
-  sys->add_force(std::make_shared<Throws>(), "throws (scene.yaml:4:5)");
+  SystemAssembly(*sys).add_force(std::make_shared<Throws>(), "throws (scene.yaml:4:5)");
   SloppyEuler solver;
   Stepper stepper(*sys, solver, kSolverLabel);
   const Eigen::VectorXd before = sys->state();
@@ -110,8 +111,8 @@ TEST(Stepper, AThrowingForceIsNamedAndTheLastGoodStateIsRestored) {
 
 TEST(Stepper, ANonFiniteStateIsTracedToTheForceThatProducedIt) {
   auto sys = two_particles();
-  sys->add_force(std::make_shared<Spring>(1.0), "spring");
-  sys->add_force(std::make_shared<NanAfter>(0.025), "nan (scene.yaml:9:5)");
+  SystemAssembly(*sys).add_force(std::make_shared<Spring>(1.0), "spring");
+  SystemAssembly(*sys).add_force(std::make_shared<NanAfter>(0.025), "nan (scene.yaml:9:5)");
   SloppyEuler solver;
   Stepper stepper(*sys, solver, kSolverLabel);
   ASSERT_TRUE(stepper.step_to(0.01));
@@ -134,7 +135,7 @@ TEST(Stepper, ANonFiniteStateIsTracedToTheForceThatProducedIt) {
 
 TEST(Stepper, ASolverThatGivesUpIsNamedWhenNoForceIsAtFault) {
   auto sys = two_particles();
-  sys->add_force(std::make_shared<Spring>(1.0), "spring");
+  SystemAssembly(*sys).add_force(std::make_shared<Spring>(1.0), "spring");
   GivesUp solver;
   Stepper stepper(*sys, solver, kSolverLabel);
   EXPECT_FALSE(stepper.step(0.01));
@@ -147,8 +148,8 @@ TEST(Stepper, ASolverThatGivesUpIsNamedWhenNoForceIsAtFault) {
 
 TEST(Stepper, ASolverThatGivesUpOnANaNIsTracedToTheForceThatMadeIt) {
   auto sys = two_particles();
-  sys->add_force(std::make_shared<Spring>(1.0), "spring");
-  sys->add_force(std::make_shared<NanAfter>(-1.0), "nan (scene.yaml:9:5)");
+  SystemAssembly(*sys).add_force(std::make_shared<Spring>(1.0), "spring");
+  SystemAssembly(*sys).add_force(std::make_shared<NanAfter>(-1.0), "nan (scene.yaml:9:5)");
   // An implicit solver's linear solve fails on a NaN; it throws its own
   // error. The replay with per-force finite checks finds the force.
   class GivesUpOnNan : public Solver {

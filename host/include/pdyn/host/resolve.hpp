@@ -1,4 +1,4 @@
-// pdyn/resolve.hpp — the one place parameter values meet their specs.
+// pdyn/host/resolve.hpp — the one place parameter values meet their specs.
 //
 // Whoever builds a plugin object (the scene loader from YAML, the viewer
 // when the user adds a force, the conformance kit, a script) has some

@@ -1,6 +1,6 @@
 // One step: solver, collision response, non-finite check, rollback (see
-// pdyn/stepper.hpp).
-#include "pdyn/stepper.hpp"
+// pdyn/host/stepper.hpp).
+#include "pdyn/host/stepper.hpp"
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -13,8 +13,9 @@
 #include <utility>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/parallel.hpp"
-#include "pdyn/plugin_call.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
 
@@ -140,7 +141,7 @@ std::optional<double> Stepper::guarded(const Take& take) {
   double h = 0.0;
   try {
     h = take();
-    sys_.respond_to_collisions(h);
+    SystemAssembly(sys_).respond_to_collisions(h);
   } catch (const PluginRuntimeError& e) {
     fault_.kind = StepFault::Kind::PluginThrew;
     fault_.label = e.label();
@@ -185,7 +186,8 @@ std::optional<double> Stepper::guarded(const Take& take) {
     return fail();
   }
   previous_.swap(next_);  // the next step's last good state, if nobody writes before it
-  sys_.wrap_positions();  // only after a good step: a failed one leaves the images alone
+  SystemAssembly(sys_)
+      .wrap_positions();  // only after a good step: a failed one leaves the images alone
   version_ = sys_.state_version();
   return h;
 }
@@ -199,7 +201,7 @@ template <class Take>
 bool Stepper::replay(const Take& take, bool finite_checks) {
   sys_.state() = previous_;
   sys_.set_time(t_previous_);
-  sys_.set_finite_checks(finite_checks);
+  SystemAssembly(sys_).set_finite_checks(finite_checks);
   bool found = false;
   try {
     take();
@@ -209,7 +211,7 @@ bool Stepper::replay(const Take& take, bool finite_checks) {
     found = true;
   } catch (...) {
   }
-  sys_.set_finite_checks(false);
+  SystemAssembly(sys_).set_finite_checks(false);
   return found;
 }
 

@@ -1,6 +1,6 @@
 // pdyn::resolve, the one place parameter values meet their specs: defaults,
 // required, types, finiteness, bounds, not-zero vectors, unknown names.
-#include "pdyn/resolve.hpp"
+#include "pdyn/host/resolve.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// pdyn/stepper.hpp — one step of a simulation, the only place that takes one.
+// pdyn/host/stepper.hpp — one step of a simulation, the only place that takes one.
 //
 // Witkin's simulation loop is "take a step, handle collisions" (SIGGRAPH '97
 // notes, "Bouncing off the Walls"). A host (the runner, the viewer, a

@@ -1,9 +1,15 @@
-// pdyn/plugin_call.hpp — which plugin call is in progress, for crash reports.
+// pdyn/kernel/plugin_call.hpp — which plugin call is in progress, for crash reports.
 //
-// The kernel marks every call into a plugin object (a force's add_forces, a
-// solver's step, ...) with a CallScope: two stores, no allocation, no lock.
-// A host that installs a fatal-signal handler (`pdyn run` does) reads the
-// innermost scope to name the plugin that crashed. Plugins need not use it.
+// The kernel marks every call it makes into a plugin object (a force's
+// add_forces, a collider's respond, ...) with a CallScope: two stores, no
+// allocation, no lock; the host marks its own (a solver's step, a writer's
+// write). A host that installs a fatal-signal handler (`pdyn run` does)
+// reads the innermost scope to name the plugin that crashed.
+//
+// This is the one thing the kernel library offers hosts and not plugins, so
+// it lives outside the plugin SDK's folder (kernel/include/pdyn/): the
+// record has to be the kernel's, because the kernel makes the calls, and
+// the host's, because the host reads it (tests/kernel/check_sdk.py).
 #pragma once
 
 #include <string>
