@@ -15,6 +15,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 what="${1:-demo}"
 case "$what" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
 
+# What the demo builds (the program, the plugins, the Python module) needs:
 packages=(
   g++ cmake ninja-build ccache     # toolchain (ccache: rebuilds are copies)
   libeigen3-dev                    # math and state vectors
@@ -23,15 +24,19 @@ packages=(
   libmuparser-dev pkg-config       # the field force's expressions
   libfmt-dev libcli11-dev          # messages, command line
   nlohmann-json3-dev               # pdyn plugins --json
-  pkg-config libcairo2-dev         # pdyn render (PNG pictures)
+  libcairo2-dev                    # pdyn render (PNG pictures)
+  libhdf5-dev                      # the h5md writer (HDF5 C library)
+  pybind11-dev python3-dev python3-numpy   # `import pdyn` (python/)
+)
+# The tests, the benchmarks and CI's other builds need more; the demo does
+# without them (clang and its runtimes are the largest).
+[[ "$what" == test ]] && packages+=(
   libgtest-dev libgmock-dev        # tests
   clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
   python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
   libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
   libbenchmark-dev                 # bench/ (Google Benchmark)
   clang-format-14                  # the formatting check (tests/format.cmake)
-  libhdf5-dev                      # the h5md writer (HDF5 C library)
-  pybind11-dev python3-dev python3-numpy   # `import pdyn` (python/)
 )
 # pdyn serve's page takes three.js from the npm registry (viewer/package.json
 # and its lock file); Node.js and npm come from Debian unless the machine
@@ -66,11 +71,15 @@ npm ci --prefix viewer --no-audit --no-fund --loglevel=error
 source scripts/ccache.sh
 
 if [[ "$what" == demo ]]; then
-  # Only what the demo needs: the program, the shipped plugins, the Python module.
-  cmake --preset default "${launcher[@]}"
+  # Only what the demo needs: the program, the shipped plugins, the Python
+  # module; no tests or benchmarks, whose packages it did not install.
+  cmake --preset default -DPDYN_BUILD_TESTS=OFF -DPDYN_BUILD_BENCH=OFF "${launcher[@]}"
   cmake --build --preset default --target pdyn pdyn_plugins pdyn_python
 else
-  cmake --preset default -DPDYN_BROWSER_TEST=ON "${launcher[@]}"  # fail, not skip, if it cannot run
+  # Tests and benchmarks on (a demo before may have turned them off); the
+  # browser test fails, not skips, if it cannot run.
+  cmake --preset default -DPDYN_BUILD_TESTS=ON -DPDYN_BUILD_BENCH=ON -DPDYN_BROWSER_TEST=ON \
+    "${launcher[@]}"
   cmake --build --preset default
 fi
 

@@ -21,12 +21,6 @@ namespace pdyn::conformance::detail {
 
 namespace {
 
-Matrix3X forces_of(Force& force, const State& s) {
-  Matrix3X f = Matrix3X::Zero(3, s.size());
-  force.add_forces(s.view(), f);
-  return f;
-}
-
 class DenseSink final : public JacobianSink {
  public:
   explicit DenseSink(Index n) : dfdx(Eigen::MatrixXd::Zero(3 * n, 3 * n)), dfdv(dfdx) {}

@@ -43,12 +43,6 @@ constexpr double kDensity = 3.0;  // per rc^3
 
 using Factory = std::function<std::shared_ptr<Force>(const State&)>;
 
-Matrix3X forces_of(Force& force, const State& s) {
-  Matrix3X f = Matrix3X::Zero(3, s.size());
-  force.add_forces(s.view(), f);
-  return f;
-}
-
 Vec3 random_direction(std::mt19937_64& rng) {
   std::normal_distribution<double> g;
   Vec3 n;

@@ -95,6 +95,12 @@ bool bit_equal(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
          std::memcmp(a.data(), b.data(), sizeof(double) * static_cast<std::size_t>(a.size())) == 0;
 }
 
+Matrix3X forces_of(Force& force, const State& s) {
+  Matrix3X f = Matrix3X::Zero(3, s.size());
+  force.add_forces(s.view(), f);
+  return f;
+}
+
 double max_abs(const Matrix3X& m) { return m.size() == 0 ? 0.0 : m.cwiseAbs().maxCoeff(); }
 
 std::size_t non_finite(const Matrix3X& m) {

@@ -90,6 +90,9 @@ class Constant final : public Force {
   Vec3 g_;
 };
 
+/// The force `force` adds to zero accumulators in state `s`, N.
+Matrix3X forces_of(Force& force, const State& s);
+
 // ---- comparing results ----
 
 /// Same shape and the same bits.

@@ -42,7 +42,7 @@ namespace {
 
 constexpr char kMagic[8] = {'P', 'D', 'Y', 'N', 'C', 'K', 'P', 'T'};
 
-class Writer {
+class ByteWriter {
  public:
   template <class T>
   void pod(const T& v) {
@@ -60,9 +60,9 @@ class Writer {
   std::string buf_;
 };
 
-class Reader {
+class ByteReader {
  public:
-  Reader(const std::string& data, std::string file) : data_(data), file_(std::move(file)) {}
+  ByteReader(const std::string& data, std::string file) : data_(data), file_(std::move(file)) {}
   template <class T>
   T pod() {
     need(sizeof(T));
@@ -125,7 +125,7 @@ std::uint64_t fnv1a(const std::string& text) {
 }
 
 void write_checkpoint(const fs::path& path, const Checkpoint& c) {
-  Writer w;
+  ByteWriter w;
   w.string(c.scene_file);
   w.string(c.scene_text);
   w.pod(c.step);
@@ -143,7 +143,7 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   } else {  // a checkpoint built without them: none wrapped
     payload.append(3 * n * sizeof(std::int32_t), '\0');
   }
-  Writer tail;
+  ByteWriter tail;
   tail.pod<std::uint64_t>(c.plugin_states.size());
   for (const auto& [label, bytes] : c.plugin_states) {
     tail.string(label);
@@ -159,7 +159,7 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   }
   payload += tail.data();
 
-  Writer file;
+  ByteWriter file;
   std::string out(kMagic, sizeof(kMagic));
   file.pod(Checkpoint::kFormatVersion);
   file.pod<std::uint64_t>(payload.size());
@@ -274,7 +274,7 @@ Checkpoint read_checkpoint(const fs::path& path) {
                     "(expected CRC-32 {:08x}, computed {:08x})",
                     file, stored, crc32(payload)));
   }
-  Reader r(payload, file);
+  ByteReader r(payload, file);
   Checkpoint c;
   c.scene_file = r.bytes();
   c.scene_text = r.bytes();
