@@ -207,7 +207,9 @@ Json import_frame_property() {
       {"description", "the frame of a LAMMPS dump or extended XYZ file: 0 the first, -1 the last"}};
 }
 
-Json make_schema(const PluginRegistry& registry) {
+// One definition per plugin (its parameters), and per kind the entry that
+// picks one by `type`.
+Json plugin_defs(const PluginRegistry& registry) {
   Json defs = Json::object();
   for (const auto& r : registry.plugins()) {
     const PluginDescriptor& d = *r.descriptor;
@@ -225,6 +227,11 @@ Json make_schema(const PluginRegistry& registry) {
   defs["solver"] = plugin_entry(registry, PluginKind::Solver);
   defs["writer"] = plugin_entry(registry, PluginKind::Writer);
 
+  return defs;
+}
+
+// simulation: time step, run length, solver, box (or a file's box).
+Json simulation_schema() {
   // periodic is a list of three booleans, which no ParamType describes.
   Json flag = Json::object();
   flag["anyOf"] = Json::array({Json{{"type", "boolean"}}, Json{{"enum", Json::array({0, 1})}}});
@@ -254,7 +261,12 @@ Json make_schema(const PluginRegistry& registry) {
                            Json{{"solver", {{"$ref", "#/$defs/solver"}}}, {"box", box}});
   simulation["description"] = "time step, run length and solver (default rk4)";
   simulation["oneOf"] = Json::array({{{"required", {"steps"}}}, {{"required", {"duration"}}}});
+  return simulation;
+}
 
+// output (a list of writers or the mapping form) and the top-level
+// checkpoint, returned as {output, checkpoint}.
+std::pair<Json, Json> output_schemas() {
   Json checkpoint = object(checkpoint_specs(), false);
   Json output_map = object(output_specs(), false, Json{{"checkpoint", checkpoint}});
   output_map["type"] = Json::array({"object", "null"});
@@ -268,39 +280,74 @@ Json make_schema(const PluginRegistry& registry) {
        Json::array({output_map, {{"type", "array"}, {"items", {{"$ref", "#/$defs/writer"}}}}})}};
   Json top_checkpoint = checkpoint;
   top_checkpoint["description"] = "checkpoints (also output.checkpoint in the mapping form)";
+  return {output, top_checkpoint};
+}
 
+// A builder's nested mapping: a force plugin's parameters less the list
+// the builder generates (or families of them), or fixed keys.
+Json builder_nested(const PluginRegistry& registry, const BuilderNested& n) {
+  Json j;
+  if (n.plugin.empty()) {
+    j = object(n.specs, false);
+  } else if (const PluginRecord* rec = registry.find(PluginKind::Force, n.plugin)) {
+    std::vector<ParamSpec> specs;
+    for (const auto& s : rec->descriptor->params) {
+      if (s.name != n.generated) specs.push_back(s);
+    }
+    j = object(specs, true);
+  } else {
+    j = Json{{"type", "object"}};
+  }
+  j["type"] = Json::array({"object", "null"});
+  if (!n.families.empty()) {
+    Json families = Json::object();
+    for (const auto& f : n.families) families[f] = j;
+    j = {{"type", Json::array({"object", "null"})},
+         {"properties", families},
+         {"additionalProperties", false}};
+  }
+  j["description"] = n.doc;
+  return j;
+}
+
+// A file of particles (docs/scenes.md, `file`): pdyn's CSV, a LAMMPS data
+// or dump file, extended XYZ.
+Json particle_file_schema() {
+  return {{"type", "object"},
+          {"properties",
+           {{"file", import_file_property()},
+            {"format", import_format_property()},
+            {"frame", import_frame_property()},
+            {"mass",
+             {{"type", "number"},
+              {"exclusiveMinimum", 0},
+              {"description",
+               "kg: every particle's mass (needed where the file has "
+               "none)"}}},
+            {"masses",
+             {{"type", "object"},
+              {"additionalProperties", {{"type", "number"}, {"exclusiveMinimum", 0}}},
+              {"description",
+               "kg per LAMMPS type ({ 1: 39.948 }) or per XYZ species ({ Ar: 39.948 "
+               "})"}}},
+            {"types",
+             {{"type", "object"},
+              {"additionalProperties", {{"type", "integer"}, {"minimum", 0}}},
+              {"description",
+               "an extended XYZ file's species as particle types ({ Ar: 1, Kr: 2 }); "
+               "default 0, 1, ... in order of first appearance"}}}}},
+          {"required", {"file"}},
+          {"additionalProperties", false}};
+}
+
+// One item of particles: a particle, a builder or a file.
+Json particle_items(const PluginRegistry& registry) {
   Json particle = object(particle_specs(), false);
   particle["description"] = "one particle";
   Json items = Json::array({particle});
-  // A builder's nested mapping: a force plugin's parameters less the list
-  // the builder generates (or families of them), or fixed keys.
-  auto nested = [&](const BuilderNested& n) {
-    Json j;
-    if (n.plugin.empty()) {
-      j = object(n.specs, false);
-    } else if (const PluginRecord* rec = registry.find(PluginKind::Force, n.plugin)) {
-      std::vector<ParamSpec> specs;
-      for (const auto& s : rec->descriptor->params) {
-        if (s.name != n.generated) specs.push_back(s);
-      }
-      j = object(specs, true);
-    } else {
-      j = Json{{"type", "object"}};
-    }
-    j["type"] = Json::array({"object", "null"});
-    if (!n.families.empty()) {
-      Json families = Json::object();
-      for (const auto& f : n.families) families[f] = j;
-      j = {{"type", Json::array({"object", "null"})},
-           {"properties", families},
-           {"additionalProperties", false}};
-    }
-    j["description"] = n.doc;
-    return j;
-  };
   for (const auto& b : builder_specs()) {
     Json extra = Json::object();
-    for (const auto& n : b.nested) extra[n.key] = nested(n);
+    for (const auto& n : b.nested) extra[n.key] = builder_nested(registry, n);
     Json builder = object(b.params, false, extra);
     builder["description"] = b.doc;
     items.push_back({{"type", "object"},
@@ -308,35 +355,15 @@ Json make_schema(const PluginRegistry& registry) {
                      {"required", {b.key}},
                      {"additionalProperties", false}});
   }
+  items.push_back(particle_file_schema());
+  return items;
+}
 
-  // A file of particles (docs/scenes.md, `file`): pdyn's CSV, a LAMMPS data
-  // or dump file, extended XYZ.
-  items.push_back({{"type", "object"},
-                   {"properties",
-                    {{"file", import_file_property()},
-                     {"format", import_format_property()},
-                     {"frame", import_frame_property()},
-                     {"mass",
-                      {{"type", "number"},
-                       {"exclusiveMinimum", 0},
-                       {"description",
-                        "kg: every particle's mass (needed where the file has "
-                        "none)"}}},
-                     {"masses",
-                      {{"type", "object"},
-                       {"additionalProperties", {{"type", "number"}, {"exclusiveMinimum", 0}}},
-                       {"description",
-                        "kg per LAMMPS type ({ 1: 39.948 }) or per XYZ species ({ Ar: 39.948 "
-                        "})"}}},
-                     {"types",
-                      {{"type", "object"},
-                       {"additionalProperties", {{"type", "integer"}, {"minimum", 0}}},
-                       {"description",
-                        "an extended XYZ file's species as particle types ({ Ar: 1, Kr: 2 }); "
-                        "default 0, 1, ... in order of first appearance"}}}}},
-                   {"required", {"file"}},
-                   {"additionalProperties", false}});
-
+Json make_schema(const PluginRegistry& registry) {
+  const Json defs = plugin_defs(registry);
+  const Json simulation = simulation_schema();
+  const auto [output, top_checkpoint] = output_schemas();
+  const Json items = particle_items(registry);
   auto plugin_list = [](const char* def) {
     return Json{{"type", Json::array({"array", "null"})},
                 {"items", {{"$ref", std::string("#/$defs/") + def}}}};

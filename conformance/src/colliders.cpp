@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <random>
@@ -125,32 +126,18 @@ std::vector<Vec3> drop_directions() {
 
 }  // namespace
 
-void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
-  std::mt19937_64 rng(o.seed);
-  const State home = random_state(rng);
-  Params params = sample_params(d, kParticles);
-  // Frictionless, so that the tangential check applies.
-  for (const auto& spec : d.params) {
-    if (spec.name == "friction" && spec.type == ParamType::Real) params.set("friction", 0.0);
-  }
-  auto make = [&] {
-    return std::shared_ptr<Collider>(d.create_collider(params, context_of(home)));
-  };
-  std::shared_ptr<Collider> c;
-  guarded(out, "construct.defaults", [&] {
-    c = make();
-    return result("construct.defaults", c != nullptr, c ? 1 : 0, 1,
-                  c ? "created with defaults" : "factory returned null");
-  });
-  if (!c) return;
+namespace {
 
+// Determinism, a read-only state, finite values, and the drawing hook.
+void basic_collider_checks(Collider& c, const std::function<std::shared_ptr<Collider>()>& make,
+                           std::mt19937_64& rng, const State& home, std::vector<CheckResult>& out) {
   guarded(out, "deterministic", [&] {
     State a = random_state(rng);
     a.x *= 0.2;  // near the origin, where default obstacles are
     a.f.setRandom();
     State b = a;
     MutableParticleView va = a.mutable_view(), vb = b.mutable_view();
-    c->respond(va, 0.01);
+    c.respond(va, 0.01);
     make()->respond(vb, 0.01);
     const bool same = bit_equal(a.x, b.x) && bit_equal(a.v, b.v);
     return result("deterministic", same, std::max(max_abs(a.x - b.x), max_abs(a.v - b.v)), 0,
@@ -161,7 +148,7 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
     State s = home;
     const State before = s;
     Matrix3X f = Matrix3X::Random(3, s.size());
-    c->apply_contact_forces(s.view(), f);
+    c.apply_contact_forces(s.view(), f);
     const bool same = bit_equal(s.x, before.x) && bit_equal(s.v, before.v);
     return result("read_only_state", same, same ? 0 : 1, 0,
                   "x, v unchanged by apply_contact_forces");
@@ -173,9 +160,9 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
       (void)label;
       s.f.setConstant(-1.0);
       Matrix3X f = s.f;
-      c->apply_contact_forces(s.view(), f);
+      c.apply_contact_forces(s.view(), f);
       MutableParticleView view = s.mutable_view();
-      c->respond(view, 0.01);
+      c.respond(view, 0.01);
       bad += non_finite(f) + non_finite(s.x) + non_finite(s.v);
     }
     return result("finite_on_degenerate", bad == 0, static_cast<double>(bad), 0,
@@ -186,7 +173,7 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
   // obstacle (1 mm to one side of the drawn surface is inside, to the other
   // side not).
   guarded(out, "collider.shape", [&] {
-    const auto* source = dynamic_cast<const ShapeSource*>(c.get());
+    const auto* source = dynamic_cast<const ShapeSource*>(&c);
     if (!source) return skip("collider.shape", "no shape hook (pdyn/shape.hpp): not drawn");
     const std::vector<Shape> shapes = source->shapes();
     if (shapes.empty()) return result("collider.shape", false, 0, 1, "shapes() returned nothing");
@@ -200,7 +187,7 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
         if (point.cwiseAbs().maxCoeff() > 2.0) continue;
         ++probes;
         const Vec3 step = 1e-3 * normal;
-        wrong += inside(*c, point + step) == inside(*c, point - step) ? 1 : 0;
+        wrong += inside(c, point + step) == inside(c, point - step) ? 1 : 0;
       }
     }
     return result("collider.shape", probes > 0 && wrong == 0, wrong, 0,
@@ -208,8 +195,10 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
                               "obstacle on exactly one side (1 mm off the surface)",
                               probes, wrong));
   });
+}
 
-  // Find the obstacle.
+// The obstacle's point nearest the origin among probes in [-2,2]^3 m.
+std::optional<Vec3> find_obstacle(Collider& c, std::vector<CheckResult>& out) {
   std::optional<Vec3> target;
   guarded(out, "collider.obstacle_found", [&] {
     int count = 0;
@@ -217,22 +206,25 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
       for (int j = 0; j <= 16; ++j)
         for (int k = 0; k <= 16; ++k) {
           const Vec3 x = Vec3(i, j, k) * 0.25 - Vec3::Constant(2.0);
-          if (!inside(*c, x)) continue;
+          if (!inside(c, x)) continue;
           ++count;
           if (!target || x.norm() < target->norm()) target = x;
         }
     return result("collider.obstacle_found", count > 0, count, 1,
                   "probe points in [-2,2]^3 m (step 0.25) that respond() moves out (>= bound)");
   });
-  if (!target) return;
+  return target;
+}
 
+// Particles dropped onto `target` from every axis and diagonal.
+std::vector<Drop> drop_checks(Collider& c, const Vec3& target, std::vector<CheckResult>& out) {
   std::vector<Drop> drops;
   guarded(out, "collider.no_particle_inside", [&] {
     int inside_count = 0, missed = 0, tried = 0;
     for (const Vec3& dir : drop_directions()) {
-      if (inside(*c, *target - 3.0 * dir)) continue;  // would start inside
+      if (inside(c, target - 3.0 * dir)) continue;  // would start inside
       ++tried;
-      drops.push_back(drop(*c, *target, dir, 5.0));
+      drops.push_back(drop(c, target, dir, 5.0));
       inside_count += drops.back().ended_inside ? 1 : 0;
       missed += drops.back().hit ? 0 : 1;
     }
@@ -242,25 +234,28 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
                               "through without a response",
                               tried, inside_count, missed));
   });
+  return drops;
+}
 
-  // A normal impact: the drop whose velocity came back antiparallel.
-  const Drop* normal = nullptr;
+// A normal impact: the drop whose velocity came back antiparallel, else
+// one that stopped (perfectly inelastic); null if none.
+const Drop* normal_impact(const std::vector<Drop>& drops) {
   for (const auto& dr : drops) {
-    if (dr.hit && dr.v_out.norm() > 0 && dr.v_out.normalized().dot(-dr.direction) > 1 - 1e-12)
-      normal = &dr;
-    if (normal) break;
-  }
-  if (!normal) {
-    for (const auto& dr : drops) {
-      if (dr.hit && dr.v_out.norm() == 0) normal = &dr;  // perfectly inelastic
-      if (normal) break;
+    if (dr.hit && dr.v_out.norm() > 0 && dr.v_out.normalized().dot(-dr.direction) > 1 - 1e-12) {
+      return &dr;
     }
   }
-  if (!normal) {
-    out.push_back(
-        result("collider.restitution", false, 0, 0, "no axis-aligned drop was a normal impact"));
-    return;
+  for (const auto& dr : drops) {
+    if (dr.hit && dr.v_out.norm() == 0) return &dr;
   }
+  return nullptr;
+}
+
+// Restitution, no tangential change without friction, contact forces that
+// only cancel a push into the surface.
+void impact_checks(Collider& c, const PluginDescriptor& d, const Params& params,
+                   const std::vector<Drop>& drops, const Drop* normal,
+                   std::vector<CheckResult>& out) {
   const Vec3 n = -normal->direction;  // outward normal at the contact point
 
   guarded(out, "collider.restitution", [&] {
@@ -286,7 +281,7 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
     s.x.col(0) = dr.contact_point + 1e-3 * dr.direction;
     const Vec3 before = s.x.col(0);
     MutableParticleView view = s.mutable_view();
-    c->respond(view, 1e-3);
+    c.respond(view, 1e-3);
     const Vec3 moved = Vec3(s.x.col(0)) - before;
     if (moved.norm() <= kInsideTolerance) return std::nullopt;
     return moved.normalized();
@@ -318,13 +313,47 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
       Matrix3X f(3, 1);
       f.col(0) = 10.0 * push * n + 3.0 * t;
       const Vec3 expected = push < 0 ? Vec3(3.0 * t) : Vec3(f.col(0));
-      c->apply_contact_forces(s.view(), f);
+      c.apply_contact_forces(s.view(), f);
       worst = std::max(worst, (Vec3(f.col(0)) - expected).norm());
     }
     return result("collider.contact_force_normal_only", worst <= 1e-12 * 10.0, worst, 1e-12 * 10.0,
                   "resting on the surface: pushing 10 N in + 3 N along -> 3 N along; pulling "
                   "unchanged; error, N");
   });
+}
+
+}  // namespace
+
+void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
+  std::mt19937_64 rng(o.seed);
+  const State home = random_state(rng);
+  Params params = sample_params(d, kParticles);
+  // Frictionless, so that the tangential check applies.
+  for (const auto& spec : d.params) {
+    if (spec.name == "friction" && spec.type == ParamType::Real) params.set("friction", 0.0);
+  }
+  auto make = [&] {
+    return std::shared_ptr<Collider>(d.create_collider(params, context_of(home)));
+  };
+  std::shared_ptr<Collider> c;
+  guarded(out, "construct.defaults", [&] {
+    c = make();
+    return result("construct.defaults", c != nullptr, c ? 1 : 0, 1,
+                  c ? "created with defaults" : "factory returned null");
+  });
+  if (!c) return;
+
+  basic_collider_checks(*c, make, rng, home, out);
+  const std::optional<Vec3> target = find_obstacle(*c, out);
+  if (!target) return;
+  const std::vector<Drop> drops = drop_checks(*c, *target, out);
+  const Drop* normal = normal_impact(drops);
+  if (!normal) {
+    out.push_back(
+        result("collider.restitution", false, 0, 0, "no axis-aligned drop was a normal impact"));
+    return;
+  }
+  impact_checks(*c, d, params, drops, normal, out);
 }
 
 }  // namespace pdyn::conformance::detail

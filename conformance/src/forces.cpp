@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <pdyn/local_force.hpp>
 #include <random>
@@ -35,37 +36,37 @@ class DenseSink final : public JacobianSink {
 
 }  // namespace
 
-void force_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
-  std::mt19937_64 rng(o.seed);
-  const State home = random_state(rng);
-  const Params params = sample_params(d, kParticles);
-  auto make = [&] { return std::shared_ptr<Force>(d.create_force(params, context_of(home))); };
+namespace {
 
-  std::shared_ptr<Force> force;
-  guarded(out, "construct.defaults", [&] {
-    force = make();
-    return result("construct.defaults", force != nullptr, force ? 1 : 0, 1,
-                  force ? "created with defaults and sample values of required parameters"
-                        : "factory returned null");
-  });
-  if (!force) return;
+// What each group of force checks gets: the plugin, the object made with
+// the sample parameters, its home state, and the one random sequence the
+// groups draw from in turn (so a seed gives the same states as ever).
+struct ForceCase {
+  const PluginDescriptor& d;
+  std::mt19937_64& rng;
+  const State& home;
+  Force& force;
+  std::function<std::shared_ptr<Force>()> make;  // a second object, same parameters
+};
 
+// Determinism, a read-only state, adding into f, finite values.
+void basic_checks(ForceCase& c, std::vector<CheckResult>& out) {
   guarded(out, "deterministic", [&] {
-    const Matrix3X a = forces_of(*force, home), b = forces_of(*force, home);
-    const Matrix3X c = forces_of(*make(), home);
-    const bool same = bit_equal(a, b) && bit_equal(a, c);
-    return result("deterministic", same, std::max(max_abs(a - b), max_abs(a - c)), 0,
+    const Matrix3X a = forces_of(c.force, c.home), b = forces_of(c.force, c.home);
+    const Matrix3X other = forces_of(*c.make(), c.home);
+    const bool same = bit_equal(a, b) && bit_equal(a, other);
+    return result("deterministic", same, std::max(max_abs(a - b), max_abs(a - other)), 0,
                   "same state twice, and a second object: bit-identical forces");
   });
 
   guarded(out, "read_only_state", [&] {
-    State s = home;
+    State s = c.home;
     const State before = s;
     Matrix3X f = Matrix3X::Zero(3, s.size());
-    force->add_forces(s.view(), f);
-    (void)force->potential_energy(s.view());
+    c.force.add_forces(s.view(), f);
+    (void)c.force.potential_energy(s.view());
     DenseSink sink(s.size());
-    (void)force->add_jacobians(s.view(), sink);
+    (void)c.force.add_jacobians(s.view(), sink);
     const bool same = bit_equal(s.x, before.x) && bit_equal(s.v, before.v) &&
                       std::memcmp(s.mass.data(), before.mass.data(),
                                   sizeof(double) * static_cast<std::size_t>(s.size())) == 0;
@@ -75,11 +76,11 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
 
   guarded(out, "adds_only", [&] {
     // Another force's contribution is already in f: it must stay there.
-    Matrix3X base = Matrix3X::Zero(3, home.size());
+    Matrix3X base = Matrix3X::Zero(3, c.home.size());
     for (Index i = 0; i < base.cols(); ++i) base.col(i) = Vec3(1.0 + i, -2.0, 3.0 - i);
     Matrix3X f = base;
-    force->add_forces(home.view(), f);
-    const Matrix3X alone = forces_of(*force, home);
+    c.force.add_forces(c.home.view(), f);
+    const Matrix3X alone = forces_of(c.force, c.home);
     const double err = max_abs(f - base - alone);
     const double bound = 1e-12 * (max_abs(alone) + max_abs(base));
     return result("adds_only", err <= bound, err, bound,
@@ -89,28 +90,31 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
   guarded(out, "finite_on_degenerate", [&] {
     std::size_t bad = 0;
     std::string where;
-    for (const auto& [label, s] : degenerate_states(rng)) {
-      if (d.force_traits.singular && label.rfind("coincident", 0) == 0) continue;
-      const Matrix3X f = forces_of(*force, s);
+    for (const auto& [label, s] : degenerate_states(c.rng)) {
+      if (c.d.force_traits.singular && label.rfind("coincident", 0) == 0) continue;
+      const Matrix3X f = forces_of(c.force, s);
       std::size_t n = non_finite(f);
-      if (const auto u = force->potential_energy(s.view()); u && !std::isfinite(*u)) ++n;
+      if (const auto u = c.force.potential_energy(s.view()); u && !std::isfinite(*u)) ++n;
       if (n > 0 && where.empty()) where = label;
       bad += n;
     }
     return result("finite_on_degenerate", bad == 0, static_cast<double>(bad), 0,
-                  bad == 0 ? (d.force_traits.singular
+                  bad == 0 ? (c.d.force_traits.singular
                                   ? "at rest, far (declared singular: not coincident): no "
                                     "NaN/inf in f or U"
                                   : "coincident, at rest, far: no NaN/inf in f or U")
                            : fmt::format("non-finite values, first on: {}", where));
   });
+}
 
-  if (d.force_traits.internal) {
+// Newton's third law and translation invariance, for forces declared internal.
+void internal_checks(ForceCase& c, std::vector<CheckResult>& out) {
+  if (c.d.force_traits.internal) {
     guarded(out, "force.net_force_zero", [&] {
       double worst = 0, bound = 0;
       for (int trial = 0; trial < 5; ++trial) {
-        const State s = trial == 0 ? home : random_state(rng);
-        const Matrix3X f = forces_of(*force, s);
+        const State s = trial == 0 ? c.home : random_state(c.rng);
+        const Matrix3X f = forces_of(c.force, s);
         worst = std::max(worst, f.rowwise().sum().norm());
         bound = std::max(bound, 1e-10 * (f.colwise().norm().sum() + 1e-300));
       }
@@ -120,8 +124,8 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
     guarded(out, "force.net_torque_zero", [&] {
       double worst = 0, bound = 0;
       for (int trial = 0; trial < 5; ++trial) {
-        const State s = trial == 0 ? home : random_state(rng);
-        const Matrix3X f = forces_of(*force, s);
+        const State s = trial == 0 ? c.home : random_state(c.rng);
+        const Matrix3X f = forces_of(c.force, s);
         Vec3 torque = Vec3::Zero();
         double scale = 0;
         for (Index i = 0; i < s.size(); ++i) {
@@ -135,9 +139,9 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
                     "declared internal: |sum x_i x f_i|, N m, on 5 random states");
     });
     guarded(out, "force.translation_invariant", [&] {
-      State moved = home;
+      State moved = c.home;
       moved.x.colwise() += Vec3(10.0, -20.0, 30.0);
-      const Matrix3X a = forces_of(*force, home), b = forces_of(*force, moved);
+      const Matrix3X a = forces_of(c.force, c.home), b = forces_of(c.force, moved);
       const double err = max_abs(a - b), bound = 1e-9 * (max_abs(a) + 1.0);
       return result("force.translation_invariant", err <= bound, err, bound,
                     "declared internal: |f(x + (10,-20,30) m) - f(x)|_max, N");
@@ -145,22 +149,25 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
   } else {
     out.push_back(skip("force.net_force_zero", "not declared internal"));
   }
+}
 
+// f = -grad U and analytic Jacobians, each against central differences.
+void derivative_checks(ForceCase& c, std::vector<CheckResult>& out) {
   guarded(out, "force.gradient_of_potential", [&] {
-    State s = home;
+    State s = c.home;
     s.v.setZero();  // damping has no potential: compare the conservative part
-    if (!force->potential_energy(s.view())) {
+    if (!c.force.potential_energy(s.view())) {
       return skip("force.gradient_of_potential", "reports no potential energy");
     }
-    const Matrix3X f = forces_of(*force, s);
+    const Matrix3X f = forces_of(c.force, s);
     double err = 0;
     for (Index i = 0; i < s.size(); ++i) {
       for (int k = 0; k < 3; ++k) {
         const double x0 = s.x(k, i), h = 1e-5 * std::max(1.0, std::abs(x0));
         s.x(k, i) = x0 + h;
-        const double up = *force->potential_energy(s.view());
+        const double up = *c.force.potential_energy(s.view());
         s.x(k, i) = x0 - h;
-        const double down = *force->potential_energy(s.view());
+        const double down = *c.force.potential_energy(s.view());
         s.x(k, i) = x0;
         err = std::max(err, std::abs(f(k, i) + (up - down) / (2 * h)));
       }
@@ -174,33 +181,33 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
     // At the construction state with v = 0 for df/dx, random v for df/dv:
     // where the approximations implicit solvers allow (e.g. Baraff & Witkin's
     // dropped damping term) vanish, analytic Jacobians must be exact.
-    State s = home;
+    State s = c.home;
     s.v.setZero();
     DenseSink sink(s.size());
-    if (!force->add_jacobians(s.view(), sink)) {
+    if (!c.force.add_jacobians(s.view(), sink)) {
       return skip("force.jacobians", "no analytic Jacobians");
     }
-    State sv = home;
+    State sv = c.home;
     DenseSink sink_v(sv.size());
-    force->add_jacobians(sv.view(), sink_v);
+    c.force.add_jacobians(sv.view(), sink_v);
     const Index n3 = 3 * s.size();
     Eigen::MatrixXd fdx(n3, n3), fdv(n3, n3);
-    for (Index c = 0; c < n3; ++c) {
-      const Index i = c / 3;
-      const int k = static_cast<int>(c % 3);
+    for (Index col = 0; col < n3; ++col) {
+      const Index i = col / 3;
+      const int k = static_cast<int>(col % 3);
       const double h = 1e-6;
       auto column = [&](State& st, Matrix3X& field) {
         const double x0 = field(k, i);
         field(k, i) = x0 + h;
-        const Matrix3X up = forces_of(*force, st);
+        const Matrix3X up = forces_of(c.force, st);
         field(k, i) = x0 - h;
-        const Matrix3X down = forces_of(*force, st);
+        const Matrix3X down = forces_of(c.force, st);
         field(k, i) = x0;
         const Matrix3X diff = (up - down) / (2 * h);
         return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(diff.data(), n3));
       };
-      fdx.col(c) = column(s, s.x);
-      fdv.col(c) = column(sv, sv.v);
+      fdx.col(col) = column(s, s.x);
+      fdv.col(col) = column(sv, sv.v);
     }
     const double err = std::max((fdx - sink.dfdx).cwiseAbs().maxCoeff(),
                                 (fdv - sink_v.dfdv).cwiseAbs().maxCoeff());
@@ -209,13 +216,17 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
     return result("force.jacobians", err <= bound, err, bound,
                   "|df/dx, df/dv - central differences (h = 1e-6)|_max");
   });
+}
 
-  if (d.force_traits.dissipative) {
+// What the force declares: dissipation, independence of velocity or time,
+// local action range by range.
+void claim_checks(ForceCase& c, std::vector<CheckResult>& out) {
+  if (c.d.force_traits.dissipative) {
     guarded(out, "force.dissipative", [&] {
       double worst = -1e300;
       for (int trial = 0; trial < 20; ++trial) {
-        const State s = random_state(rng);
-        const Matrix3X f = forces_of(*force, s);
+        const State s = random_state(c.rng);
+        const Matrix3X f = forces_of(c.force, s);
         worst = std::max(worst, (f.cwiseProduct(s.v)).sum());
       }
       return result("force.dissipative", worst <= 1e-12, worst, 1e-12,
@@ -227,16 +238,16 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
 
   // A claim of independence lets a solver reuse forces evaluated at other
   // velocities or another time (verlet): it must hold bit for bit.
-  const StateDependence claim = force->dependence();
+  const StateDependence claim = c.force.dependence();
   if (!claim.velocity || !claim.time) {
     guarded(out, "force.dependence", [&] {
-      const Matrix3X f0 = forces_of(*force, home);
+      const Matrix3X f0 = forces_of(c.force, c.home);
       double worst = 0.0;
       for (int trial = 0; trial < 5; ++trial) {
-        State s = home;
-        if (!claim.velocity) s.v = random_state(rng).v;
-        if (!claim.time) s.t = home.t + 1.0 + trial;
-        const Matrix3X f = forces_of(*force, s);
+        State s = c.home;
+        if (!claim.velocity) s.v = random_state(c.rng).v;
+        if (!claim.time) s.t = c.home.t + 1.0 + trial;
+        const Matrix3X f = forces_of(c.force, s);
         worst = std::max(worst, bits_apart(f, f0));
       }
       const char* what = claim.velocity ? "time: the same bits at 5 other times"
@@ -252,15 +263,15 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
 
   // The kernel adds a local force range by range inside its gather pass:
   // that must give add_forces' bits, however the particles are split.
-  if (LocalForce* local = local_force(*force); local != nullptr && local->acts_locally()) {
+  if (LocalForce* local = local_force(c.force); local != nullptr && local->acts_locally()) {
     guarded(out, "force.local_range", [&] {
-      const Matrix3X whole = forces_of(*force, home);
+      const Matrix3X whole = forces_of(c.force, c.home);
       double worst = 0.0;
-      const Index n = home.size();
+      const Index n = c.home.size();
       for (const Index cut : {Index{1}, n / 3, n - 1}) {
         Matrix3X f = Matrix3X::Zero(3, n);
-        local->add_forces_range(home.view(), f, cut, n);
-        local->add_forces_range(home.view(), f, 0, cut);
+        local->add_forces_range(c.home.view(), f, cut, n);
+        local->add_forces_range(c.home.view(), f, 0, cut);
         worst = std::max(worst, bits_apart(f, whole));
       }
       return result("force.local_range", worst == 0.0, worst, 0,
@@ -269,7 +280,30 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
   } else {
     out.push_back(skip("force.local_range", "no LocalForce interface"));
   }
+}
 
+}  // namespace
+
+void force_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
+  std::mt19937_64 rng(o.seed);
+  const State home = random_state(rng);
+  const Params params = sample_params(d, kParticles);
+  auto make = [&] { return std::shared_ptr<Force>(d.create_force(params, context_of(home))); };
+
+  std::shared_ptr<Force> force;
+  guarded(out, "construct.defaults", [&] {
+    force = make();
+    return result("construct.defaults", force != nullptr, force ? 1 : 0, 1,
+                  force ? "created with defaults and sample values of required parameters"
+                        : "factory returned null");
+  });
+  if (!force) return;
+
+  ForceCase c{d, rng, home, *force, make};
+  basic_checks(c, out);
+  internal_checks(c, out);
+  derivative_checks(c, out);
+  claim_checks(c, out);
   pair_checks(d, params, *force, rng, out);
 }
 

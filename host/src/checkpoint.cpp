@@ -191,7 +191,10 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   }
 }
 
-Checkpoint read_checkpoint(const fs::path& path) {
+namespace {
+
+// The whole file, or a CheckpointError saying why it cannot be read.
+std::string checkpoint_bytes(const fs::path& path) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   std::string why;
@@ -215,8 +218,13 @@ Checkpoint read_checkpoint(const fs::path& path) {
   }
   std::ostringstream ss;
   ss << in.rdbuf();
-  const std::string data = ss.str();
-  const std::string file = path.string();
+  return ss.str();
+}
+
+// The payload after the header's checks (magic, format version, length)
+// and the CRC's; `version` is the file's format version.
+std::string checked_payload(const std::string& data, const std::string& file,
+                            std::uint32_t& version) {
   constexpr std::size_t kHeader = sizeof(kMagic) + sizeof(std::uint32_t) + sizeof(std::uint64_t);
   if (data.empty()) {
     throw CheckpointError(
@@ -236,7 +244,6 @@ Checkpoint read_checkpoint(const fs::path& path) {
                     "{}-byte header)",
                     file, data.size(), kHeader));
   }
-  std::uint32_t version = 0;
   std::uint64_t length = 0;
   std::memcpy(&version, data.data() + sizeof(kMagic), sizeof(version));
   std::memcpy(&length, data.data() + sizeof(kMagic) + sizeof(version), sizeof(length));
@@ -274,6 +281,59 @@ Checkpoint read_checkpoint(const fs::path& path) {
                     "(expected CRC-32 {:08x}, computed {:08x})",
                     file, stored, crc32(payload)));
   }
+  return payload;
+}
+
+// The plugins' saved states, then the writers' marks (format 4 on; before
+// that, the frames and energy files' (bytes, CRC) pairs).
+void read_plugins_and_outputs(ByteReader& r, Checkpoint& c, std::uint32_t version,
+                              std::size_t payload_size) {
+  const auto count = r.pod<std::uint64_t>();
+  if (count > payload_size) r.fail("plugin count larger than the file");
+  for (std::uint64_t i = 0; i < count; ++i) {
+    std::string label = r.bytes();
+    std::string bytes = r.bytes();
+    c.plugin_states.emplace_back(std::move(label),
+                                 std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
+  }
+  if (version >= 4) {
+    const auto writers = r.pod<std::uint64_t>();
+    if (writers > payload_size) r.fail("writer count larger than the file");
+    for (std::uint64_t i = 0; i < writers; ++i) {
+      std::string written = r.bytes();
+      std::string mark = r.bytes();
+      const auto wrote = r.pod<std::int8_t>();
+      if (wrote < -1 || wrote > 1) r.fail("a flag is neither -1, 0 nor 1");
+      WriterMark w{
+          std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end()), wrote, {}};
+      if (version >= 5) {
+        const auto pending = r.pod<std::uint64_t>();
+        if (pending > payload_size) r.fail("pending frame count larger than the file");
+        for (std::uint64_t k = 0; k < pending; ++k) {
+          std::string frame = r.bytes();
+          w.pending.emplace_back(frame.begin(), frame.end());
+        }
+      }
+      c.outputs.push_back(std::move(w));
+    }
+  } else {
+    for (int k = 0; k < 2; ++k) {  // frames, energy
+      std::string written = r.bytes();
+      FileMark m;
+      m.bytes = r.pod<std::uint64_t>();
+      m.crc = r.pod<std::uint32_t>();
+      if (!written.empty()) c.outputs.push_back({std::move(written), m.encode(), -1, {}});
+    }
+  }
+}
+
+}  // namespace
+
+Checkpoint read_checkpoint(const fs::path& path) {
+  const std::string data = checkpoint_bytes(path);
+  const std::string file = path.string();
+  std::uint32_t version = 0;
+  const std::string payload = checked_payload(data, file, version);
   ByteReader r(payload, file);
   Checkpoint c;
   c.scene_file = r.bytes();
@@ -298,43 +358,7 @@ Checkpoint read_checkpoint(const fs::path& path) {
       for (auto& k : image) k = r.pod<std::int32_t>();
     }
   }
-  const auto count = r.pod<std::uint64_t>();
-  if (count > payload.size()) r.fail("plugin count larger than the file");
-  for (std::uint64_t i = 0; i < count; ++i) {
-    std::string label = r.bytes();
-    std::string bytes = r.bytes();
-    c.plugin_states.emplace_back(std::move(label),
-                                 std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
-  }
-  if (version >= 4) {
-    const auto writers = r.pod<std::uint64_t>();
-    if (writers > payload.size()) r.fail("writer count larger than the file");
-    for (std::uint64_t i = 0; i < writers; ++i) {
-      std::string written = r.bytes();
-      std::string mark = r.bytes();
-      const auto wrote = r.pod<std::int8_t>();
-      if (wrote < -1 || wrote > 1) r.fail("a flag is neither -1, 0 nor 1");
-      WriterMark w{
-          std::move(written), std::vector<std::uint8_t>(mark.begin(), mark.end()), wrote, {}};
-      if (version >= 5) {
-        const auto pending = r.pod<std::uint64_t>();
-        if (pending > payload.size()) r.fail("pending frame count larger than the file");
-        for (std::uint64_t k = 0; k < pending; ++k) {
-          std::string frame = r.bytes();
-          w.pending.emplace_back(frame.begin(), frame.end());
-        }
-      }
-      c.outputs.push_back(std::move(w));
-    }
-  } else {
-    for (int k = 0; k < 2; ++k) {  // frames, energy
-      std::string written = r.bytes();
-      FileMark m;
-      m.bytes = r.pod<std::uint64_t>();
-      m.crc = r.pod<std::uint32_t>();
-      if (!written.empty()) c.outputs.push_back({std::move(written), m.encode(), -1, {}});
-    }
-  }
+  read_plugins_and_outputs(r, c, version, payload.size());
   if (!r.done()) r.fail("unexpected bytes after the last field");
   return c;
 }

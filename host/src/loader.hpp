@@ -134,6 +134,14 @@ class Loader final : public BuilderHost {
   void add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
                  const Params& generated, const Params& defaults, bool create) override;
 
+  // ---- the steps of load() ----
+  YAML::Node parse(const std::string& text);
+  void read_solver(const YAML::Node& root, std::vector<PendingPlugin>& solvers);
+  void assemble_system(Scene& scene);
+  void create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
+                      std::vector<PendingPlugin>& colliders,
+                      const std::vector<PendingPlugin>& solvers);
+
   // ---- sections ----
   void apply_overrides(YAML::Node& root);
   void read_simulation(const YAML::Node& n, Scene& scene);

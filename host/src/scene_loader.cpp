@@ -512,9 +512,8 @@ auto Loader::create(const PendingPlugin& p, Create&& create_fn) -> decltype(crea
   return nullptr;
 }
 
-Scene Loader::load(const std::string& text) {
-  Scene scene;
-  scene.file = file_;
+// The scene's text as YAML: a mapping, or located problems.
+YAML::Node Loader::parse(const std::string& text) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -546,30 +545,29 @@ Scene Loader::load(const std::string& text) {
           "and optionally output, forces, colliders)");
     fail();
   }
-  apply_overrides(root);
-  if (!diags_.empty()) fail();
-  root_.reset(root);
-  {
-    // What a checkpoint must match: the scene after overrides, less the run
-    // length, which a resumed run may extend, and the thread count.
-    YAML::Node canonical = YAML::Clone(root);
-    if (canonical["simulation"].IsMap()) {
-      canonical["simulation"].remove("steps");
-      canonical["simulation"].remove("duration");
-      canonical["simulation"].remove("threads");  // bit-identical results for any count
-    }
-    YAML::Emitter emitter;
-    emitter << canonical;
-    scene.canonical_text = emitter.c_str();
-  }
+  return root;
+}
 
-  check_keys(root, "", {"simulation", "output", "checkpoint", "particles", "forces", "colliders"});
-  read_simulation(root["simulation"], scene);
-  read_particles(root["particles"]);
-  check_inside_box();
-  std::vector<PendingPlugin> forces, colliders, solvers;
-  read_plugin_list(root["forces"], "forces", PluginKind::Force, forces);
-  read_plugin_list(root["colliders"], "colliders", PluginKind::Collider, colliders);
+namespace {
+
+// What a checkpoint must match: the scene after overrides, less the run
+// length, which a resumed run may extend, and the thread count.
+std::string canonical_text(const YAML::Node& root) {
+  YAML::Node canonical = YAML::Clone(root);
+  if (canonical["simulation"].IsMap()) {
+    canonical["simulation"].remove("steps");
+    canonical["simulation"].remove("duration");
+    canonical["simulation"].remove("threads");  // bit-identical results for any count
+  }
+  YAML::Emitter emitter;
+  emitter << canonical;
+  return emitter.c_str();
+}
+
+}  // namespace
+
+// simulation.solver, or the default rk4 with its defaults.
+void Loader::read_solver(const YAML::Node& root, std::vector<PendingPlugin>& solvers) {
   const YAML::Node sim = root["simulation"];
   if (sim.IsMap() && sim["solver"].IsDefined() && !sim["solver"].IsNull()) {
     const YAML::Node s = sim["solver"];
@@ -597,11 +595,12 @@ Scene Loader::load(const std::string& text) {
             "simulation.solver: { type: NAME })");
     }
   }
-  read_output(root["output"], root["checkpoint"], scene);
-  if (!diags_.empty()) fail();
+}
 
-  // Assemble. Everything is valid as far as the descriptors can tell; the
-  // factories may still refuse values (ParamError), reported the same way.
+// The System with the particles, the box, radii, types and image counts the
+// sections read: before any force or collider exists, so that their
+// factories see all of it in SceneContext::particles.
+void Loader::assemble_system(Scene& scene) {
   const Index n = static_cast<Index>(x_.size());
   Matrix3X x(3, n), v(3, n);
   Eigen::VectorXd m(n);
@@ -629,6 +628,14 @@ Scene Loader::load(const std::string& text) {
     type_.resize(static_cast<std::size_t>(n), 0);
     SystemAssembly(*scene.system).set_types(std::move(type_));
   }
+}
+
+// The plugin objects, created in scene order and added to the System; each
+// object's parameters move into scene.uses once it exists (no copy of a
+// large spring list).
+void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
+                            std::vector<PendingPlugin>& colliders,
+                            const std::vector<PendingPlugin>& solvers) {
   scene.groups = groups_;
   const SceneContext ctx{scene.system->view(), &scene.groups};
   auto label = [&](const PendingPlugin& p) {
@@ -664,6 +671,32 @@ Scene Loader::load(const std::string& text) {
     scene.libraries[label(p)] = p.record->library;
   }
   for (const auto& w : scene.output.writers) scene.libraries[w.label] = w.record.library;
+}
+
+Scene Loader::load(const std::string& text) {
+  Scene scene;
+  scene.file = file_;
+  YAML::Node root = parse(text);
+  apply_overrides(root);
+  if (!diags_.empty()) fail();
+  root_.reset(root);
+  scene.canonical_text = canonical_text(root);
+
+  check_keys(root, "", {"simulation", "output", "checkpoint", "particles", "forces", "colliders"});
+  read_simulation(root["simulation"], scene);
+  read_particles(root["particles"]);
+  check_inside_box();
+  std::vector<PendingPlugin> forces, colliders, solvers;
+  read_plugin_list(root["forces"], "forces", PluginKind::Force, forces);
+  read_plugin_list(root["colliders"], "colliders", PluginKind::Collider, colliders);
+  read_solver(root, solvers);
+  read_output(root["output"], root["checkpoint"], scene);
+  if (!diags_.empty()) fail();
+
+  // Assemble. Everything is valid as far as the descriptors can tell; the
+  // factories may still refuse values (ParamError), reported the same way.
+  assemble_system(scene);
+  create_plugins(scene, forces, colliders, solvers);
   if (!diags_.empty()) fail();
   return scene;
 }

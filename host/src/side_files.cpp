@@ -73,6 +73,140 @@ std::string column_count_message(std::size_t got, std::size_t want, const std::s
                      count_of(static_cast<long long>(got), "field"), want, want, header);
 }
 
+// A particle CSV file read row by row: the header fixes which field holds
+// which column; each record is checked and appended to `rows`.
+class ParticleCsv {
+ public:
+  enum Col { X, Y, Z, VX, VY, VZ, MASS, RADIUS, FIXED, TYPE, N_COLS };
+
+  ParticleCsv(Problems& problems, std::size_t estimate) : problems_(problems), estimate_(estimate) {
+    at_.fill(-1);
+    rows.x.reserve(estimate);
+    rows.v.reserve(estimate);
+    rows.mass.reserve(estimate);
+    rows.fixed.reserve(estimate);
+  }
+
+  bool header(std::size_t line, const std::vector<Field>& fields) {
+    width_ = fields.size();
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+      header_text_ += (k ? "," : "") + std::string(fields[k].text);
+      int c = 0;
+      while (c < N_COLS && fields[k].text != kNames[c]) ++c;
+      if (c == N_COLS) {
+        problems_.add(line, fields[k].column,
+                      fmt::format("unknown column {} (expected x, y, z, vx, vy, vz, mass, fixed, "
+                                  "radius, type)",
+                                  quoted(fields[k].text)));
+      } else if (at_[c] >= 0) {
+        problems_.add(
+            line, fields[k].column,
+            fmt::format("column '{}' appears twice (expected each column once)", kNames[c]));
+      } else {
+        at_[c] = static_cast<int>(k);
+      }
+    }
+    for (int c : {X, Y, Z, MASS}) {
+      if (at_[c] < 0) {
+        problems_.add(line, 1,
+                      fmt::format("the header has no column '{}' (expected x,y,z[,vx,vy,vz],mass"
+                                  "[,fixed][,radius][,type])",
+                                  kNames[c]));
+      }
+    }
+    const int velocities = (at_[VX] >= 0) + (at_[VY] >= 0) + (at_[VZ] >= 0);
+    if (velocities != 0 && velocities != 3) {
+      problems_.add(line, 1, "the header has only some of vx, vy, vz (expected all three or none)");
+    }
+    if (!problems_.any()) {
+      if (at_[RADIUS] >= 0) rows.radius.reserve(estimate_);
+      if (at_[TYPE] >= 0) rows.type.reserve(estimate_);
+    }
+    return !problems_.any();
+  }
+
+  void row(std::size_t line, const std::vector<Field>& fields) {
+    if (fields.size() != width_) {
+      problems_.add(line, fields.back().column + fields.back().text.size(),
+                    column_count_message(fields.size(), width_, header_text_));
+      return;
+    }
+    bool ok = true;
+    double value[N_COLS] = {};
+    for (int c = X; c <= RADIUS; ++c) {
+      if (at_[c] < 0) continue;
+      const auto x =
+          parse_real(fields[static_cast<std::size_t>(at_[c])], line, kNames[c], problems_);
+      ok = ok && x;
+      if (x) value[c] = *x;
+    }
+    if (ok && !(value[MASS] > 0.0)) {
+      problems_.add(line, fields[static_cast<std::size_t>(at_[MASS])].column,
+                    fmt::format("mass: {} is not positive (expected a mass > 0 kg)",
+                                fields[static_cast<std::size_t>(at_[MASS])].text));
+      ok = false;
+    }
+    if (at_[RADIUS] >= 0 && ok && !(value[RADIUS] >= 0.0)) {
+      const Field& f = fields[static_cast<std::size_t>(at_[RADIUS])];
+      problems_.add(line, f.column,
+                    fmt::format("radius: {} is negative (expected a radius >= 0 m)", f.text));
+      ok = false;
+    }
+    std::int32_t type = 0;
+    if (at_[TYPE] >= 0)
+      ok = read_type(fields[static_cast<std::size_t>(at_[TYPE])], line, type) && ok;
+    std::uint8_t fixed = 0;
+    if (at_[FIXED] >= 0) {
+      ok = read_fixed(fields[static_cast<std::size_t>(at_[FIXED])], line, fixed) && ok;
+    }
+    if (!ok) return;
+    rows.x.emplace_back(value[X], value[Y], value[Z]);
+    // A nailed particle does not move: its velocity is zeroed on assembly.
+    rows.v.emplace_back(value[VX], value[VY], value[VZ]);
+    rows.mass.push_back(value[MASS]);
+    rows.fixed.push_back(fixed);
+    if (at_[RADIUS] >= 0) rows.radius.push_back(value[RADIUS]);
+    if (at_[TYPE] >= 0) rows.type.push_back(type);
+  }
+
+  ParticleRows rows;
+
+ private:
+  static constexpr const char* kNames[N_COLS] = {"x",  "y",    "z",      "vx",    "vy",
+                                                 "vz", "mass", "radius", "fixed", "type"};
+
+  bool read_type(const Field& f, std::size_t line, std::int32_t& type) {
+    const long long t = text_file::to_number<long long>(f.text).value_or(-1);
+    if (t < 0 || t > std::numeric_limits<std::int32_t>::max()) {
+      problems_.add(line, f.column,
+                    fmt::format("type: {} is not a particle type (expected a whole number in "
+                                "[0, {}])",
+                                quoted(f.text), std::numeric_limits<std::int32_t>::max()));
+      return false;
+    }
+    type = static_cast<std::int32_t>(t);
+    return true;
+  }
+
+  bool read_fixed(const Field& f, std::size_t line, std::uint8_t& fixed) {
+    if (f.text == "1" || f.text == "true") {
+      fixed = 1;
+    } else if (!(f.text == "0" || f.text == "false")) {
+      problems_.add(
+          line, f.column,
+          fmt::format("fixed: {} is not a flag (expected 0, 1, true or false)", quoted(f.text)));
+      return false;
+    }
+    return true;
+  }
+
+  Problems& problems_;
+  std::size_t estimate_;
+  std::array<int, N_COLS> at_{};  // field index of each column, -1 if absent
+  std::size_t width_ = 0;
+  std::string header_text_;
+};
+
 }  // namespace
 
 std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
@@ -83,126 +217,20 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
     problems.add_file("cannot read the particle file (expected a readable CSV file)");
     return std::nullopt;
   }
-  enum Col { X, Y, Z, VX, VY, VZ, MASS, RADIUS, FIXED, TYPE, N_COLS };
-  static const char* const kNames[N_COLS] = {"x",  "y",    "z",      "vx",    "vy",
-                                             "vz", "mass", "radius", "fixed", "type"};
-  std::array<int, N_COLS> at{};  // field index of each column, -1 if absent
-  at.fill(-1);
-  std::size_t width = 0;
-  std::string header_text;
-  ParticleRows rows;
-  const std::size_t estimate = text->size() / 40;  // typical record length
-  rows.x.reserve(estimate);
-  rows.v.reserve(estimate);
-  rows.mass.reserve(estimate);
-  rows.fixed.reserve(estimate);
-  auto header = [&](std::size_t line, const std::vector<Field>& fields) {
-    width = fields.size();
-    for (std::size_t k = 0; k < fields.size(); ++k) {
-      header_text += (k ? "," : "") + std::string(fields[k].text);
-      int c = 0;
-      while (c < N_COLS && fields[k].text != kNames[c]) ++c;
-      if (c == N_COLS) {
-        problems.add(line, fields[k].column,
-                     fmt::format("unknown column {} (expected x, y, z, vx, vy, vz, mass, fixed, "
-                                 "radius, type)",
-                                 quoted(fields[k].text)));
-      } else if (at[c] >= 0) {
-        problems.add(
-            line, fields[k].column,
-            fmt::format("column '{}' appears twice (expected each column once)", kNames[c]));
-      } else {
-        at[c] = static_cast<int>(k);
-      }
-    }
-    for (int c : {X, Y, Z, MASS}) {
-      if (at[c] < 0) {
-        problems.add(line, 1,
-                     fmt::format("the header has no column '{}' (expected x,y,z[,vx,vy,vz],mass"
-                                 "[,fixed][,radius][,type])",
-                                 kNames[c]));
-      }
-    }
-    const int velocities = (at[VX] >= 0) + (at[VY] >= 0) + (at[VZ] >= 0);
-    if (velocities != 0 && velocities != 3) {
-      problems.add(line, 1, "the header has only some of vx, vy, vz (expected all three or none)");
-    }
-    if (!problems.any()) {
-      if (at[RADIUS] >= 0) rows.radius.reserve(estimate);
-      if (at[TYPE] >= 0) rows.type.reserve(estimate);
-    }
-    return !problems.any();
-  };
-  auto row = [&](std::size_t line, const std::vector<Field>& fields) {
-    if (fields.size() != width) {
-      problems.add(line, fields.back().column + fields.back().text.size(),
-                   column_count_message(fields.size(), width, header_text));
-      return;
-    }
-    bool ok = true;
-    double value[N_COLS] = {};
-    for (int c = X; c <= RADIUS; ++c) {
-      if (at[c] < 0) continue;
-      const auto x = parse_real(fields[static_cast<std::size_t>(at[c])], line, kNames[c], problems);
-      ok = ok && x;
-      if (x) value[c] = *x;
-    }
-    if (ok && !(value[MASS] > 0.0)) {
-      problems.add(line, fields[static_cast<std::size_t>(at[MASS])].column,
-                   fmt::format("mass: {} is not positive (expected a mass > 0 kg)",
-                               fields[static_cast<std::size_t>(at[MASS])].text));
-      ok = false;
-    }
-    if (at[RADIUS] >= 0 && ok && !(value[RADIUS] >= 0.0)) {
-      const Field& f = fields[static_cast<std::size_t>(at[RADIUS])];
-      problems.add(line, f.column,
-                   fmt::format("radius: {} is negative (expected a radius >= 0 m)", f.text));
-      ok = false;
-    }
-    std::int32_t type = 0;
-    if (at[TYPE] >= 0) {
-      const Field& f = fields[static_cast<std::size_t>(at[TYPE])];
-      const long long t = text_file::to_number<long long>(f.text).value_or(-1);
-      if (t < 0 || t > std::numeric_limits<std::int32_t>::max()) {
-        problems.add(line, f.column,
-                     fmt::format("type: {} is not a particle type (expected a whole number in "
-                                 "[0, {}])",
-                                 quoted(f.text), std::numeric_limits<std::int32_t>::max()));
-        ok = false;
-      }
-      type = static_cast<std::int32_t>(t);
-    }
-    std::uint8_t fixed = 0;
-    if (at[FIXED] >= 0) {
-      const Field& f = fields[static_cast<std::size_t>(at[FIXED])];
-      if (f.text == "1" || f.text == "true") {
-        fixed = 1;
-      } else if (!(f.text == "0" || f.text == "false")) {
-        problems.add(
-            line, f.column,
-            fmt::format("fixed: {} is not a flag (expected 0, 1, true or false)", quoted(f.text)));
-        ok = false;
-      }
-    }
-    if (!ok) return;
-    rows.x.emplace_back(value[X], value[Y], value[Z]);
-    // A nailed particle does not move: its velocity is zeroed on assembly.
-    rows.v.emplace_back(value[VX], value[VY], value[VZ]);
-    rows.mass.push_back(value[MASS]);
-    rows.fixed.push_back(fixed);
-    if (at[RADIUS] >= 0) rows.radius.push_back(value[RADIUS]);
-    if (at[TYPE] >= 0) rows.type.push_back(type);
-  };
-  for_each_row(*text, problems, header, row);
+  ParticleCsv csv(problems, text->size() / 40);  // typical record length
+  for_each_row(
+      *text, problems,
+      [&](std::size_t line, const std::vector<Field>& fields) { return csv.header(line, fields); },
+      [&](std::size_t line, const std::vector<Field>& fields) { csv.row(line, fields); });
   if (problems.any()) {
     problems.finish();
     return std::nullopt;
   }
-  if (rows.x.empty()) {
+  if (csv.rows.x.empty()) {
     problems.add_file("the file has a header but no particles (expected at least one record)");
     return std::nullopt;
   }
-  return rows;
+  return std::move(csv.rows);
 }
 
 template <std::size_t K>

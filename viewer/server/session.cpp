@@ -260,6 +260,91 @@ std::pair<double, double> Session::default_mouse_spring(Index i) const {
   return {ks, kd};
 }
 
+// `reload`: the scene file read again; on any problem the running
+// simulation is kept and the client told why.
+void Session::reload() {
+  try {
+    load(true);
+  } catch (const SceneError& e) {
+    throw CommandError("reload: the scene has errors; the running simulation is kept\n" +
+                       joined(e));
+  } catch (const std::exception& e) {
+    throw CommandError(fmt::format("reload: {}; the running simulation is kept", e.what()));
+  }
+}
+
+// `solver`: the named solver plugin with its defaults replaces the scene's.
+void Session::choose_solver(const std::string& name) {
+  System& sys = *scene_.system;
+  const PluginRecord* r = registry_->find(PluginKind::Solver, name);
+  if (!r) {
+    std::string names;
+    for (const auto& n : registry_->names(PluginKind::Solver))
+      names += (names.empty() ? "" : ", ") + n;
+    throw CommandError(fmt::format("solver: there is no solver plugin '{}' (expected one of: {})",
+                                   name.size() > 40 ? name.substr(0, 40) + "..." : name, names));
+  }
+  Params p = defaults_of(*r, {});
+  const SceneContext ctx{sys.view(), &scene_.groups};
+  scene_.solver = registry_->create_solver(*r, p, ctx);
+  scene_.solver_name = r->descriptor->name;
+  scene_.solver_label = fmt::format("{} (chosen in the viewer)", scene_.solver_name);
+  scene_.solver_params = std::move(p);
+  scene_.libraries[scene_.solver_label] = r->library;
+}
+
+// `drag`: a mouse spring from the client's pointer to a particle (an anchor
+// whose target the pointer moves), replacing the client's earlier one.
+void Session::start_drag(const Command& c, int client) {
+  System& sys = *scene_.system;
+  check_particle(c, "id", *c.id);
+  if (auto it = drags_.find(client); it != drags_.end()) {
+    SystemAssembly(sys).remove_force(it->second.force.get());
+    drags_.erase(it);
+  }
+  const auto [ks0, kd0] = default_mouse_spring(*c.id);
+  Params p;
+  p.set("ids", std::vector<Index>{*c.id});
+  p.set("points", std::vector<Vec3>{*c.point});
+  p.set("ks", c.ks.value_or(ks0));
+  p.set("kd", c.kd.value_or(kd0));
+  const std::string label = fmt::format("mouse spring (viewer client {})", client);
+  auto force = make_force("anchor", std::move(p), label);
+  if (!movable_targets(*force)) {
+    throw CommandError(
+        "drag: the 'anchor' plugin on the plugin path cannot move its target "
+        "(expected it to implement pdyn::MovableTargets)");
+  }
+  SystemAssembly(sys).add_force(force, label);
+  drags_[client] = {force, *c.id};
+  refresh_solver();
+}
+
+// `attach`: a spring between two particles, at rest at their distance.
+void Session::attach(const Command& c) {
+  System& sys = *scene_.system;
+  check_particle(c, "a", *c.a);
+  check_particle(c, "b", *c.b);
+  if (*c.a == *c.b) {
+    throw CommandError(fmt::format(
+        "attach: fields 'a' and 'b' are both particle {} (expected two different particles)",
+        *c.a));
+  }
+  // Rest length = the current distance: the new spring starts at rest.
+  const double rest = (sys.positions().col(*c.a) - sys.positions().col(*c.b)).norm();
+  Params p;
+  p.set("pairs", std::vector<IndexPair>{{*c.a, *c.b}});
+  p.set("ks", c.ks.value_or(100.0));
+  p.set("kd", c.kd.value_or(0.1));
+  p.set("rest", std::vector<double>{rest});
+  const std::string label = fmt::format("spring (attached in the viewer, #{})", ++attached_);
+  auto force = make_force("spring", p, label);
+  SystemAssembly(sys).add_force(force, label);
+  scene_.uses.push_back({PluginKind::Force, "spring", label, std::move(p)});
+  ++topology_;
+  refresh_solver();
+}
+
 std::optional<Index> Session::apply(const Command& c, int client) {
   using Op = Command::Op;
   const std::lock_guard lock(mutex_);
@@ -285,14 +370,7 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       load(false);
       break;
     case Op::Reload:
-      try {
-        load(true);
-      } catch (const SceneError& e) {
-        throw CommandError("reload: the scene has errors; the running simulation is kept\n" +
-                           joined(e));
-      } catch (const std::exception& e) {
-        throw CommandError(fmt::format("reload: {}; the running simulation is kept", e.what()));
-      }
+      reload();
       break;
     case Op::Speed:
       if (*c.value > 1e6)
@@ -303,49 +381,12 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       dt_ = *c.value;
       debt_ = 0.0;
       break;
-    case Op::Solver: {
-      const PluginRecord* r = registry_->find(PluginKind::Solver, c.name);
-      if (!r) {
-        std::string names;
-        for (const auto& n : registry_->names(PluginKind::Solver))
-          names += (names.empty() ? "" : ", ") + n;
-        throw CommandError(
-            fmt::format("solver: there is no solver plugin '{}' (expected one of: {})",
-                        c.name.size() > 40 ? c.name.substr(0, 40) + "..." : c.name, names));
-      }
-      Params p = defaults_of(*r, {});
-      const SceneContext ctx{sys.view(), &scene_.groups};
-      scene_.solver = registry_->create_solver(*r, p, ctx);
-      scene_.solver_name = r->descriptor->name;
-      scene_.solver_label = fmt::format("{} (chosen in the viewer)", scene_.solver_name);
-      scene_.solver_params = std::move(p);
-      scene_.libraries[scene_.solver_label] = r->library;
+    case Op::Solver:
+      choose_solver(c.name);
       break;
-    }
-    case Op::Drag: {
-      check_particle(c, "id", *c.id);
-      if (auto it = drags_.find(client); it != drags_.end()) {
-        SystemAssembly(sys).remove_force(it->second.force.get());
-        drags_.erase(it);
-      }
-      const auto [ks0, kd0] = default_mouse_spring(*c.id);
-      Params p;
-      p.set("ids", std::vector<Index>{*c.id});
-      p.set("points", std::vector<Vec3>{*c.point});
-      p.set("ks", c.ks.value_or(ks0));
-      p.set("kd", c.kd.value_or(kd0));
-      const std::string label = fmt::format("mouse spring (viewer client {})", client);
-      auto force = make_force("anchor", std::move(p), label);
-      if (!movable_targets(*force)) {
-        throw CommandError(
-            "drag: the 'anchor' plugin on the plugin path cannot move its target "
-            "(expected it to implement pdyn::MovableTargets)");
-      }
-      SystemAssembly(sys).add_force(force, label);
-      drags_[client] = {force, *c.id};
-      refresh_solver();
+    case Op::Drag:
+      start_drag(c, client);
       break;
-    }
     case Op::Move:
       if (auto it = drags_.find(client); it != drags_.end()) {
         movable_targets(*it->second.force)->set_target(0, *c.point);
@@ -372,29 +413,9 @@ std::optional<Index> Session::apply(const Command& c, int client) {
       ++topology_;
       refresh_solver();
       break;
-    case Op::Attach: {
-      check_particle(c, "a", *c.a);
-      check_particle(c, "b", *c.b);
-      if (*c.a == *c.b) {
-        throw CommandError(fmt::format(
-            "attach: fields 'a' and 'b' are both particle {} (expected two different particles)",
-            *c.a));
-      }
-      // Rest length = the current distance: the new spring starts at rest.
-      const double rest = (sys.positions().col(*c.a) - sys.positions().col(*c.b)).norm();
-      Params p;
-      p.set("pairs", std::vector<IndexPair>{{*c.a, *c.b}});
-      p.set("ks", c.ks.value_or(100.0));
-      p.set("kd", c.kd.value_or(0.1));
-      p.set("rest", std::vector<double>{rest});
-      const std::string label = fmt::format("spring (attached in the viewer, #{})", ++attached_);
-      auto force = make_force("spring", p, label);
-      SystemAssembly(sys).add_force(force, label);
-      scene_.uses.push_back({PluginKind::Force, "spring", label, std::move(p)});
-      ++topology_;
-      refresh_solver();
+    case Op::Attach:
+      attach(c);
       break;
-    }
   }
   ++version_;
   return created;

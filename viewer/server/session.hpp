@@ -88,6 +88,11 @@ class Session {
   std::pair<double, double> default_mouse_spring(Index i) const;
 
  private:
+  // The commands apply() hands on (with the session's lock held).
+  void reload();
+  void choose_solver(const std::string& name);
+  void start_drag(const Command& c, int client);
+  void attach(const Command& c);
   struct Drag {
     std::shared_ptr<Force> force;
     Index particle = 0;
