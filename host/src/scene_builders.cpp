@@ -182,64 +182,79 @@ std::vector<ParamSpec> lattice_specs() {
   });
 }
 
-void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
-  if (!host.check_map(l, path, "lattice: { origin, n: [nx, ny, nz], spacing, mass, ... }")) return;
-  auto p = host.read_params(l, path, lattice_specs(), {"springs"});
-  if (!p) return;
-  const Vec3 nv = p->vec3("n");
-  if (nv != nv.array().round().matrix()) {
-    host.error(l["n"], path + ".n",
-               fmt::format("{}.n: [{}, {}, {}] is not three whole numbers (expected [nx, ny, nz], "
-                           "each a whole number >= 1)",
-                           path, nv.x(), nv.y(), nv.z()));
-    return;
-  }
-  // As a double first: the product of three mistyped sizes may not fit.
-  const double total = nv.prod();
-  if (!host.can_add(total > 1e15 ? std::int64_t{1} << 50 : static_cast<std::int64_t>(total), l,
-                    path)) {
-    return;
-  }
-  const std::int64_t nx = static_cast<std::int64_t>(nv.x()), ny = static_cast<std::int64_t>(nv.y()),
-                     nz = static_cast<std::int64_t>(nv.z());
-  const Index base = host.particle_count();
-  auto id = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+// A lattice's size and where its particles start in the scene: particle
+// (i, j, k) is id(i, j, k), x fastest.
+struct LatticeIds {
+  std::int64_t nx, ny, nz;
+  Index base;
+  Index id(std::int64_t i, std::int64_t j, std::int64_t k) const {
     return base + (k * ny + j) * nx + i;
-  };
-  const Vec3 origin = p->vec3("origin");
-  const double h = p->real("spacing");
-  for (std::int64_t k = 0; k < nz; ++k)
-    for (std::int64_t j = 0; j < ny; ++j)
-      for (std::int64_t i = 0; i < nx; ++i)
-        host.add_particle(origin + h * Vec3(static_cast<double>(i), static_cast<double>(j),
-                                            static_cast<double>(k)),
-                          p->vec3("velocity"), p->real("mass"), false);
-  if (p->has("pin")) {
-    const auto& pins = p->triples("pin");
-    const std::int64_t dims[3] = {nx, ny, nz};
-    for (std::size_t q = 0; q < pins.size(); ++q) {
-      std::int64_t c[3];
-      bool ok = true;
-      for (int a = 0; a < 3; ++a) {
-        c[a] = pins[q][a] < 0 ? pins[q][a] + dims[a] : pins[q][a];
-        ok = ok && c[a] >= 0 && c[a] < dims[a];
-      }
-      if (!ok) {
-        host.error(l["pin"][q], fmt::format("{}.pin[{}]", path, q),
-                   fmt::format("{}.pin[{}]: [{}, {}, {}] is outside the {} x {} x {} lattice "
-                               "(expected i in -{}..{}, j in -{}..{}, k in -{}..{})",
-                               path, q, pins[q][0], pins[q][1], pins[q][2], nx, ny, nz, nx, nx - 1,
-                               ny, ny - 1, nz, nz - 1));
-        continue;
-      }
-      host.set_fixed(id(c[0], c[1], c[2]));
-    }
   }
-  host.set_properties(base, nx * ny * nz, particle_properties(*p));
-  group(host, *p, l, path, base, nx * ny * nz);
+};
 
-  // Without `springs`, structural and shear springs with the defaults: a
-  // lattice that holds its shape. With it, exactly the families it lists.
+// One family of a lattice's springs: structural (along the axes), shear
+// (face diagonals) or body (cube diagonals).
+std::vector<IndexPair> lattice_pairs(const LatticeIds& L, const std::string& name) {
+  std::vector<IndexPair> pairs;
+  auto id = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return L.id(i, j, k); };
+  for (std::int64_t k = 0; k < L.nz; ++k)
+    for (std::int64_t j = 0; j < L.ny; ++j)
+      for (std::int64_t i = 0; i < L.nx; ++i) {
+        const bool X = i + 1 < L.nx, Y = j + 1 < L.ny, Z = k + 1 < L.nz;
+        if (name == "structural") {
+          if (X) pairs.push_back({id(i, j, k), id(i + 1, j, k)});
+          if (Y) pairs.push_back({id(i, j, k), id(i, j + 1, k)});
+          if (Z) pairs.push_back({id(i, j, k), id(i, j, k + 1)});
+        } else if (name == "shear") {
+          if (X && Y) {
+            pairs.push_back({id(i, j, k), id(i + 1, j + 1, k)});
+            pairs.push_back({id(i + 1, j, k), id(i, j + 1, k)});
+          }
+          if (X && Z) {
+            pairs.push_back({id(i, j, k), id(i + 1, j, k + 1)});
+            pairs.push_back({id(i + 1, j, k), id(i, j, k + 1)});
+          }
+          if (Y && Z) {
+            pairs.push_back({id(i, j, k), id(i, j + 1, k + 1)});
+            pairs.push_back({id(i, j + 1, k), id(i, j, k + 1)});
+          }
+        } else if (X && Y && Z) {
+          pairs.push_back({id(i, j, k), id(i + 1, j + 1, k + 1)});
+          pairs.push_back({id(i + 1, j, k), id(i, j + 1, k + 1)});
+          pairs.push_back({id(i, j + 1, k), id(i + 1, j, k + 1)});
+          pairs.push_back({id(i + 1, j + 1, k), id(i, j, k + 1)});
+        }
+      }
+  return pairs;
+}
+
+// `pin`: lattice coordinates of nailed particles, negative from the end.
+void pin_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path,
+                 const std::vector<IndexTriple>& pins, const LatticeIds& L) {
+  const std::int64_t dims[3] = {L.nx, L.ny, L.nz};
+  for (std::size_t q = 0; q < pins.size(); ++q) {
+    std::int64_t c[3];
+    bool ok = true;
+    for (int a = 0; a < 3; ++a) {
+      c[a] = pins[q][a] < 0 ? pins[q][a] + dims[a] : pins[q][a];
+      ok = ok && c[a] >= 0 && c[a] < dims[a];
+    }
+    if (!ok) {
+      host.error(l["pin"][q], fmt::format("{}.pin[{}]", path, q),
+                 fmt::format("{}.pin[{}]: [{}, {}, {}] is outside the {} x {} x {} lattice "
+                             "(expected i in -{}..{}, j in -{}..{}, k in -{}..{})",
+                             path, q, pins[q][0], pins[q][1], pins[q][2], L.nx, L.ny, L.nz, L.nx,
+                             L.nx - 1, L.ny, L.ny - 1, L.nz, L.nz - 1));
+      continue;
+    }
+    host.set_fixed(L.id(c[0], c[1], c[2]));
+  }
+}
+
+// Without `springs`, structural and shear springs with the defaults: a
+// lattice that holds its shape. With it, exactly the families it lists.
+void lattice_springs(BuilderHost& host, const YAML::Node& l, const std::string& path,
+                     const LatticeIds& L) {
   const Family springs =
       family(host, l, "springs", path, "springs: { structural: {...}, shear: {...}, body: {...} }");
   if (springs == Family::Bad) return;
@@ -258,39 +273,46 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
     } else if (name == "body") {
       continue;
     }
-    std::vector<IndexPair> pairs;
-    for (std::int64_t k = 0; k < nz; ++k)
-      for (std::int64_t j = 0; j < ny; ++j)
-        for (std::int64_t i = 0; i < nx; ++i) {
-          const bool X = i + 1 < nx, Y = j + 1 < ny, Z = k + 1 < nz;
-          if (name == "structural") {
-            if (X) pairs.push_back({id(i, j, k), id(i + 1, j, k)});
-            if (Y) pairs.push_back({id(i, j, k), id(i, j + 1, k)});
-            if (Z) pairs.push_back({id(i, j, k), id(i, j, k + 1)});
-          } else if (name == "shear") {
-            if (X && Y) {
-              pairs.push_back({id(i, j, k), id(i + 1, j + 1, k)});
-              pairs.push_back({id(i + 1, j, k), id(i, j + 1, k)});
-            }
-            if (X && Z) {
-              pairs.push_back({id(i, j, k), id(i + 1, j, k + 1)});
-              pairs.push_back({id(i + 1, j, k), id(i, j, k + 1)});
-            }
-            if (Y && Z) {
-              pairs.push_back({id(i, j, k), id(i, j + 1, k + 1)});
-              pairs.push_back({id(i, j + 1, k), id(i, j, k + 1)});
-            }
-          } else if (X && Y && Z) {
-            pairs.push_back({id(i, j, k), id(i + 1, j + 1, k + 1)});
-            pairs.push_back({id(i + 1, j, k), id(i, j + 1, k + 1)});
-            pairs.push_back({id(i, j + 1, k), id(i + 1, j, k + 1)});
-            pairs.push_back({id(i + 1, j + 1, k), id(i, j, k + 1)});
-          }
-        }
+    std::vector<IndexPair> pairs = lattice_pairs(L, name);
     const bool any = !pairs.empty();
     host.add_force("spring", node, sp + "." + name, with_pairs(std::move(pairs)), spring_defaults(),
                    any);
   }
+}
+
+void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
+  if (!host.check_map(l, path, "lattice: { origin, n: [nx, ny, nz], spacing, mass, ... }")) return;
+  auto p = host.read_params(l, path, lattice_specs(), {"springs"});
+  if (!p) return;
+  const Vec3 nv = p->vec3("n");
+  if (nv != nv.array().round().matrix()) {
+    host.error(l["n"], path + ".n",
+               fmt::format("{}.n: [{}, {}, {}] is not three whole numbers (expected [nx, ny, nz], "
+                           "each a whole number >= 1)",
+                           path, nv.x(), nv.y(), nv.z()));
+    return;
+  }
+  // As a double first: the product of three mistyped sizes may not fit.
+  const double total = nv.prod();
+  if (!host.can_add(total > 1e15 ? std::int64_t{1} << 50 : static_cast<std::int64_t>(total), l,
+                    path)) {
+    return;
+  }
+  const LatticeIds L{static_cast<std::int64_t>(nv.x()), static_cast<std::int64_t>(nv.y()),
+                     static_cast<std::int64_t>(nv.z()), host.particle_count()};
+  const Vec3 origin = p->vec3("origin");
+  const double h = p->real("spacing");
+  for (std::int64_t k = 0; k < L.nz; ++k)
+    for (std::int64_t j = 0; j < L.ny; ++j)
+      for (std::int64_t i = 0; i < L.nx; ++i)
+        host.add_particle(origin + h * Vec3(static_cast<double>(i), static_cast<double>(j),
+                                            static_cast<double>(k)),
+                          p->vec3("velocity"), p->real("mass"), false);
+  if (p->has("pin")) pin_lattice(host, l, path, p->triples("pin"), L);
+  const std::int64_t count = L.nx * L.ny * L.nz;
+  host.set_properties(L.base, count, particle_properties(*p));
+  group(host, *p, l, path, L.base, count);
+  lattice_springs(host, l, path, L);
 }
 
 // ---------------------------------------------------------------------------
