@@ -67,20 +67,22 @@ void write_file(const fs::path& file, std::string_view text) {
   if (!out) throw Error(fmt::format("cannot write {}", file.string()));
 }
 
-int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
+// The name: valid, not a CMake target, not a plugin already found. Prints
+// why not and returns false.
+bool name_is_free(const NewArgs& a, std::ostream& err) {
   if (!is_valid_plugin_name(a.name)) {
     err << fmt::format(
         "pdyn: '{}' is not a valid plugin name (expected [a-z0-9_]+, e.g. "
         "my_{})\n",
         a.name, a.kind);
-    return kBadInput;
+    return false;
   }
   if (reserved_by_cmake(a.name)) {
     err << fmt::format(
         "pdyn: '{}' is a target name that CMake reserves (expected another name, "
         "e.g. my_{})\n",
         a.name, a.name);
-    return kBadInput;
+    return false;
   }
   // A second plugin of that name would be refused as a duplicate wherever
   // both are on the search path, so refuse the name now.
@@ -90,24 +92,33 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
   if (const PluginRecord* r = registry.find_any(a.name)) {
     err << fmt::format("pdyn: a plugin named '{}' already exists ({}) (expected a new name)\n",
                        a.name, r->library.string());
-    return kBadInput;
+    return false;
   }
 
-  const fs::path target = a.dir.empty() ? fs::path(a.name) : fs::path(a.dir);
+  return true;
+}
+
+// The folder: new, or an empty one. Prints why not and returns false.
+bool folder_is_free(const fs::path& target, std::ostream& err) {
   std::error_code ec;
   const auto status = fs::symlink_status(target, ec);
   const bool exists = fs::exists(status);
   if (exists && !fs::is_directory(status)) {
     err << fmt::format("pdyn: {} exists and is not a folder (expected a new or empty folder)\n",
                        target.string());
-    return kBadInput;
+    return false;
   }
   if (exists && !fs::is_empty(target, ec)) {
     err << fmt::format("pdyn: {} exists and is not empty (expected a new or empty folder)\n",
                        target.string());
-    return kBadInput;
+    return false;
   }
 
+  return true;
+}
+
+// The project's files for `kind`: (path relative to the project, template).
+std::vector<std::pair<std::string, std::string_view>> project_files(const NewArgs& a) {
   std::vector<std::pair<std::string, std::string_view>> files;  // (relative path, template)
   for (const auto& t : template_files()) {
     const auto slash = t.path.find('/');
@@ -117,29 +128,38 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
                          t.text);
     }
   }
+  return files;
+}
 
-  // Where the plugin author's guide is: installed beside this program
-  // (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources. A pair
-  // force's author reads pairs.md (the law, PairForce), the others plugins.md.
-  const std::string page = a.kind == "pair" ? "pairs.md" : "plugins.md";
+// Where the plugin author's guide is: installed beside this program
+// (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources. A pair
+// force's author reads pairs.md (the law, PairForce), the others plugins.md.
+std::string guide_for(const std::string& kind) {
+  std::error_code ec;
+  const std::string page = kind == "pair" ? "pairs.md" : "plugins.md";
   std::string guide = "docs/" + page + " in the pdyn sources";
   {
     const fs::path program = fs::read_symlink("/proc/self/exe", ec);
     const fs::path installed = program.parent_path() / PDYN_BIN_TO_DOCS / page;
     if (!ec && fs::is_regular_file(installed, ec)) guide = installed.lexically_normal().string();
   }
+  return guide;
+}
 
-  fs::path staging;
+// Writes the project into a temporary sibling of `target`, then renames it
+// into place: a failure leaves nothing behind.
+void write_project(const NewArgs& a, const fs::path& target,
+                   const std::vector<std::pair<std::string, std::string_view>>& files,
+                   const std::string& guide) {
+  const fs::path absolute = fs::absolute(target).lexically_normal();
+  fs::path parent =
+      absolute.has_filename() ? absolute.parent_path() : absolute.parent_path().parent_path();
+  const fs::path final_path =
+      parent / (absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename());
+  fs::create_directories(parent);
+  const fs::path staging = temporary_sibling(final_path);
+  fs::create_directory(staging);
   try {
-    const fs::path absolute = fs::absolute(target).lexically_normal();
-    fs::path parent =
-        absolute.has_filename() ? absolute.parent_path() : absolute.parent_path().parent_path();
-    const fs::path final_path =
-        parent /
-        (absolute.has_filename() ? absolute.filename() : absolute.parent_path().filename());
-    fs::create_directories(parent);
-    staging = temporary_sibling(final_path);
-    fs::create_directory(staging);
     for (const auto& [path, text] : files) {
       const fs::path file = staging / path;
       fs::create_directories(file.parent_path());
@@ -151,13 +171,24 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
     }
     // rename(2) replaces an empty folder, so an empty target is fine too.
     fs::rename(staging, final_path);
-    staging.clear();
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(staging, ec);
+    throw;
+  }
+}
+
+int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
+  if (!name_is_free(a, err)) return kBadInput;
+  const fs::path target = a.dir.empty() ? fs::path(a.name) : fs::path(a.dir);
+  if (!folder_is_free(target, err)) return kBadInput;
+  const auto files = project_files(a);
+  try {
+    write_project(a, target, files, guide_for(a.kind));
   } catch (const std::exception& e) {
-    if (!staging.empty()) fs::remove_all(staging, ec);
     err << fmt::format("pdyn: cannot create {}: {}\n", target.string(), e.what());
     return kFailure;
   }
-
   out << fmt::format("pdyn: wrote a {} plugin project '{}' in {}:\n", a.kind, a.name,
                      target.string());
   for (const auto& f : files) out << "  " << (target / f.first).string() << "\n";
