@@ -124,6 +124,83 @@ std::size_t read_back_differences(const PluginDescriptor& d, const Frames& frame
   return bad;
 }
 
+// writer.atomic: an abandoned writer leaves nothing; a committed one's file
+// appears only at commit, with no temporary left. Leaves the committed
+// output in `whole` for the checks after it.
+CheckResult atomic_check(const PluginDescriptor& d, const Params& params, const Frames& frames,
+                         const Scratch& scratch, const fs::path& whole, const std::string& file) {
+  // Abandoned: nothing under the final name, no temporary left.
+  const fs::path dir = scratch.dir / "abandoned";
+  fs::create_directories(dir);
+  {
+    auto w = d.create_writer(params, context(d, frames, dir / file));
+    for (int k = 0; k < 2; ++k) w->write(frames.frame(k));
+    w->mark();
+  }
+  const bool left = fs::exists(dir / file);
+  const std::size_t temps = temporaries(dir);
+  // Written and committed: the file only appears at commit.
+  fs::create_directories(whole);
+  auto w = d.create_writer(params, context(d, frames, whole / file));
+  for (int k = 0; k < kFrames; ++k) w->write(frames.frame(k));
+  const bool early = fs::exists(whole / file);
+  w->commit();
+  const bool there = fs::exists(whole / file);
+  const std::size_t after = temporaries(whole);
+  const std::size_t bad = left + temps + early + !there + after;
+  return result("writer.atomic", bad == 0, static_cast<double>(bad), 0,
+                fmt::format("{} under the final name before commit, {} after; abandoned: {} "
+                            "final file, {} temporaries; committed: {} temporaries",
+                            early ? "a file" : "nothing", there ? "the file" : "NOTHING",
+                            left ? 1 : 0, temps, after));
+}
+
+// writer.resume_identical: an interrupted run resumed from a checkpoint's
+// mark writes what one uninterrupted run (in `whole`) wrote.
+CheckResult resume_check(const PluginDescriptor& d, const Params& params, const Frames& frames,
+                         const fs::path& whole, const fs::path& split, const std::string& file) {
+  // An interrupted run: frames 0..2, a checkpoint's mark, an extra frame,
+  // committed; then resumed from the mark with frames 3..4.
+  fs::create_directories(split);
+  std::vector<std::uint8_t> mark;
+  {
+    auto w = d.create_writer(params, context(d, frames, split / file));
+    for (int k = 0; k < 3; ++k) w->write(frames.frame(k));
+    mark = w->mark();
+    w->write(frames.frame(3));
+    w->commit();
+  }
+  WriterContext ctx = context(d, frames, split / file);
+  ctx.resume = mark;
+  ctx.resuming = true;
+  auto w = d.create_writer(params, ctx);
+  for (int k = 3; k < kFrames; ++k) w->write(frames.frame(k));
+  w->commit();
+  const auto a = files_in(whole), b = files_in(split);
+  std::size_t differ = a.size() == b.size() ? 0 : 1;
+  for (const auto& [name, bytes] : a) {
+    const auto it = b.find(name);
+    differ += it == b.end() || it->second != bytes;
+  }
+  if (differ == 0) {
+    return result("writer.resume_identical", true, 0, 0,
+                  fmt::format("{} files byte-identical to one uninterrupted output", a.size()));
+  }
+  // A format whose layout may differ (HDF5): the frames must not.
+  if (d.read_back && a.size() == b.size()) {
+    std::string detail;
+    const std::size_t bad = read_back_differences(d, frames, split / file, detail);
+    return result("writer.resume_identical", bad == 0, static_cast<double>(bad), 0,
+                  bad == 0 ? fmt::format("{} frames read back identical (the file's bytes "
+                                         "differ in layout)",
+                                         kFrames)
+                           : detail);
+  }
+  return result(
+      "writer.resume_identical", false, static_cast<double>(differ), 0,
+      fmt::format("{} of {} files differ from an uninterrupted output", differ, a.size()));
+}
+
 }  // namespace
 
 void writer_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
@@ -146,32 +223,8 @@ void writer_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
   });
   if (!constructed) return;
 
-  guarded(out, "writer.atomic", [&] {
-    // Abandoned: nothing under the final name, no temporary left.
-    const fs::path dir = scratch.dir / "abandoned";
-    fs::create_directories(dir);
-    {
-      auto w = d.create_writer(params, context(d, frames, dir / file));
-      for (int k = 0; k < 2; ++k) w->write(frames.frame(k));
-      w->mark();
-    }
-    const bool left = fs::exists(dir / file);
-    const std::size_t temps = temporaries(dir);
-    // Written and committed: the file only appears at commit.
-    fs::create_directories(whole);
-    auto w = d.create_writer(params, context(d, frames, whole / file));
-    for (int k = 0; k < kFrames; ++k) w->write(frames.frame(k));
-    const bool early = fs::exists(whole / file);
-    w->commit();
-    const bool there = fs::exists(whole / file);
-    const std::size_t after = temporaries(whole);
-    const std::size_t bad = left + temps + early + !there + after;
-    return result("writer.atomic", bad == 0, static_cast<double>(bad), 0,
-                  fmt::format("{} under the final name before commit, {} after; abandoned: {} "
-                              "final file, {} temporaries; committed: {} temporaries",
-                              early ? "a file" : "nothing", there ? "the file" : "NOTHING",
-                              left ? 1 : 0, temps, after));
-  });
+  guarded(out, "writer.atomic",
+          [&] { return atomic_check(d, params, frames, scratch, whole, file); });
 
   guarded(out, "writer.read_back", [&] {
     if (!d.read_back) return skip("writer.read_back", "the plugin declares no reader (read_back)");
@@ -182,48 +235,8 @@ void writer_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
         bad == 0 ? fmt::format("{} frames: t, x and v read back bit for bit", kFrames) : detail);
   });
 
-  guarded(out, "writer.resume_identical", [&] {
-    // An interrupted run: frames 0..2, a checkpoint's mark, an extra frame,
-    // committed; then resumed from the mark with frames 3..4.
-    fs::create_directories(split);
-    std::vector<std::uint8_t> mark;
-    {
-      auto w = d.create_writer(params, context(d, frames, split / file));
-      for (int k = 0; k < 3; ++k) w->write(frames.frame(k));
-      mark = w->mark();
-      w->write(frames.frame(3));
-      w->commit();
-    }
-    WriterContext ctx = context(d, frames, split / file);
-    ctx.resume = mark;
-    ctx.resuming = true;
-    auto w = d.create_writer(params, ctx);
-    for (int k = 3; k < kFrames; ++k) w->write(frames.frame(k));
-    w->commit();
-    const auto a = files_in(whole), b = files_in(split);
-    std::size_t differ = a.size() == b.size() ? 0 : 1;
-    for (const auto& [name, bytes] : a) {
-      const auto it = b.find(name);
-      differ += it == b.end() || it->second != bytes;
-    }
-    if (differ == 0) {
-      return result("writer.resume_identical", true, 0, 0,
-                    fmt::format("{} files byte-identical to one uninterrupted output", a.size()));
-    }
-    // A format whose layout may differ (HDF5): the frames must not.
-    if (d.read_back && a.size() == b.size()) {
-      std::string detail;
-      const std::size_t bad = read_back_differences(d, frames, split / file, detail);
-      return result("writer.resume_identical", bad == 0, static_cast<double>(bad), 0,
-                    bad == 0 ? fmt::format("{} frames read back identical (the file's bytes "
-                                           "differ in layout)",
-                                           kFrames)
-                             : detail);
-    }
-    return result(
-        "writer.resume_identical", false, static_cast<double>(differ), 0,
-        fmt::format("{} of {} files differ from an uninterrupted output", differ, a.size()));
-  });
+  guarded(out, "writer.resume_identical",
+          [&] { return resume_check(d, params, frames, whole, split, file); });
 }
 
 }  // namespace pdyn::conformance::detail
