@@ -82,96 +82,127 @@ std::optional<std::string> outside(const ParamSpec& s, bool below, bool integer)
   return std::nullopt;
 }
 
-std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
-  std::vector<BadCase> cases;
-  for (const auto& s : d.params) {
-    auto add = [&](std::string what, std::string value) {
-      cases.push_back({s.name, std::move(what), std::move(value)});
-    };
+// (what is wrong, YAML value) pairs for one parameter.
+using Values = std::vector<std::pair<std::string, std::string>>;
+
+// A value of another type than the spec's (and, for named reals, a name
+// that is no identifier).
+Values wrong_types(const ParamSpec& s) {
+  Values v;
+  auto add = [&](std::string what, std::string value) {
+    v.emplace_back(std::move(what), std::move(value));
+  };
+  switch (s.type) {
+    case ParamType::Real:
+      add("wrong type", "'abc'");
+      break;
+    case ParamType::Integer:
+      add("wrong type", "0.5");
+      break;
+    case ParamType::Boolean:
+      add("wrong type", "'maybe'");
+      break;
+    case ParamType::String:
+      add("wrong type", "[1, 2]");
+      break;
+    case ParamType::Vector:
+      add("wrong type", "[1, 2]");
+      break;
+    case ParamType::RealList:
+      add("wrong type", "'abc'");
+      break;
+    case ParamType::VectorList:
+      add("wrong type", "[1, 2, 3]");
+      break;
+    case ParamType::IndexList:
+      add("wrong type", "[0.5]");
+      break;
+    case ParamType::IndexPairs:
+      add("wrong type", "[[0, 1, 2]]");
+      break;
+    case ParamType::IndexTriples:
+      add("wrong type", "[[0, 1]]");
+      break;
+    case ParamType::StringList:
+      add("wrong type", "{ a: 1 }");
+      break;
+    case ParamType::NamedReals:
+      add("wrong type", "[1, 2]");
+      add("not an identifier", "{ 2x: 1 }");
+      break;
+  }
+  return v;
+}
+
+// Numbers outside the spec's bounds, and the zero vector where it is refused.
+Values out_of_bounds(const ParamSpec& s) {
+  Values v;
+  auto add = [&](std::string what, std::string value) {
+    v.emplace_back(std::move(what), std::move(value));
+  };
+  const bool integer = s.type == ParamType::Integer;
+  for (bool below : {true, false}) {
+    const auto x = outside(s, below, integer);
+    if (!x) continue;
+    const std::string what = below ? "below the minimum" : "above the maximum";
     switch (s.type) {
       case ParamType::Real:
-        add("wrong type", "'abc'");
-        break;
       case ParamType::Integer:
-        add("wrong type", "0.5");
-        break;
-      case ParamType::Boolean:
-        add("wrong type", "'maybe'");
-        break;
-      case ParamType::String:
-        add("wrong type", "[1, 2]");
+        add(what, *x);
         break;
       case ParamType::Vector:
-        add("wrong type", "[1, 2]");
+        add(what, fmt::format("[{0}, {0}, {0}]", *x));
         break;
       case ParamType::RealList:
-        add("wrong type", "'abc'");
+        add(what, fmt::format("[{}]", *x));
         break;
       case ParamType::VectorList:
-        add("wrong type", "[1, 2, 3]");
-        break;
-      case ParamType::IndexList:
-        add("wrong type", "[0.5]");
-        break;
-      case ParamType::IndexPairs:
-        add("wrong type", "[[0, 1, 2]]");
-        break;
-      case ParamType::IndexTriples:
-        add("wrong type", "[[0, 1]]");
-        break;
-      case ParamType::StringList:
-        add("wrong type", "{ a: 1 }");
+        add(what, fmt::format("[[{0}, {0}, {0}]]", *x));
         break;
       case ParamType::NamedReals:
-        add("wrong type", "[1, 2]");
-        add("not an identifier", "{ 2x: 1 }");
-        break;
-    }
-    const bool integer = s.type == ParamType::Integer;
-    for (bool below : {true, false}) {
-      const auto x = outside(s, below, integer);
-      if (!x) continue;
-      const std::string what = below ? "below the minimum" : "above the maximum";
-      switch (s.type) {
-        case ParamType::Real:
-        case ParamType::Integer:
-          add(what, *x);
-          break;
-        case ParamType::Vector:
-          add(what, fmt::format("[{0}, {0}, {0}]", *x));
-          break;
-        case ParamType::RealList:
-          add(what, fmt::format("[{}]", *x));
-          break;
-        case ParamType::VectorList:
-          add(what, fmt::format("[[{0}, {0}, {0}]]", *x));
-          break;
-        case ParamType::NamedReals:
-          add(what, fmt::format("{{ a: {} }}", *x));
-          break;
-        default:
-          break;
-      }
-    }
-    const bool zero_in_range =
-        (!s.min || (s.min_exclusive ? 0.0 > *s.min : 0.0 >= *s.min)) && (!s.max || 0.0 <= *s.max);
-    if (s.nonzero && zero_in_range) {
-      if (s.type == ParamType::Vector) add("the zero vector", "[0, 0, 0]");
-      if (s.type == ParamType::VectorList) add("the zero vector", "[[0, 0, 0]]");
-    }
-    switch (s.type) {
-      case ParamType::IndexList:
-        add("particle index out of range", fmt::format("[{}]", n));
-        break;
-      case ParamType::IndexPairs:
-        add("particle index out of range", fmt::format("[[0, {}]]", n));
-        add("negative particle index", "[[-1, 0]]");
-        break;
-      case ParamType::IndexTriples:
-        add("particle index out of range", fmt::format("[[0, 1, {}]]", n));
+        add(what, fmt::format("{{ a: {} }}", *x));
         break;
       default:
         break;
+    }
+  }
+  const bool zero_in_range =
+      (!s.min || (s.min_exclusive ? 0.0 > *s.min : 0.0 >= *s.min)) && (!s.max || 0.0 <= *s.max);
+  if (s.nonzero && zero_in_range) {
+    if (s.type == ParamType::Vector) add("the zero vector", "[0, 0, 0]");
+    if (s.type == ParamType::VectorList) add("the zero vector", "[[0, 0, 0]]");
+  }
+  return v;
+}
+
+// Particle indices that are out of range or negative, for `n` particles.
+Values bad_indices(const ParamSpec& s, Index n) {
+  Values v;
+  auto add = [&](std::string what, std::string value) {
+    v.emplace_back(std::move(what), std::move(value));
+  };
+  switch (s.type) {
+    case ParamType::IndexList:
+      add("particle index out of range", fmt::format("[{}]", n));
+      break;
+    case ParamType::IndexPairs:
+      add("particle index out of range", fmt::format("[[0, {}]]", n));
+      add("negative particle index", "[[-1, 0]]");
+      break;
+    case ParamType::IndexTriples:
+      add("particle index out of range", fmt::format("[[0, 1, {}]]", n));
+      break;
+    default:
+      break;
+  }
+  return v;
+}
+
+std::vector<BadCase> bad_cases(const PluginDescriptor& d, Index n) {
+  std::vector<BadCase> cases;
+  for (const auto& s : d.params) {
+    for (const Values& values : {wrong_types(s), out_of_bounds(s), bad_indices(s, n)}) {
+      for (const auto& [what, value] : values) cases.push_back({s.name, what, value});
     }
     if (s.required) cases.push_back({s.name, "required key left out", std::nullopt});
   }
