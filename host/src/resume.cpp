@@ -42,11 +42,10 @@ void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path,
   if (fa != fb) out.push_back(fmt::format("{}: {} in the checkpoint, {} now", here, fa, fb));
 }
 
-}  // namespace
-
-void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
-                        std::vector<std::string>* differences, std::string_view anyway) {
-  System& sys = *scene.system;
+// The checkpoint's scene against this one: refused unless `force`, else
+// the differences listed in `differences`.
+void compare_scenes(const Scene& scene, const Checkpoint& c, bool force,
+                    std::vector<std::string>* differences, std::string_view anyway) {
   if (c.scene_text != scene.canonical_text) {
     std::vector<std::string> lines;
     try {
@@ -65,6 +64,12 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
     }
     if (differences) *differences = lines;
   }
+}
+
+// Particles, image counts, plugin objects and the run's end: refused
+// unless they match.
+void check_counts(const Scene& scene, const Checkpoint& c) {
+  const System& sys = *scene.system;
   if (c.mass.size() != sys.size()) {
     throw CheckpointError(
         fmt::format("the checkpoint holds {} but the scene has {} "
@@ -94,6 +99,15 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
                     "this run (step {}, t = {} s); expected a longer run",
                     c.step, c.time, scene.steps, scene.end_time));
   }
+}
+
+}  // namespace
+
+void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
+                        std::vector<std::string>* differences, std::string_view anyway) {
+  System& sys = *scene.system;
+  compare_scenes(scene, c, force, differences, anyway);
+  check_counts(scene, c);
   // Every check passed: apply. A plugin that refuses its bytes leaves the
   // run unstarted (the caller exits), so nothing half-applied is simulated.
   auto restore = [&](PluginObject& obj, std::size_t i) {
