@@ -85,6 +85,8 @@ class Loader final : public BuilderHost {
                                        const ParamSpec& spec, Index n_particles);
   std::optional<double> read_number(const YAML::Node& n, const std::string& path,
                                     const ParamSpec& spec);
+  std::optional<ParamValue> read_boolean(const YAML::Node& n, const std::string& path,
+                                         const ParamSpec& spec);
   std::optional<ParamValue> read_named_reals(const YAML::Node& n, const std::string& path,
                                              const ParamSpec& spec);
   std::optional<std::int64_t> read_integer(const YAML::Node& n, const std::string& path,

@@ -332,6 +332,20 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML:
   return out;
 }
 
+// true or false; 0 and 1 too, as a CSV side file's `fixed` column takes them.
+std::optional<ParamValue> Loader::read_boolean(const YAML::Node& n, const std::string& path,
+                                               const ParamSpec& spec) {
+  bool b = false;
+  if (n.IsScalar() && YAML::convert<bool>::decode(n, b)) return ParamValue(b);
+  if (n.IsScalar() && (n.Scalar() == "0" || n.Scalar() == "1")) {
+    return ParamValue(n.Scalar() == "1");
+  }
+  error(n, path,
+        fmt::format("{}: '{}' is not true or false (expected {})", path, shown(n),
+                    expectation(spec)));
+  return std::nullopt;
+}
+
 std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::string& path,
                                              const ParamSpec& spec, Index n_particles) {
   auto list_of = [&](auto&& read_one) -> std::optional<ParamValue> {
@@ -361,18 +375,8 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     case ParamType::Integer:
       if (auto x = read_integer(n, path, spec)) return ParamValue(*x);
       return std::nullopt;
-    case ParamType::Boolean: {
-      bool b = false;
-      if (n.IsScalar() && YAML::convert<bool>::decode(n, b)) return ParamValue(b);
-      // 0 and 1 too, as a CSV side file's `fixed` column takes them.
-      if (n.IsScalar() && (n.Scalar() == "0" || n.Scalar() == "1")) {
-        return ParamValue(n.Scalar() == "1");
-      }
-      error(n, path,
-            fmt::format("{}: '{}' is not true or false (expected {})", path, shown(n),
-                        expectation(spec)));
-      return std::nullopt;
-    }
+    case ParamType::Boolean:
+      return read_boolean(n, path, spec);
     case ParamType::String:
       if (n.IsScalar()) return ParamValue(n.Scalar());
       error(n, path, fmt::format("{}: is not a string (expected {})", path, expectation(spec)));
