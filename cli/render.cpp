@@ -344,8 +344,10 @@ void write_png(cairo_surface_t* surface, const fs::path& path) {
   fs::rename(temp, path);
 }
 
-int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
-  int width = 0, height = 0;
+// --size, --png, --view and --at checked: false (with the message printed)
+// if one is wrong.
+bool render_args_ok(const RenderArgs& a, int& width, int& height, render::View& view,
+                    std::ostream& err) {
   char x = 0, rest = 0;
   if (std::sscanf(a.size.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || x != 'x' ||
       width < 16 || height < 16 || width > 16384 || height > 16384) {
@@ -353,7 +355,7 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
         "pdyn render: --size '{}' is not a picture size (expected WIDTHxHEIGHT in "
         "pixels, each 16..16384, e.g. 1200x800)\n",
         a.size);
-    return kBadInput;
+    return false;
   }
   // Cairo writes PNG bytes whatever the name: a .jpg file would hold a PNG.
   std::string extension = fs::path(a.png).extension().string();
@@ -363,13 +365,12 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
         "pdyn render: --png '{}' does not end in .png (expected a .png file name: "
         "pictures are written as PNG only, e.g. out/frame.png)\n",
         a.png);
-    return kBadInput;
+    return false;
   }
-  render::View view;
   if (!render::parse_view(a.view, view)) {
     err << fmt::format("pdyn render: --view '{}' is not a view (expected 3d, xy, xz or yz)\n",
                        a.view);
-    return kBadInput;
+    return false;
   }
   for (double t : a.at) {
     if (!std::isfinite(t) || t < 0) {
@@ -377,19 +378,23 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
           "pdyn render: --at {} is not a time (expected times >= 0 s, e.g. "
           "--at 0,0.5,1)\n",
           t);
-      return kBadInput;
+      return false;
     }
   }
+  return true;
+}
+
+// One run per picture, each from the start: the state at T is exactly the
+// final state of `pdyn run --duration T`. Returns a run's nonzero exit
+// status (its message printed), else 0.
+int run_to_frames(const RenderArgs& a, std::vector<render::Frame>& frames, render::Drawables& drawn,
+                  std::ostream& err) {
   PluginRegistry registry;
   registry.discover(PluginRegistry::search_path(
       std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
   std::vector<Override> base;
   for (const auto& s : a.sets) base.push_back(parse_override(s));
 
-  // One run per picture, each from the start: the state at T is exactly the
-  // final state of `pdyn run --duration T`.
-  std::vector<render::Frame> frames;
-  render::Drawables drawn;
   for (std::size_t k = 0; k < a.at.size(); ++k) {
     auto overrides = base;
     if (a.at[k] > 0) {
@@ -409,7 +414,13 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
     frames.push_back({scene.system->time(), scene.system->positions(), scene.system->fixed(),
                       scene.system->radii()});
   }
+  return 0;
+}
 
+// The pictures: one camera fitted to every frame, obstacles and planes.
+void draw_frames(const RenderArgs& a, const std::vector<render::Frame>& frames,
+                 const render::Drawables& drawn, render::View view, int width, int height,
+                 std::ostream& out) {
   Vec3 lo = frames[0].x.rowwise().minCoeff(), hi = frames[0].x.rowwise().maxCoeff();
   for (const auto& f : frames) {
     lo = lo.cwiseMin(f.x.rowwise().minCoeff());
@@ -439,6 +450,16 @@ int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
     write_png(surface.get(), path);
     if (!a.quiet) out << fmt::format("pdyn render: t = {} s -> {}\n", frames[k].t, path.string());
   }
+}
+
+int cmd_render(const RenderArgs& a, std::ostream& out, std::ostream& err) {
+  int width = 0, height = 0;
+  render::View view;
+  if (!render_args_ok(a, width, height, view, err)) return kBadInput;
+  std::vector<render::Frame> frames;
+  render::Drawables drawn;
+  if (const int status = run_to_frames(a, frames, drawn, err); status != 0) return status;
+  draw_frames(a, frames, drawn, view, width, height, out);
   return kOk;
 }
 
