@@ -128,6 +128,44 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
   }
 }
 
+// What `pdyn run` reports after a run: steps, particles, solver, wall
+// time, force evaluations, where the outputs went.
+void print_run_summary(std::ostream& out, const Scene& scene, const RunResult& r,
+                       const std::optional<Checkpoint>& checkpoint, double wall,
+                       std::uint64_t evaluations_before) {
+  // A resumed run took only the steps after its checkpoint's.
+  const std::int64_t first = checkpoint ? checkpoint->step : 0;
+  const std::string steps =
+      checkpoint ? fmt::format("{} (resumed at step {}; {} in all)",
+                               count_of(r.steps_done - first, "step"), first, r.steps_done)
+                 : count_of(r.steps_done, "step");
+  out << fmt::format("pdyn: {} of {} with {} to t = {} s in {:.3g} s{}\n", steps,
+                     count_of(scene.system->size(), "particle"), scene.solver_name, r.time, wall,
+                     scene.solver->adaptive()
+                         ? fmt::format(" ({} accepted, {} rejected)",
+                                       count_of(r.counts.accepted, "step"), r.counts.rejected)
+                         : "");
+  // The cost of the run: what a solver or a plugin change is judged by.
+  const std::uint64_t evaluations = scene.system->force_evaluations() - evaluations_before;
+  const double particle_steps =
+      static_cast<double>(r.steps_done - first) * static_cast<double>(scene.system->size());
+  out << fmt::format("pdyn: {}, {:.3g} particle-steps/s\n",
+                     count_of(static_cast<long long>(evaluations), "force evaluation"),
+                     wall > 0 ? particle_steps / wall : 0.0);
+  for (const auto& w : scene.output.writers) {
+    const std::string& type = w.record.descriptor->name;
+    out << fmt::format("pdyn: {} written to {}\n",
+                       type == "csv"      ? std::string("frames")
+                       : type == "energy" ? std::string("energy")
+                                          : type + " frames",
+                       fs::absolute(w.path).string());
+  }
+  if (!r.checkpoint.empty()) {
+    out << fmt::format("pdyn: checkpoint written to {}\n", fs::absolute(r.checkpoint).string());
+  }
+  if (!r.energy_warning.empty()) out << "pdyn: warning: " << r.energy_warning << "\n";
+}
+
 int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err,
             bool terminal) {
   const PluginRegistry registry = discover(c);
@@ -174,40 +212,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
         err << "pdyn: " << r.message << "\n";
         return kNonFinite;
     }
-    if (!c.quiet) {
-      // A resumed run took only the steps after its checkpoint's.
-      const std::int64_t first = checkpoint ? checkpoint->step : 0;
-      const std::string steps =
-          checkpoint ? fmt::format("{} (resumed at step {}; {} in all)",
-                                   count_of(r.steps_done - first, "step"), first, r.steps_done)
-                     : count_of(r.steps_done, "step");
-      out << fmt::format("pdyn: {} of {} with {} to t = {} s in {:.3g} s{}\n", steps,
-                         count_of(scene.system->size(), "particle"), scene.solver_name, r.time,
-                         wall,
-                         scene.solver->adaptive()
-                             ? fmt::format(" ({} accepted, {} rejected)",
-                                           count_of(r.counts.accepted, "step"), r.counts.rejected)
-                             : "");
-      // The cost of the run: what a solver or a plugin change is judged by.
-      const std::uint64_t evaluations = scene.system->force_evaluations() - evaluations_before;
-      const double particle_steps =
-          static_cast<double>(r.steps_done - first) * static_cast<double>(scene.system->size());
-      out << fmt::format("pdyn: {}, {:.3g} particle-steps/s\n",
-                         count_of(static_cast<long long>(evaluations), "force evaluation"),
-                         wall > 0 ? particle_steps / wall : 0.0);
-      for (const auto& w : scene.output.writers) {
-        const std::string& type = w.record.descriptor->name;
-        out << fmt::format("pdyn: {} written to {}\n",
-                           type == "csv"      ? std::string("frames")
-                           : type == "energy" ? std::string("energy")
-                                              : type + " frames",
-                           fs::absolute(w.path).string());
-      }
-      if (!r.checkpoint.empty()) {
-        out << fmt::format("pdyn: checkpoint written to {}\n", fs::absolute(r.checkpoint).string());
-      }
-      if (!r.energy_warning.empty()) out << "pdyn: warning: " << r.energy_warning << "\n";
-    }
+    if (!c.quiet) print_run_summary(out, scene, r, checkpoint, wall, evaluations_before);
     return kOk;
   } catch (...) {
     return report_error(std::current_exception(), err);
