@@ -352,13 +352,8 @@ void accept(tcp::acceptor& acceptor, Hub& hub) {
   });
 }
 
-}  // namespace
-
-void serve(Session& session, const ServerOptions& options, std::ostream& out,
-           const std::string& scene_name) {
-  net::io_context ioc{1};
-  Hub hub(ioc, session, options);
-
+// Binds `acceptor` to --host and --port, or throws saying why not.
+void listen_on(tcp::acceptor& acceptor, const ServerOptions& options) {
   boost::system::error_code ec;
   const auto address = net::ip::make_address(options.host, ec);
   if (ec) {
@@ -367,7 +362,6 @@ void serve(Session& session, const ServerOptions& options, std::ostream& out,
                     "every interface)",
                     options.host));
   }
-  tcp::acceptor acceptor(ioc);
   const tcp::endpoint endpoint(address, options.port);
   acceptor.open(endpoint.protocol(), ec);
   if (!ec) acceptor.set_option(net::socket_base::reuse_address(true), ec);
@@ -378,6 +372,49 @@ void serve(Session& session, const ServerOptions& options, std::ostream& out,
         fmt::format("cannot listen on {}:{}: {} (expected a free port, or --port 0 for any)",
                     options.host, options.port, ec.message()));
   }
+}
+
+// The simulation thread: steps to real time, then offers a frame when the
+// state changed, at most options.frame_rate times a second, and a status
+// line four times a second, until `stop`.
+void simulate(Session& session, Hub& hub, net::io_context& ioc, const ServerOptions& options,
+              const std::atomic<bool>& stop) {
+  // OpenMP's thread count is a per-thread setting: set it where the
+  // forces run.
+  if (options.threads > 0) set_threads(options.threads);
+  const auto period = std::chrono::duration<double>(1.0 / options.frame_rate);
+  auto last = Clock::now(), last_status = last;
+  std::uint64_t sent = ~std::uint64_t{0};
+  while (!stop) {
+    const auto now = Clock::now();
+    session.advance(std::chrono::duration<double>(now - last).count(), 0.8 * period.count());
+    last = now;
+    if (hub.client_count > 0) {
+      const std::uint64_t version = session.version();
+      if (version != sent) {
+        sent = version;
+        auto frame = bytes(encode_frame(session.frame()));
+        net::post(ioc, [&hub, frame] { hub.broadcast_frame(frame); });
+      }
+      if (now - last_status >= std::chrono::milliseconds(250)) {
+        last_status = now;
+        auto status = bytes(session.status_json());
+        net::post(ioc, [&hub, status] { hub.broadcast_text(status); });
+      }
+    }
+    std::this_thread::sleep_until(now + std::chrono::duration_cast<Clock::duration>(period));
+  }
+}
+
+}  // namespace
+
+void serve(Session& session, const ServerOptions& options, std::ostream& out,
+           const std::string& scene_name) {
+  net::io_context ioc{1};
+  Hub hub(ioc, session, options);
+
+  tcp::acceptor acceptor(ioc);
+  listen_on(acceptor, options);
   const unsigned short port = acceptor.local_endpoint().port();
 
   // Ctrl-C: stop taking connections, close every WebSocket with "going
@@ -396,36 +433,7 @@ void serve(Session& session, const ServerOptions& options, std::ostream& out,
   });
   accept(acceptor, hub);
 
-  // The simulation thread: steps to real time, then offers a frame when the
-  // state changed, at most options.frame_rate times a second, and a status
-  // line four times a second.
-  std::thread simulation([&] {
-    // OpenMP's thread count is a per-thread setting: set it where the
-    // forces run.
-    if (options.threads > 0) set_threads(options.threads);
-    const auto period = std::chrono::duration<double>(1.0 / options.frame_rate);
-    auto last = Clock::now(), last_status = last;
-    std::uint64_t sent = ~std::uint64_t{0};
-    while (!stop) {
-      const auto now = Clock::now();
-      session.advance(std::chrono::duration<double>(now - last).count(), 0.8 * period.count());
-      last = now;
-      if (hub.client_count > 0) {
-        const std::uint64_t version = session.version();
-        if (version != sent) {
-          sent = version;
-          auto frame = bytes(encode_frame(session.frame()));
-          net::post(ioc, [&hub, frame] { hub.broadcast_frame(frame); });
-        }
-        if (now - last_status >= std::chrono::milliseconds(250)) {
-          last_status = now;
-          auto status = bytes(session.status_json());
-          net::post(ioc, [&hub, status] { hub.broadcast_text(status); });
-        }
-      }
-      std::this_thread::sleep_until(now + std::chrono::duration_cast<Clock::duration>(period));
-    }
-  });
+  std::thread simulation([&] { simulate(session, hub, ioc, options, stop); });
 
   out << fmt::format("pdyn serve: http://{}:{}/ ({})", options.host, port, scene_name) << std::endl;
   try {
