@@ -358,6 +358,30 @@ void run_fixed(Loop& loop, std::int64_t k0) {
   }
 }
 
+// Writes frame loop.next_frame from the dense output `dense` at time `tf`
+// inside the step that ended at `t_new`, then puts the step's end state
+// back. In a periodic box (`images_before` given: the image counts at the
+// step's start, which the dense output continues) the frame is wrapped from
+// those. `current` is scratch of the state's size.
+void emit_interpolated(Loop& loop, const Eigen::VectorXd& dense, double tf, double t_new,
+                       const std::vector<std::array<std::int32_t, 3>>* images_before,
+                       Eigen::VectorXd& current) {
+  System& sys = *loop.scene.system;
+  current = sys.state();
+  sys.state() = dense;
+  sys.set_time(tf);
+  std::vector<std::array<std::int32_t, 3>> images_after;
+  if (images_before) {
+    images_after = sys.images();
+    SystemAssembly(sys).set_images(*images_before);
+    SystemAssembly(sys).wrap_positions();
+  }
+  loop.out.emit(loop.next_frame * loop.out.period(), /*current=*/false);
+  sys.state() = current;
+  sys.set_time(t_new);
+  if (images_before) SystemAssembly(sys).set_images(std::move(images_after));
+}
+
 // Adaptive steps: the solver chooses each step's length; frames are due at
 // m every dt (the times a fixed-step run would write them) and at the end.
 // With dense output a frame is interpolated inside the step that crosses its
@@ -398,19 +422,7 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
     if (!has_dense) has_dense = interpolate(t_new);
     for (double tf; (tf = frame_time(next_frame)) < t_new;) {
       if (!interpolate(tf)) break;
-      current = sys.state();
-      sys.state() = dense;
-      sys.set_time(tf);
-      std::vector<std::array<std::int32_t, 3>> images_after;
-      if (periodic) {
-        images_after = sys.images();
-        SystemAssembly(sys).set_images(images_before);
-        SystemAssembly(sys).wrap_positions();
-      }
-      loop.out.emit(next_frame * every, /*current=*/false);
-      sys.state() = current;
-      sys.set_time(t_new);
-      if (periodic) SystemAssembly(sys).set_images(std::move(images_after));
+      emit_interpolated(loop, dense, tf, t_new, periodic ? &images_before : nullptr, current);
       ++next_frame;
     }
   };
