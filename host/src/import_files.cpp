@@ -149,10 +149,19 @@ Domain orthogonal_box(const Vec3& lo, const Vec3& hi, const std::array<bool, 3>&
   return d;
 }
 
-std::optional<std::size_t> pick_frame(long long frame, std::size_t count) {
-  const auto n = static_cast<long long>(count);
+std::optional<std::size_t> choose_frame(const std::vector<std::size_t>& starts, long long frame,
+                                        std::string_view empty, Problems& problems, ReadResult& r) {
+  r.frames = starts.size();
+  if (starts.empty()) {
+    problems.add(1, 1, std::string(empty));
+    return std::nullopt;
+  }
+  const auto n = static_cast<long long>(starts.size());
   const long long k = frame < 0 ? n + frame : frame;
-  if (k < 0 || k >= n) return std::nullopt;
+  if (k < 0 || k >= n) {
+    r.no_such_frame = true;
+    return std::nullopt;
+  }
   return static_cast<std::size_t>(k);
 }
 

@@ -238,16 +238,9 @@ ReadResult read_lammps_dump(const std::string& text, long long frame, Problems& 
     if (is_item(lines[k], "TIMESTEP")) starts.push_back(k);
   }
   ReadResult r;
-  r.frames = starts.size();
-  if (starts.empty()) {
-    problems.add(1, 1, "no 'ITEM: TIMESTEP' line (expected a LAMMPS text dump)");
-    return r;
-  }
-  const auto k = pick_frame(frame, starts.size());
-  if (!k) {
-    r.no_such_frame = true;
-    return r;
-  }
+  const auto k = choose_frame(
+      starts, frame, "no 'ITEM: TIMESTEP' line (expected a LAMMPS text dump)", problems, r);
+  if (!k) return r;
   const std::size_t end = *k + 1 < starts.size() ? starts[*k + 1] : lines.size();
   r.imported = read_frame(lines, starts[*k], end, problems);
   return r;

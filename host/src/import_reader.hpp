@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "import_files.hpp"
@@ -72,8 +73,12 @@ bool to_rows(Atoms& atoms, bool images, Problems& problems, Imported& out);
 /// The box [lo, hi] with its periodic axes.
 Domain orthogonal_box(const Vec3& lo, const Vec3& hi, const std::array<bool, 3>& periodic);
 
-/// Frame `frame` of `count` (0 the first, -1 the last), or nothing.
-std::optional<std::size_t> pick_frame(long long frame, std::size_t count);
+/// Which of a file's frames to read, given each frame's first line
+/// (`starts`): frame `frame`, 0 the first, -1 the last. Records the count in
+/// `r`. Nothing if the file has no frame (`empty` reported at line 1) or no
+/// such frame (r.no_such_frame set: the loader reports it at `frame:`).
+std::optional<std::size_t> choose_frame(const std::vector<std::size_t>& starts, long long frame,
+                                        std::string_view empty, Problems& problems, ReadResult& r);
 
 /// A mass read from `f` that must be > 0, or a problem at it.
 std::optional<double> parse_mass(const Field& f, std::size_t line, Problems& problems);

@@ -271,16 +271,10 @@ ReadResult read_extxyz(const std::string& text, long long frame, Problems& probl
     at += 2 + static_cast<std::size_t>(*n);
   }
   ReadResult r;
-  r.frames = starts.size();
-  if (starts.empty()) {
-    problems.add(1, 1, "the file is empty (expected an atom count, a comment line, then rows)");
-    return r;
-  }
-  const auto k = pick_frame(frame, starts.size());
-  if (!k) {
-    r.no_such_frame = true;
-    return r;
-  }
+  const auto k = choose_frame(
+      starts, frame, "the file is empty (expected an atom count, a comment line, then rows)",
+      problems, r);
+  if (!k) return r;
   r.imported = read_xyz_frame(lines, starts[*k], problems);
   return r;
 }
