@@ -128,14 +128,14 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
   // set_particles clears them. The box is kept; the images are the run's.
   std::vector<double> radius = sys.radii();
   std::vector<std::int32_t> type = sys.types();
-  SystemAssembly(sys).set_particles(x, v, c.mass, c.fixed);
-  SystemAssembly(sys).set_radii(std::move(radius));
-  SystemAssembly(sys).set_types(std::move(type));
+  const SystemAssembly assembly(sys);
+  assembly.set_particles(x, v, c.mass, c.fixed);
+  assembly.set_radii(std::move(radius));
+  assembly.set_types(std::move(type));
   if (c.images.empty()) {  // a checkpoint made in memory without them: nothing wrapped
-    SystemAssembly(sys).set_images(
-        std::vector<std::array<std::int32_t, 3>>(c.mass.size(), {0, 0, 0}));
+    assembly.set_images(std::vector<std::array<std::int32_t, 3>>(c.mass.size(), {0, 0, 0}));
   } else {
-    SystemAssembly(sys).set_images(c.images);
+    assembly.set_images(c.images);
   }
   sys.set_time(c.time);
 }

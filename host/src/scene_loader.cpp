@@ -612,21 +612,22 @@ void Loader::assemble_system(Scene& scene) {
     m(i) = m_[i];
   }
   scene.system = std::make_unique<System>();
-  SystemAssembly(*scene.system).set_particles(x, v, m, fixed_);
+  const SystemAssembly assembly(*scene.system);
+  assembly.set_particles(x, v, m, fixed_);
   if (!images_.empty()) {  // a LAMMPS file's image flags (scene_files.cpp)
     images_.resize(static_cast<std::size_t>(n), {0, 0, 0});
-    SystemAssembly(*scene.system).set_images(std::move(images_));
+    assembly.set_images(std::move(images_));
   }
   // Before any force or collider exists: their factories see the box, the
   // radii and the types in SceneContext::particles.
-  if (box_) SystemAssembly(*scene.system).set_domain(*box_);
+  if (box_) assembly.set_domain(*box_);
   if (!radius_.empty()) {
     radius_.resize(static_cast<std::size_t>(n), 0.0);
-    SystemAssembly(*scene.system).set_radii(std::move(radius_));
+    assembly.set_radii(std::move(radius_));
   }
   if (!type_.empty()) {
     type_.resize(static_cast<std::size_t>(n), 0);
-    SystemAssembly(*scene.system).set_types(std::move(type_));
+    assembly.set_types(std::move(type_));
   }
 }
 
@@ -638,6 +639,7 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
                             const std::vector<PendingPlugin>& solvers) {
   scene.groups = groups_;
   const SceneContext ctx{scene.system->view(), &scene.groups};
+  const SystemAssembly assembly(*scene.system);
   auto label = [&](const PendingPlugin& p) {
     return fmt::format("{} ({})", p.record->descriptor->name, where(p.node, p.path));
   };
@@ -650,7 +652,7 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
     for (auto& p : *list) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
       if (!f) continue;
-      SystemAssembly(*scene.system).add_force(std::move(f), label(p));
+      assembly.add_force(std::move(f), label(p));
       scene.libraries[label(p)] = p.record->library;
       scene.force_traits[label(p)] = p.record->descriptor->force_traits;
       keep(p, PluginKind::Force);
@@ -659,7 +661,7 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
   for (auto& p : colliders) {
     auto c = create(p, [&] { return registry_.create_collider(*p.record, p.params, ctx); });
     if (!c) continue;
-    SystemAssembly(*scene.system).add_collider(std::move(c), label(p));
+    assembly.add_collider(std::move(c), label(p));
     scene.libraries[label(p)] = p.record->library;
     keep(p, PluginKind::Collider);
   }

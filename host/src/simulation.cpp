@@ -179,25 +179,25 @@ std::unique_ptr<System> Simulation::add_particles(const Matrix3X& x, const Matri
   std::vector<std::uint8_t> f = old.fixed();
   f.insert(f.end(), fixed.begin(), fixed.end());
   auto sys = std::make_unique<System>();
-  SystemAssembly(*sys).set_particles(xs, vs, m, f);
+  const SystemAssembly assembly(*sys);
+  assembly.set_particles(xs, vs, m, f);
   sys->set_time(old.time());
-  SystemAssembly(*sys).set_domain(old.domain());
+  assembly.set_domain(old.domain());
   if (!old.radii().empty()) {
     auto r = old.radii();
     r.resize(static_cast<std::size_t>(n + added), 0.0);
-    SystemAssembly(*sys).set_radii(std::move(r));
+    assembly.set_radii(std::move(r));
   }
   if (!old.types().empty()) {
     auto t = old.types();
     t.resize(static_cast<std::size_t>(n + added), 0);
-    SystemAssembly(*sys).set_types(std::move(t));
+    assembly.set_types(std::move(t));
   }
   auto images = old.images();
   images.resize(static_cast<std::size_t>(n + added), {0, 0, 0});
-  SystemAssembly(*sys).set_images(std::move(images));
-  for (const auto& e : old.force_objects()) SystemAssembly(*sys).add_force(e.force, e.label);
-  for (const auto& c : old.collider_objects())
-    SystemAssembly(*sys).add_collider(c.collider, c.label);
+  assembly.set_images(std::move(images));
+  for (const auto& e : old.force_objects()) assembly.add_force(e.force, e.label);
+  for (const auto& c : old.collider_objects()) assembly.add_collider(c.collider, c.label);
   std::swap(scene_.system, sys);
   stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
   return sys;

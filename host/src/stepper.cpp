@@ -186,8 +186,8 @@ std::optional<double> Stepper::guarded(const Take& take) {
     return fail();
   }
   previous_.swap(next_);  // the next step's last good state, if nobody writes before it
-  SystemAssembly(sys_)
-      .wrap_positions();  // only after a good step: a failed one leaves the images alone
+  // Only after a good step: a failed one leaves the images alone.
+  SystemAssembly(sys_).wrap_positions();
   version_ = sys_.state_version();
   return h;
 }

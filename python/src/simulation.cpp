@@ -249,10 +249,11 @@ class PySimulation {
     auto radius = s.radii();
     auto type = s.types();
     auto images = s.images();
-    SystemAssembly(s).set_particles(x, v, masses, s.fixed());
-    SystemAssembly(s).set_radii(std::move(radius));
-    SystemAssembly(s).set_types(std::move(type));
-    SystemAssembly(s).set_images(std::move(images));
+    const SystemAssembly assembly(s);
+    assembly.set_particles(x, v, masses, s.fixed());
+    assembly.set_radii(std::move(radius));
+    assembly.set_types(std::move(type));
+    assembly.set_images(std::move(images));
   }
   void set_fixed(Index i, bool on) {
     if (i < 0 || i >= sys().size()) {
