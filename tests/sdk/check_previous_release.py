@@ -24,6 +24,7 @@ refuses each plugin so built.
 import argparse
 import pathlib
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -65,6 +66,10 @@ def main():
     ap.add_argument("--pdyn", type=pathlib.Path)
     ap.add_argument("--kernel-lib-dir", type=pathlib.Path)
     ap.add_argument("--cxx", default="c++")
+    ap.add_argument("--cxx-flags", default="",
+                    help="the host build's CMAKE_CXX_FLAGS: a sanitizer build changes Eigen's "
+                         "allocator (handmade aligned malloc under ASan), so a plugin must be "
+                         "compiled with the same flags to share Eigen objects with the host")
     ap.add_argument("--perturb-vtable", action="store_true")
     ap.add_argument("--release-only", action="store_true",
                     help="print the previous release's commit if git has it, else nothing")
@@ -108,7 +113,8 @@ def main():
     for src in plugins:
         name = pathlib.Path(src).stem
         lib = a.work / f"pdyn_old_{name}.so"
-        cmd = [a.cxx, "-std=c++20", "-O2", "-fPIC", "-shared", "-fopenmp", "-DEIGEN_MPL2_ONLY",
+        cmd = [a.cxx, *shlex.split(a.cxx_flags), "-std=c++20", "-O2", "-fPIC", "-shared",
+               "-fopenmp", "-DEIGEN_MPL2_ONLY",
                "-DFMT_SHARED", "-I", str(old / "kernel" / "include"), "-isystem", eigen,
                str(old / src), "-o", str(lib), "-L", str(a.kernel_lib_dir),
                f"-Wl,-rpath,{a.kernel_lib_dir}", "-lpdyn_kernel", "-lfmt"]
