@@ -76,6 +76,7 @@ Json value_json(const ParamValue& v) {
     Json operator()(const std::vector<Index>& xs) const { return xs; }
     Json operator()(const std::vector<IndexPair>& xs) const { return xs; }
     Json operator()(const std::vector<IndexTriple>& xs) const { return xs; }
+    Json operator()(const std::vector<IndexQuad>& xs) const { return xs; }
     Json operator()(const std::vector<std::string>& xs) const { return xs; }
     Json operator()(const NamedReals& xs) const {
       Json o = Json::object();
@@ -123,6 +124,15 @@ Json param_schema(const ParamSpec& s, bool indices_checked) {
       break;
     case ParamType::IndexTriples:
       j = {{"type", "array"}, {"items", tuples(3, indices_checked)}};
+      break;
+    case ParamType::IndexQuads:
+      j = {{"type", "array"}, {"items", tuples(4, indices_checked)}};
+      break;
+    case ParamType::IntegerList:
+      // A single whole number is the one-element list, as for RealList.
+      j = Json::object();
+      j["anyOf"] = Json::array(
+          {number(s, "integer"), Json{{"type", "array"}, {"items", number(s, "integer")}}});
       break;
     case ParamType::StringList:
       j = {{"type", "array"}, {"items", {{"type", "string"}}}};

@@ -123,6 +123,12 @@ Values wrong_types(const ParamSpec& s) {
     case ParamType::IndexTriples:
       add("wrong type", "[[0, 1]]");
       break;
+    case ParamType::IndexQuads:
+      add("wrong type", "[[0, 1, 2]]");
+      break;
+    case ParamType::IntegerList:
+      add("wrong type", "[0.5]");
+      break;
     case ParamType::StringList:
       add("wrong type", "{ a: 1 }");
       break;
@@ -140,7 +146,7 @@ Values out_of_bounds(const ParamSpec& s) {
   auto add = [&](std::string what, std::string value) {
     v.emplace_back(std::move(what), std::move(value));
   };
-  const bool integer = s.type == ParamType::Integer;
+  const bool integer = s.type == ParamType::Integer || s.type == ParamType::IntegerList;
   for (bool below : {true, false}) {
     const auto x = outside(s, below, integer);
     if (!x) continue;
@@ -154,6 +160,7 @@ Values out_of_bounds(const ParamSpec& s) {
         add(what, fmt::format("[{0}, {0}, {0}]", *x));
         break;
       case ParamType::RealList:
+      case ParamType::IntegerList:
         add(what, fmt::format("[{}]", *x));
         break;
       case ParamType::VectorList:
@@ -191,6 +198,9 @@ Values bad_indices(const ParamSpec& s, Index n) {
       break;
     case ParamType::IndexTriples:
       add("particle index out of range", fmt::format("[[0, 1, {}]]", n));
+      break;
+    case ParamType::IndexQuads:
+      add("particle index out of range", fmt::format("[[0, 1, 2, {}]]", n));
       break;
     default:
       break;

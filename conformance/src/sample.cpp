@@ -164,6 +164,12 @@ Params sample_params(const PluginDescriptor& d, Index n) {
       case ParamType::IndexTriples:
         p.set(s.name, std::vector<IndexTriple>{{0, 1, 2}, {1, 2, 3}});
         break;
+      case ParamType::IndexQuads:
+        p.set(s.name, std::vector<IndexQuad>{{0, 1, 2, 3}, {1, 2, 3, 4}});
+        break;
+      case ParamType::IntegerList:
+        p.set(s.name, IntegerValues{static_cast<std::int64_t>(std::ceil(x))});
+        break;
       case ParamType::StringList:
         p.set(s.name, std::vector<std::string>{"1"});
         break;

@@ -17,7 +17,7 @@ std::string num(double x) { return fmt::format("{}", x); }
 // The spec of one number inside a vector or list: the same bounds and unit.
 ParamSpec element_spec(const ParamSpec& spec) {
   ParamSpec e = spec;
-  e.type = ParamType::Real;
+  e.type = spec.type == ParamType::IntegerList ? ParamType::Integer : ParamType::Real;
   return e;
 }
 
@@ -96,6 +96,11 @@ void check_value(const ParamSpec& spec, const ParamValue& value, std::vector<Par
     case ParamType::NamedReals:
       for (const auto& [name, x] : std::get<NamedReals>(value)) check.number(x, {}, name);
       break;
+    case ParamType::IntegerList: {
+      const auto& is = std::get<IntegerValues>(value);
+      for (std::size_t e = 0; e < is.size(); ++e) check.number(static_cast<double>(is[e]), {e});
+      break;
+    }
     default:  // strings, booleans and particle indices have no bounds here
       break;
   }

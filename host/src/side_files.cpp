@@ -244,8 +244,8 @@ std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesyst
     problems.add_file("cannot read the index file (expected a readable CSV file)");
     return std::nullopt;
   }
-  static const char* const kNames[3] = {"i", "j", "k"};
-  const std::string header_text = K == 2 ? "i,j" : "i,j,k";
+  static const char* const kNames[4] = {"i", "j", "k", "l"};
+  const std::string header_text = K == 2 ? "i,j" : K == 3 ? "i,j,k" : "i,j,k,l";
   std::vector<std::array<Index, K>> tuples;
   tuples.reserve(text->size() / (4 * K));
   auto header = [&](std::size_t line, const std::vector<Field>& fields) {
@@ -297,6 +297,8 @@ std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesyst
 template std::optional<std::vector<std::array<Index, 2>>> read_tuples<2>(
     const std::filesystem::path&, const std::string&, Index, std::vector<Diagnostic>&);
 template std::optional<std::vector<std::array<Index, 3>>> read_tuples<3>(
+    const std::filesystem::path&, const std::string&, Index, std::vector<Diagnostic>&);
+template std::optional<std::vector<std::array<Index, 4>>> read_tuples<4>(
     const std::filesystem::path&, const std::string&, Index, std::vector<Diagnostic>&);
 
 void write_particles(const std::filesystem::path& file, const ParticleRows& rows) {

@@ -292,12 +292,15 @@ template <std::size_t K>
 std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML::Node& n,
                                                                      const std::string& path,
                                                                      Index n_particles) {
-  const char* expected = K == 2 ? "a list of particle index pairs [[i, j], ...]"
-                                : "a list of particle index triples [[i, j, k], ...]";
+  static_assert(K >= 2 && K <= 4);
+  const char* expected = K == 2   ? "a list of particle index pairs [[i, j], ...]"
+                         : K == 3 ? "a list of particle index triples [[i, j, k], ...]"
+                                  : "a list of particle index quadruples [[i, j, k, l], ...]";
   if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file
-    const auto file = side_file(
-        n, path,
-        K == 2 ? "{ file: pairs.csv } with header i,j" : "{ file: triples.csv } with header i,j,k");
+    const auto file = side_file(n, path,
+                                K == 2   ? "{ file: pairs.csv } with header i,j"
+                                : K == 3 ? "{ file: triples.csv } with header i,j,k"
+                                         : "{ file: quads.csv } with header i,j,k,l");
     if (!file) return std::nullopt;
     return side_files::read_tuples<K>(*file, file->string(), n_particles, diags_);
   }
@@ -407,6 +410,26 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     case ParamType::IndexTriples:
       if (auto t = read_tuples<3>(n, path, n_particles)) return ParamValue(std::move(*t));
       return std::nullopt;
+    case ParamType::IndexQuads:
+      if (auto t = read_tuples<4>(n, path, n_particles)) return ParamValue(std::move(*t));
+      return std::nullopt;
+    case ParamType::IntegerList: {
+      element.type = ParamType::Integer;
+      // As for RealList, a single whole number is the one-element list.
+      if (n.IsScalar()) {
+        if (auto x = read_integer(n, path, element)) {
+          return ParamValue(IntegerValues{*x});
+        }
+        return std::nullopt;
+      }
+      if (auto xs = list_of([&](const YAML::Node& e, const std::string& p) {
+            return read_integer(e, p, element);
+          })) {
+        const auto& v = std::get<std::vector<std::int64_t>>(*xs);
+        return ParamValue(IntegerValues(v.begin(), v.end()));
+      }
+      return std::nullopt;
+    }
     case ParamType::StringList:
       return list_of([&](const YAML::Node& e, const std::string& p) -> std::optional<std::string> {
         if (e.IsScalar()) return e.Scalar();

@@ -27,6 +27,11 @@ ParamSpec real(std::string name, double fallback, std::string unit, std::string 
 ParamSpec required_real(std::string name, std::string unit, std::string doc) {
   return required(std::move(name), ParamType::Real, std::move(unit), std::move(doc));
 }
+ParamSpec real_list(std::string name, double fallback, std::string unit, std::string doc) {
+  ParamSpec s = make(std::move(name), ParamType::RealList, std::move(unit), std::move(doc));
+  s.fallback = std::vector<double>{fallback};
+  return s;
+}
 ParamSpec integer(std::string name, std::int64_t fallback, std::string doc) {
   ParamSpec s = make(std::move(name), ParamType::Integer, "", std::move(doc));
   s.fallback = fallback;
@@ -107,6 +112,12 @@ const std::vector<std::string>& Params::strings(std::string_view name) const {
   return as<std::vector<std::string>>(name);
 }
 const NamedReals& Params::named_reals(std::string_view name) const { return as<NamedReals>(name); }
+const std::vector<IndexQuad>& Params::quads(std::string_view name) const {
+  return as<std::vector<IndexQuad>>(name);
+}
+const std::vector<std::int64_t>& Params::integers(std::string_view name) const {
+  return as<IntegerValues>(name);
+}
 
 const char* describe(ParamType type) {
   switch (type) {
@@ -134,6 +145,10 @@ const char* describe(ParamType type) {
       return "a list of strings [\"a\", \"b\", ...]";
     case ParamType::NamedReals:
       return "a mapping of names to numbers { name: value, ... }";
+    case ParamType::IndexQuads:
+      return "a list of particle index quadruples [[i, j, k, l], ...]";
+    case ParamType::IntegerList:
+      return "a whole number or a list of whole numbers [a, b, ...]";
   }
   return "?";
 }
@@ -164,6 +179,10 @@ const char* type_name(ParamType type) {
       return "string list";
     case ParamType::NamedReals:
       return "named reals";
+    case ParamType::IndexQuads:
+      return "index quads";
+    case ParamType::IntegerList:
+      return "integer list";
   }
   return "?";
 }
@@ -199,6 +218,10 @@ std::string format_value(const ParamValue& value) {
     }
     std::string operator()(const std::vector<IndexPair>& x) const { return list(x, tuple<2>); }
     std::string operator()(const std::vector<IndexTriple>& x) const { return list(x, tuple<3>); }
+    std::string operator()(const std::vector<IndexQuad>& x) const { return list(x, tuple<4>); }
+    std::string operator()(const IntegerValues& x) const {
+      return list(x, [](std::int64_t i) { return std::to_string(i); });
+    }
     std::string operator()(const std::vector<std::string>& x) const {
       return list(x, [](const std::string& e) { return "\"" + e + "\""; });
     }
@@ -223,6 +246,19 @@ void require_distinct_particles(const Params& params, std::string_view key) {
       if ((*pairs)[s][0] == (*pairs)[s][1]) {
         refuse(s, fmt::format("joins particle {} to itself (expected two different particles)",
                               (*pairs)[s][0]));
+      }
+    }
+    return;
+  }
+  const auto* quads =
+      it == params.values().end() ? nullptr : std::get_if<std::vector<IndexQuad>>(&it->second);
+  if (quads) {
+    for (std::size_t s = 0; s < quads->size(); ++s) {
+      const auto [i, j, k, l] = (*quads)[s];
+      if (i == j || i == k || i == l || j == k || j == l || k == l) {
+        refuse(s, fmt::format("[{}, {}, {}, {}] repeats a particle (expected four different "
+                              "particles)",
+                              i, j, k, l));
       }
     }
     return;

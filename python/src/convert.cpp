@@ -56,10 +56,12 @@ py::object to_python(const ParamValue& value) {
             for (int k = 0; k < 3; ++k) m(i, k) = v[i](k);
           }
           return a;
-        } else if constexpr (std::is_same_v<T, std::vector<Index>>) {
+        } else if constexpr (std::is_same_v<T, std::vector<Index>> ||
+                             std::is_same_v<T, IntegerValues>) {
           return py::array_t<std::int64_t>(static_cast<py::ssize_t>(v.size()), v.data());
         } else if constexpr (std::is_same_v<T, std::vector<IndexPair>> ||
-                             std::is_same_v<T, std::vector<IndexTriple>>) {
+                             std::is_same_v<T, std::vector<IndexTriple>> ||
+                             std::is_same_v<T, std::vector<IndexQuad>>) {
           return index_rows(v);
         } else {
           return py::cast(v);
@@ -75,7 +77,8 @@ ParamType param_type(const std::string& name) {
       {"vector", ParamType::Vector},      {"reals", ParamType::RealList},
       {"vectors", ParamType::VectorList}, {"indices", ParamType::IndexList},
       {"pairs", ParamType::IndexPairs},   {"triples", ParamType::IndexTriples},
-      {"strings", ParamType::StringList}, {"named_reals", ParamType::NamedReals}};
+      {"strings", ParamType::StringList}, {"named_reals", ParamType::NamedReals},
+      {"quads", ParamType::IndexQuads},   {"integers", ParamType::IntegerList}};
   const auto it = names.find(name);
   if (it == names.end()) {
     std::string all;
@@ -103,7 +106,20 @@ ParamValue from_python(ParamType type, py::handle value, const std::string& what
         return Vec3(v[0], v[1], v[2]);
       }
       case ParamType::RealList:
+        // A single number is the one-element list, as in a scene file.
+        if (py::isinstance<py::float_>(value) || py::isinstance<py::int_>(value)) {
+          return std::vector<double>{value.cast<double>()};
+        }
         return value.cast<std::vector<double>>();
+      case ParamType::IntegerList: {
+        if (py::isinstance<py::int_>(value)) {
+          return IntegerValues{value.cast<std::int64_t>()};
+        }
+        const auto list = value.cast<std::vector<std::int64_t>>();
+        return IntegerValues(list.begin(), list.end());
+      }
+      case ParamType::IndexQuads:
+        return value.cast<std::vector<IndexQuad>>();
       case ParamType::VectorList: {
         std::vector<Vec3> out;
         for (const auto& row : value.cast<std::vector<std::vector<double>>>()) {

@@ -31,14 +31,26 @@ enum class ParamType {
   IndexTriples,  ///< [[i, j, k], ...] particle indices, checked against N
   StringList,    ///< ["a", "b", ...] strings (e.g. expressions)
   NamedReals,    ///< { name: number, ... } names [A-Za-z_][A-Za-z0-9_]*, each once
+  // Added in 0.7.0 (ABI 6): at the end, so that the values above keep their
+  // numbers and ParamValue's alternatives above keep their indices.
+  IndexQuads,   ///< [[i, j, k, l], ...] particle indices, checked against N
+  IntegerList,  ///< [a, b, ...] whole numbers (e.g. a type per bonded term)
 };
 
 /// The value of a NamedReals parameter: name -> number, in name order.
 using NamedReals = std::map<std::string, double, std::less<>>;
 
+/// The value of an IntegerList parameter. A type of its own, not
+/// std::vector<std::int64_t>: that is IndexList's std::vector<Index>, and
+/// ParamValue's alternatives must differ.
+struct IntegerValues : std::vector<std::int64_t> {
+  using std::vector<std::int64_t>::vector;
+};
+
 using ParamValue = std::variant<double, std::int64_t, bool, std::string, Vec3, std::vector<double>,
                                 std::vector<Vec3>, std::vector<Index>, std::vector<IndexPair>,
-                                std::vector<IndexTriple>, std::vector<std::string>, NamedReals>;
+                                std::vector<IndexTriple>, std::vector<std::string>, NamedReals,
+                                std::vector<IndexQuad>, IntegerValues>;
 
 /// How one parameter is spelled, typed, bounded and documented.
 struct ParamSpec {
@@ -91,6 +103,8 @@ namespace param {
 ParamSpec real(std::string name, double fallback, std::string unit, std::string doc);
 ParamSpec required_real(std::string name, std::string unit, std::string doc);
 ParamSpec integer(std::string name, std::int64_t fallback, std::string doc);
+/// A RealList whose default is the one-element list [fallback] (since 0.7.0).
+ParamSpec real_list(std::string name, double fallback, std::string unit, std::string doc);
 ParamSpec boolean(std::string name, bool fallback, std::string doc);
 ParamSpec string(std::string name, std::string fallback, std::string doc);
 ParamSpec vec3(std::string name, Vec3 fallback, std::string unit, std::string doc);
@@ -115,6 +129,8 @@ class Params {
   const std::vector<IndexTriple>& triples(std::string_view name) const;
   const std::vector<std::string>& strings(std::string_view name) const;
   const NamedReals& named_reals(std::string_view name) const;
+  const std::vector<IndexQuad>& quads(std::string_view name) const;
+  const std::vector<std::int64_t>& integers(std::string_view name) const;
 
   /// Host side: stores a checked value.
   void set(std::string name, ParamValue value);
@@ -129,7 +145,7 @@ class Params {
 
 // ---- checks and defaults that factories of multi-particle forces share ----
 
-/// Throws ParamError at the first element of the pair or triple list `key`
+/// Throws ParamError at the first element of the pair, triple or quad list `key`
 /// that names one particle twice (a spring from a particle to itself, a
 /// triangle with a repeated corner): no geometry to act along.
 void require_distinct_particles(const Params& params, std::string_view key);

@@ -27,4 +27,7 @@ using IndexPair = std::array<Index, 2>;
 /// A triple of particle indices (an angle or area spring's corners).
 using IndexTriple = std::array<Index, 3>;
 
+/// A quadruple of particle indices (a dihedral's four corners).
+using IndexQuad = std::array<Index, 4>;
+
 }  // namespace pdyn

@@ -26,102 +26,73 @@
 // zero moment: the force is internal. The damping term is the bending
 // analogue of Witkin's spring damping (SIGGRAPH '97 notes, "Damped Spring"):
 // it resists only the rate of bending, f . v = -kd (dtheta/dt)^2 <= 0.
-#include <fmt/format.h>
-
-#include <Eigen/Geometry>
+//
+// The loop, the per-type coefficients, the threads and the Jacobians are
+// pdyn/bonded.hpp's (Harmonic<Bend>): this file gives theta and its
+// gradient, written once for any scalar type so that the SDK differentiates
+// the gradient exactly for implicit solvers.
 #include <cmath>
 #include <numbers>
+#include <pdyn/bonded.hpp>
 #include <pdyn/plugin.hpp>
 
 namespace {
 
-using pdyn::Index;
-using pdyn::IndexTriple;
-using pdyn::Vec3;
+using pdyn::Coordinate;
+using pdyn::Vector3;
 
+// theta at the middle particle of [i, j, k] and its gradient.
 struct Bend {
-  double theta = 0.0;  // rad
-  Vec3 ga, gb;         // dtheta/dx_i, dtheta/dx_k (dtheta/dx_j = -(ga + gb)), 1/m
-  bool has_gradient = false;
+  static constexpr int arity = 3;
+
+  template <class T>
+  Coordinate<3, T> operator()(const std::array<Vector3<T>, 3>& x) const {
+    using std::atan2;
+    Coordinate<3, T> q;
+    const Vector3<T> a = x[0] - x[1], b = x[2] - x[1];
+    const Vector3<T> c = a.cross(b);
+    const T s = c.norm(), d = a.dot(b);
+    q.value = atan2(s, d);
+    const T aabb = a.squaredNorm() * b.squaredNorm();
+    const double aabb0 = pdyn::value_of(aabb);
+    if (pdyn::value_of(s) == 0.0 || !(aabb0 > 0.0) || !std::isfinite(aabb0)) return q;
+    const Vector3<T> n = c / s;
+    q.gradient[0] = (d * b.cross(n) - s * b) / aabb;
+    q.gradient[2] = (d * n.cross(a) - s * a) / aabb;
+    q.gradient[1] = -(q.gradient[0] + q.gradient[2]);
+    q.defined = pdyn::all_finite(q.gradient[0]) && pdyn::all_finite(q.gradient[2]);
+    return q;
+  }
 };
 
-Bend bend(const Vec3& xi, const Vec3& xj, const Vec3& xk) {
-  Bend r;
-  const Vec3 a = xi - xj, b = xk - xj;
-  const Vec3 c = a.cross(b);
-  const double s = c.norm(), d = a.dot(b);
-  r.theta = std::atan2(s, d);
-  const double aabb = a.squaredNorm() * b.squaredNorm();
-  if (s == 0.0 || !(aabb > 0.0) || !std::isfinite(aabb)) return r;
-  const Vec3 n = c / s;
-  r.ga = (d * b.cross(n) - s * b) / aabb;
-  r.gb = (d * n.cross(a) - s * a) / aabb;
-  r.has_gradient = r.ga.allFinite() && r.gb.allFinite();
-  return r;
-}
-
-class Angle final : public pdyn::Force {
- public:
-  Angle(std::vector<IndexTriple> triples, std::vector<double> rest, double k, double kd)
-      : triples_(std::move(triples)), rest_(std::move(rest)), k_(k), kd_(kd) {}
-
-  void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {
-    for (std::size_t s = 0; s < triples_.size(); ++s) {
-      const auto [i, j, k] = triples_[s];
-      const Bend b = bend(p.x.col(i), p.x.col(j), p.x.col(k));
-      if (!b.has_gradient) continue;
-      const Vec3 gj = -(b.ga + b.gb);
-      const double rate = b.ga.dot(p.v.col(i)) + gj.dot(p.v.col(j)) + b.gb.dot(p.v.col(k));
-      const double magnitude = k_ * (b.theta - rest_[s]) + kd_ * rate;
-      f.col(i) -= magnitude * b.ga;
-      f.col(j) -= magnitude * gj;
-      f.col(k) -= magnitude * b.gb;
-    }
-  }
-
-  // Only the damping term reads velocities.
-  pdyn::StateDependence dependence() const override { return {kd_ > 0.0, false}; }
-
-  std::optional<double> potential_energy(const pdyn::ParticleView& p) const override {
-    double u = 0.0;
-    for (std::size_t s = 0; s < triples_.size(); ++s) {
-      const auto [i, j, k] = triples_[s];
-      const double bent = bend(p.x.col(i), p.x.col(j), p.x.col(k)).theta - rest_[s];
-      u += 0.5 * k_ * bent * bent;
-    }
-    return u;
-  }
-
- private:
-  std::vector<IndexTriple> triples_;
-  std::vector<double> rest_;  // rest angle of each triple, rad
-  double k_, kd_;
-};
+using Angle = pdyn::BondedForce<pdyn::Harmonic<Bend>>;
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  pdyn::require_distinct_particles(p, "triples");
-  const auto& triples = p.triples("triples");
-  std::vector<double> rest =
-      pdyn::rest_values(p, "rest", triples.size(), "triples", [&](std::size_t s) {
-        const auto [i, j, k] = triples[s];
-        return bend(ctx.particles.x.col(i), ctx.particles.x.col(j), ctx.particles.x.col(k)).theta;
-      });
-  return std::make_unique<Angle>(triples, std::move(rest), p.real("k"), p.real("kd"));
+  const pdyn::Harmonic<Bend> law;
+  const auto in = pdyn::read_bonded<3>(p, ctx, "triples", {"k", "kd"},
+                                       [&](const auto& x) { return law.measure(x); });
+  return std::make_unique<Angle>(law, in, pdyn::harmonic_coefficients(p, in.n_types, "k", "kd"),
+                                 ctx.particles.size());
 }
 
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
   d.name = "angle";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.description =
       "damped bending spring on the angle at j of each triple [i, j, k]: U = k/2 (theta - "
       "theta0)^2, f = -[k (theta - theta0) + kd dtheta/dt] grad theta";
   d.params = {
       pdyn::param::required("triples", pdyn::ParamType::IndexTriples, "",
                             "particle triples [[i, j, k], ...]; the angle is at the middle one j"),
-      pdyn::param::real("k", 1.0, "N m/rad", "bending stiffness").at_least(0),
-      pdyn::param::real("kd", 0.0, "N m s/rad", "damping of the bending rate").at_least(0),
+      pdyn::bonded_types_param(),
+      pdyn::param::real_list("k", 1.0, "N m/rad",
+                             "bending stiffness: one for all term types or one per type")
+          .at_least(0),
+      pdyn::param::real_list("kd", 0.0, "N m s/rad",
+                             "damping of the bending rate: one for all term types or one per type")
+          .at_least(0),
       pdyn::param::optional("rest", pdyn::ParamType::RealList, "rad",
                             "rest angles: one for all triples or one per triple; default: the "
                             "initial angles")

@@ -55,7 +55,7 @@ std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
                                            const std::string& shown,
                                            std::vector<Diagnostic>& problems);
 
-/// Reads an index-tuple file with header i,j (K = 2) or i,j,k (K = 3); every
+/// Reads an index-tuple file with header i,j (K = 2), i,j,k (K = 3) or i,j,k,l (K = 4); every
 /// index must be a whole number in 0..n_particles-1 (unchecked if
 /// n_particles < 0).
 template <std::size_t K>
