@@ -36,6 +36,12 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
 void pair_checks(const PluginDescriptor& d, const Params& params, const Force& force,
                  std::mt19937_64& rng, std::vector<CheckResult>& out);
 
+/// bonded.cpp: the bonded.* checks of a force that offers
+/// pdyn::BondedReference (pdyn/bonded.hpp; every BondedForce does), or their
+/// skips, on random states away from rest.
+void bonded_checks(const PluginDescriptor& d, const Params& params, const Force& force,
+                   std::mt19937_64& rng, std::vector<CheckResult>& out);
+
 /// solvers.cpp: construct.defaults, deterministic, finite_on_degenerate and
 /// the solver.* checks.
 void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);

@@ -305,6 +305,7 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
   derivative_checks(c, out);
   claim_checks(c, out);
   pair_checks(d, params, *force, rng, out);
+  bonded_checks(d, params, *force, rng, out);
 }
 
 }  // namespace pdyn::conformance::detail

@@ -30,8 +30,8 @@ constexpr double kDefaultKd = 0.1;    // N s/m
 
 Params spring_defaults() {
   Params d;
-  d.set("ks", kDefaultKs);
-  d.set("kd", kDefaultKd);
+  d.set("ks", std::vector<double>{kDefaultKs});
+  d.set("kd", std::vector<double>{kDefaultKd});
   return d;
 }
 

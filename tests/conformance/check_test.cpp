@@ -62,7 +62,12 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, CheckBroken,
                                          BrokenCase{"bad_pair_gradient", "pair.gradient"},
                                          BrokenCase{"lopsided_pair", "pair.newton_third_law"},
                                          BrokenCase{"stale_pair_list", "pair.matches_brute_force"},
-                                         BrokenCase{"jumping_pair", "pair.continuous_at_cutoff"}),
+                                         BrokenCase{"jumping_pair", "pair.continuous_at_cutoff"},
+                                         BrokenCase{"bond_one_sided", "bonded.third_law"},
+                                         BrokenCase{"bond_bad_energy", "bonded.gradient"},
+                                         BrokenCase{"bond_bad_hessian", "bonded.jacobian_exact"},
+                                         BrokenCase{"bond_indefinite", "bonded.jacobian_definite"},
+                                         BrokenCase{"bond_drops_term", "bonded.matches_terms"}),
                          [](const auto& param_info) {
                            return std::string(param_info.param.plugin) + "_" +
                                   std::to_string(param_info.index);
@@ -95,6 +100,33 @@ TEST(Check, EachBrokenPairForceFailsOnlyItsOwnPairCheck) {
       EXPECT_EQ(verdict, name == check ? "FAIL" : (verdict == "skip" ? "skip" : "pass"))
           << plugin << ": " << name << "\n"
           << res.out;
+    }
+  }
+}
+
+// Each broken bonded force fails its own bonded.* check and passes the
+// others that apply to it.
+TEST(Check, EachBrokenBondedForceFailsOnlyItsOwnBondedCheck) {
+  const std::map<std::string, std::string> own = {{"bond_one_sided", "bonded.third_law"},
+                                                  {"bond_bad_energy", "bonded.gradient"},
+                                                  {"bond_bad_hessian", "bonded.jacobian_exact"},
+                                                  {"bond_indefinite", "bonded.jacobian_definite"},
+                                                  {"bond_drops_term", "bonded.matches_terms"}};
+  for (const auto& [plugin, check] : own) {
+    const auto res = test::pdyn({"check", plugin, "--plugin-path", kBroken});
+    std::map<std::string, std::string> verdicts;
+    std::istringstream lines(res.out);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.rfind("bonded.", 0) != 0) continue;
+      std::istringstream row(line);
+      std::string name, verdict;
+      row >> name >> verdict;
+      verdicts[name] = verdict;
+    }
+    EXPECT_EQ(verdicts.size(), 5u) << res.out;
+    for (const auto& [name, verdict] : verdicts) {
+      EXPECT_EQ(verdict, name == check ? "FAIL" : "pass") << plugin << ": " << name << "\n"
+                                                         << res.out;
     }
   }
 }

@@ -334,8 +334,8 @@ void Session::attach(const Command& c) {
   const double rest = (sys.positions().col(*c.a) - sys.positions().col(*c.b)).norm();
   Params p;
   p.set("pairs", std::vector<IndexPair>{{*c.a, *c.b}});
-  p.set("ks", c.ks.value_or(100.0));
-  p.set("kd", c.kd.value_or(0.1));
+  p.set("ks", std::vector<double>{c.ks.value_or(100.0)});
+  p.set("kd", std::vector<double>{c.kd.value_or(0.1)});
   p.set("rest", std::vector<double>{rest});
   const std::string label = fmt::format("spring (attached in the viewer, #{})", ++attached_);
   auto force = make_force("spring", p, label);

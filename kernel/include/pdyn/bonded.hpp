@@ -25,15 +25,16 @@
 //     // them; without it the force declares that it reads them.
 //     bool reads_velocity(const Coefficients& c) const;
 //     // Optional: the term's Jacobians for implicit solvers, 3N x 3N with
-//     // block (a, b) = d f_a / d x_b (resp. v_b); symmetric and negative
-//     // semidefinite, so that the solvers' M - h df/dv - h^2 df/dx stays
-//     // positive definite. Without it implicit solvers differentiate
-//     // numerically.
-//     void jacobian(const pdyn::BondedPoint<arity>& p, const Coefficients& c,
+//     // block (a, b) = d f_a / d x_b (resp. v_b), given zeroed; symmetric
+//     // and negative semidefinite, so that the solvers' M - h df/dv -
+//     // h^2 df/dx stays positive definite. Returns false where the term
+//     // adds nothing (no blocks are added then). Without it implicit solvers
+//     // differentiate numerically.
+//     bool jacobian(const pdyn::BondedPoint<arity>& p, const Coefficients& c,
 //                   pdyn::BondedMatrix<arity>& dfdx, pdyn::BondedMatrix<arity>& dfdv) const;
 //     // Optional: the exact derivatives of operator() where jacobian()
 //     // approximates them, for the conformance kit's bonded.jacobian_exact.
-//     void exact_jacobian(... same arguments ...) const;
+//     bool exact_jacobian(... same arguments ...) const;
 //   };
 //
 // Most bonded terms are one damped harmonic spring on one scalar coordinate
@@ -221,14 +222,14 @@ class Harmonic {
 
   bool reads_velocity(const Coefficients& c) const { return c.kd > 0.0; }
 
-  void jacobian(const BondedPoint<arity>& p, const Coefficients& c, BondedMatrix<arity>& dfdx,
+  bool jacobian(const BondedPoint<arity>& p, const Coefficients& c, BondedMatrix<arity>& dfdx,
                 BondedMatrix<arity>& dfdv) const {
-    jacobians(p, c, dfdx, dfdv, false);
+    return jacobians(p, c, dfdx, dfdv, false);
   }
 
-  void exact_jacobian(const BondedPoint<arity>& p, const Coefficients& c,
+  bool exact_jacobian(const BondedPoint<arity>& p, const Coefficients& c,
                       BondedMatrix<arity>& dfdx, BondedMatrix<arity>& dfdv) const {
-    jacobians(p, c, dfdx, dfdv, true);
+    return jacobians(p, c, dfdx, dfdv, true);
   }
 
  private:
@@ -246,7 +247,7 @@ class Harmonic {
   bool gradient_and_hessian(const BondedPoint<arity>& p, double& value, Derivatives& g,
                             BondedMatrix<arity>& h) const;
 
-  void jacobians(const BondedPoint<arity>& p, const Coefficients& c, BondedMatrix<arity>& dfdx,
+  bool jacobians(const BondedPoint<arity>& p, const Coefficients& c, BondedMatrix<arity>& dfdx,
                  BondedMatrix<arity>& dfdv, bool exact) const;
 
   Geometry geometry_;
@@ -308,6 +309,12 @@ BondedInput<N> read_bonded(const Params& params, const SceneContext& ctx,
                            Measure&& measure) {
   BondedInput<N> in;
   require_distinct_particles(params, terms_key);
+  if (ctx.particles.size() > std::numeric_limits<std::int32_t>::max()) {
+    throw ParamError(std::string(terms_key),
+                     "a scene of " + std::to_string(ctx.particles.size()) +
+                         " particles (expected at most 2147483647: bonded terms store 32-bit "
+                         "particle ids)");
+  }
   if constexpr (N == 2) {
     in.terms = params.pairs(terms_key);
   } else if constexpr (N == 3) {
@@ -431,7 +438,7 @@ class BondedForce : public Force, public BondedReference {
       for (Index s = 0; s < term_count(); ++s) {
         dfdx.setZero();
         dfdv.setZero();
-        law_.jacobian(point(p, s), coefficients(s), dfdx, dfdv);
+        if (!law_.jacobian(point(p, s), coefficients(s), dfdx, dfdv)) continue;
         const bool damped = !dfdv.isZero(0.0);
         for (int a = 0; a < N; ++a) {
           for (int b = 0; b < N; ++b) {
@@ -522,10 +529,11 @@ class BondedForce : public Force, public BondedReference {
     const double* __restrict rest;          // per term, or null if Uniform
     const std::int32_t* __restrict types;   // per term, or null if !Typed
     const Coefficients* __restrict coeffs;  // per type
-    Coefficients c0;                        // type 0's, for !Typed
     double rest0;
 
-    [[gnu::always_inline]] inline BondedTerm<N> term(Index s) const {
+    // `c0`: type 0's coefficients, copied by the caller into a local of its
+    // loop, so that the compiler keeps them in registers.
+    [[gnu::always_inline]] inline BondedTerm<N> term(Index s, const Coefficients& c0) const {
       BondedPoint<N> q;
       for (int a = 0; a < N; ++a) {
         q.x[a] = x + 3 * static_cast<Index>(terms[s][a]);
@@ -561,13 +569,13 @@ class BondedForce : public Force, public BondedReference {
                                    Uniform ? nullptr : rest_.data(),
                                    Typed ? types_.data() : nullptr,
                                    coefficients_.data(),
-                                   coefficients_[0],
                                    rest0_};
     const Index* block_start = block_start_.data();
     auto interior = [&](Index blk) {
       const Index begin = block_start[blk], end = block_start[blk + 1];
+      const Coefficients c0 = k.coeffs[0];
       for (Index s = begin; s < end; ++s) {
-        const BondedTerm<N> t = k.term(s);
+        const BondedTerm<N> t = k.term(s, c0);
         for (int a = 0; a < N; ++a) {
           double* fa = f + fs * k.terms[s][a];
           fa[0] += t.force[a][0];
@@ -591,8 +599,9 @@ class BondedForce : public Force, public BondedReference {
     if (n_boundary == 0) return;
     double* buffer = buffer_.data();
     parallel_ranges(n_boundary, [&](Index b, Index e) {
+      const Coefficients c0 = k.coeffs[0];
       for (Index s = b; s < e; ++s) {
-        const BondedTerm<N> t = k.term(first + s);
+        const BondedTerm<N> t = k.term(first + s, c0);
         for (int a = 0; a < N; ++a) {
           double* out = buffer + 3 * (N * s + a);
           out[0] = t.force[a][0];
@@ -720,7 +729,7 @@ bool Harmonic<Geometry>::gradient_and_hessian(const BondedPoint<arity>& p, doubl
 }
 
 template <class Geometry>
-void Harmonic<Geometry>::jacobians(const BondedPoint<arity>& p, const Coefficients& c,
+bool Harmonic<Geometry>::jacobians(const BondedPoint<arity>& p, const Coefficients& c,
                                    BondedMatrix<arity>& dfdx, BondedMatrix<arity>& dfdv,
                                    bool exact) const {
   double value = 0.0;
@@ -728,7 +737,7 @@ void Harmonic<Geometry>::jacobians(const BondedPoint<arity>& p, const Coefficien
   BondedMatrix<arity> h;
   dfdx.setZero();
   dfdv.setZero();
-  if (!gradient_and_hessian(p, value, g, h)) return;  // no force there either
+  if (!gradient_and_hessian(p, value, g, h)) return false;  // no force there either
   Derivatives v;
   for (int a = 0; a < arity; ++a) v.template segment<3>(3 * a) = p.velocity(a);
   const double rate = c.kd > 0.0 ? g.dot(v) : 0.0;
@@ -739,7 +748,7 @@ void Harmonic<Geometry>::jacobians(const BondedPoint<arity>& p, const Coefficien
     // f = -m g with m = k (q - q0) + kd g.v:
     // df/dx = -k g g^T - kd g (H v)^T - m H.
     dfdx = -c.k * ggt - c.kd * g * (h * v).transpose() - magnitude * h;
-    return;
+    return true;
   }
   // The curvature term -m H, symmetrised (H is symmetric up to rounding)
   // and clamped to its negative semidefinite part.
@@ -747,6 +756,7 @@ void Harmonic<Geometry>::jacobians(const BondedPoint<arity>& p, const Coefficien
   const Eigen::SelfAdjointEigenSolver<BondedMatrix<arity>> eig(curvature);
   const Derivatives lambda = eig.eigenvalues().cwiseMin(0.0);
   dfdx = -c.k * ggt + eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
+  return true;
 }
 
 }  // namespace pdyn
