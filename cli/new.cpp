@@ -1,4 +1,4 @@
-// `pdyn new force|solver|collider|pair|writer NAME [DIR]`: writes a ready out-of-tree
+// `pdyn new force|solver|collider|pair|bonded|writer NAME [DIR]`: writes a ready out-of-tree
 // plugin project (CMakeLists.txt, NAME.cpp, README.md, scene.yaml) that
 // builds against the installed SDK and passes `pdyn check` as generated.
 //   exit 0: written; 2: bad name, kind or folder; 1: a file could not be written.
@@ -133,10 +133,13 @@ std::vector<std::pair<std::string, std::string_view>> project_files(const NewArg
 
 // Where the plugin author's guide is: installed beside this program
 // (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources. A pair
-// force's author reads pairs.md (the law, PairForce), the others plugins.md.
+// force's author reads pairs.md (the law, PairForce), a bonded force's
+// bonded.md (BondedForce, Harmonic), the others plugins.md.
 std::string guide_for(const std::string& kind) {
   std::error_code ec;
-  const std::string page = kind == "pair" ? "pairs.md" : "plugins.md";
+  const std::string page = kind == "pair"     ? "pairs.md"
+                           : kind == "bonded" ? "bonded.md"
+                                              : "plugins.md";
   std::string guide = "docs/" + page + " in the pdyn sources";
   {
     const fs::path program = fs::read_symlink("/proc/self/exe", ec);
@@ -163,8 +166,8 @@ void write_project(const NewArgs& a, const fs::path& target,
     for (const auto& [path, text] : files) {
       const fs::path file = staging / path;
       fs::create_directories(file.parent_path());
-      // A pair force is a force plugin (pdyn_add_plugin(... KIND force)).
-      const std::string plugin_kind = a.kind == "pair" ? "force" : a.kind;
+      // Pair and bonded forces are force plugins (pdyn_add_plugin(... KIND force)).
+      const std::string plugin_kind = a.kind == "pair" || a.kind == "bonded" ? "force" : a.kind;
       write_file(file, replace_all(replace_all(replace_all(std::string(text), "@NAME@", a.name),
                                                "@KIND@", plugin_kind),
                                    "@DOCS@", guide));
@@ -207,9 +210,10 @@ SdkCommand add_new_command(CLI::App& app) {
   auto a = std::make_shared<NewArgs>();
   CLI::App* sub = app.add_subcommand(
       "new", "write a new plugin project (CMake, source, README, scene, conformance test)");
-  sub->add_option("kind", a->kind, "force, solver, collider, pair (a pair force) or writer")
+  sub->add_option("kind", a->kind,
+                  "force, solver, collider, pair (a pair force), bonded (a bonded force) or writer")
       ->required()
-      ->check(CLI::IsMember({"force", "solver", "collider", "pair", "writer"}));
+      ->check(CLI::IsMember({"force", "solver", "collider", "pair", "bonded", "writer"}));
   sub->add_option("name", a->name, "the plugin's name, [a-z0-9_]+")->required();
   sub->add_option("dir", a->dir, "folder to create (default: ./NAME); must be new or empty");
   add_plugin_path_option(sub, a->plugin_path,

@@ -16,6 +16,8 @@
 //   bonded.matches_terms    the force's loop (blocks, boundary terms,
 //                           threads) adds what its terms add, and the same
 //                           bits on 1 and 2 threads, on 5,000 particles
+#include "pdyn/bonded.hpp"
+
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
@@ -24,7 +26,6 @@
 #include <memory>
 
 #include "checks.hpp"
-#include "pdyn/bonded.hpp"
 #include "pdyn/host/threads.hpp"
 #include "sample.hpp"
 
@@ -140,8 +141,8 @@ CheckResult jacobian_exact(const BondedReference& b, std::mt19937_64& rng) {
       }
       const Eigen::MatrixXd fx = term_differences(b, s, t, false);
       const Eigen::MatrixXd fv = term_differences(b, s, t, true);
-      worst = std::max({worst, (dfdx - fx).cwiseAbs().maxCoeff(),
-                        (dfdv - fv).cwiseAbs().maxCoeff()});
+      worst =
+          std::max({worst, (dfdx - fx).cwiseAbs().maxCoeff(), (dfdv - fv).cwiseAbs().maxCoeff()});
       bound = std::max(bound,
                        1e-5 * (1.0 + std::max(fx.cwiseAbs().maxCoeff(), fv.cwiseAbs().maxCoeff())));
     }
@@ -171,8 +172,8 @@ CheckResult jacobian_definite(const BondedReference& b, std::mt19937_64& rng) {
         return skip(name, "the law gives no Jacobians for implicit solvers");
       }
       double asymmetry = 0.0;
-      const double top = std::max(worst_definiteness(dfdx, asymmetry),
-                                  worst_definiteness(dfdv, asymmetry));
+      const double top =
+          std::max(worst_definiteness(dfdx, asymmetry), worst_definiteness(dfdv, asymmetry));
       worst = std::max({worst, top, asymmetry});
       const double scale = std::max(dfdx.cwiseAbs().maxCoeff(), dfdv.cwiseAbs().maxCoeff());
       bound = std::max(bound, 1e-10 * (1.0 + scale));
@@ -279,8 +280,9 @@ void bonded_checks(const PluginDescriptor& d, const Params& params, const Force&
                          "bonded.jacobian_definite", "bonded.matches_terms"};
   if (!b) {
     for (const char* name : names) {
-      out.push_back(skip(name, "not a bonded force (offers no pdyn::BondedReference, "
-                               "pdyn/bonded.hpp)"));
+      out.push_back(skip(name,
+                         "not a bonded force (offers no pdyn::BondedReference, "
+                         "pdyn/bonded.hpp)"));
     }
     return;
   }

@@ -89,6 +89,8 @@ class Loader final : public BuilderHost {
                                          const ParamSpec& spec);
   std::optional<ParamValue> read_named_reals(const YAML::Node& n, const std::string& path,
                                              const ParamSpec& spec);
+  std::optional<ParamValue> read_integer_list(const YAML::Node& n, const std::string& path,
+                                              const ParamSpec& spec);
   std::optional<std::int64_t> read_integer(const YAML::Node& n, const std::string& path,
                                            const ParamSpec& spec);
   std::optional<Index> read_index(const YAML::Node& n, const std::string& path, Index n_particles);

@@ -413,23 +413,8 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
     case ParamType::IndexQuads:
       if (auto t = read_tuples<4>(n, path, n_particles)) return ParamValue(std::move(*t));
       return std::nullopt;
-    case ParamType::IntegerList: {
-      element.type = ParamType::Integer;
-      // As for RealList, a single whole number is the one-element list.
-      if (n.IsScalar()) {
-        if (auto x = read_integer(n, path, element)) {
-          return ParamValue(IntegerValues{*x});
-        }
-        return std::nullopt;
-      }
-      if (auto xs = list_of([&](const YAML::Node& e, const std::string& p) {
-            return read_integer(e, p, element);
-          })) {
-        const auto& v = std::get<std::vector<std::int64_t>>(*xs);
-        return ParamValue(IntegerValues(v.begin(), v.end()));
-      }
-      return std::nullopt;
-    }
+    case ParamType::IntegerList:
+      return read_integer_list(n, path, spec);
     case ParamType::StringList:
       return list_of([&](const YAML::Node& e, const std::string& p) -> std::optional<std::string> {
         if (e.IsScalar()) return e.Scalar();
@@ -440,6 +425,34 @@ std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::str
       return read_named_reals(n, path, spec);
   }
   return std::nullopt;
+}
+
+// [a, b, ...] of whole numbers; as for RealList, a single whole number is the
+// one-element list.
+std::optional<ParamValue> Loader::read_integer_list(const YAML::Node& n, const std::string& path,
+                                                    const ParamSpec& spec) {
+  ParamSpec element = spec;
+  element.type = ParamType::Integer;
+  if (n.IsScalar()) {
+    if (auto x = read_integer(n, path, element)) return ParamValue(IntegerValues{*x});
+    return std::nullopt;
+  }
+  if (!n.IsSequence()) {
+    error(n, path, fmt::format("{}: is not a list (expected {})", path, expectation(spec)));
+    return std::nullopt;
+  }
+  IntegerValues out;
+  bool ok = true;
+  for (std::size_t e = 0; e < n.size(); ++e) {
+    auto x = read_integer(n[e], fmt::format("{}[{}]", path, e), element);
+    if (x) {
+      out.push_back(*x);
+    } else {
+      ok = false;
+    }
+  }
+  if (!ok) return std::nullopt;
+  return ParamValue(std::move(out));
 }
 
 // { name: number, ... }: names are identifiers, so that a plugin can use

@@ -130,7 +130,8 @@ TEST(Schema, EveryPluginIsABranchWithItsParameters) {
   EXPECT_EQ(spring["required"], json({"pairs"}));
   EXPECT_EQ(spring["properties"]["pairs"]["items"]["minItems"], 2);
   EXPECT_EQ(spring["properties"]["pairs"]["items"]["items"]["minimum"], 0);
-  EXPECT_EQ(spring["properties"]["ks"]["description"], "stiffness [N/m]");
+  EXPECT_EQ(spring["properties"]["ks"]["description"],
+            "stiffness: one for all term types or one per type [N/m]");
   const json& plane = defs["collider.plane"];
   EXPECT_EQ(plane["properties"]["restitution"]["minimum"], 0);
   EXPECT_EQ(plane["properties"]["restitution"]["maximum"], 1);

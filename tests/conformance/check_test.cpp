@@ -126,7 +126,7 @@ TEST(Check, EachBrokenBondedForceFailsOnlyItsOwnBondedCheck) {
     EXPECT_EQ(verdicts.size(), 5u) << res.out;
     for (const auto& [name, verdict] : verdicts) {
       EXPECT_EQ(verdict, name == check ? "FAIL" : "pass") << plugin << ": " << name << "\n"
-                                                         << res.out;
+                                                          << res.out;
     }
   }
 }
@@ -221,7 +221,7 @@ TEST(Check, SampleParamsFillRequiredIndexPairs) {
     EXPECT_NE(pair[0], pair[1]);
     EXPECT_LT(pair[1], 6);
   }
-  EXPECT_EQ(p.real("ks"), 1.0);
+  EXPECT_EQ(p.reals("ks"), std::vector<double>{1.0});
   EXPECT_FALSE(p.has("rest"));  // optional without default: left out
 }
 

@@ -673,7 +673,7 @@ TABLE_COLUMNS = ["key", "type", "default", "unit", "range", "meaning"]
 COMPARED_COLUMNS = ["type", "default", "unit", "range"]
 KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider",
                 "writers": "writer"}
-NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|pi"
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|-?pi"
 
 
 class ParamTables(Checker):
@@ -850,7 +850,7 @@ def bounds(text):
     found = set()
 
     def num(s):
-        return math.pi if s == "pi" else float(s)
+        return {"pi": math.pi, "-pi": -math.pi}.get(s) or float(s)
 
     def interval(m):
         found.update({(">=", num(m.group(1))), ("<=", num(m.group(2)))})

@@ -94,7 +94,8 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
       "  - { type: attractor, center: [5, 5, 5] }\n"
       "  - { type: lennard_jones }\n"
       "  - { type: soft_contact }\n"
-      "  - { type: nbody }\n");
+      "  - { type: nbody }\n"
+      "  - { type: dihedral, quads: [[0, 1, 2, 3]] }\n");
   const auto start = doc.find("`potential` is the sum of the potential");
   ASSERT_NE(start, std::string::npos);
   const std::string sentence = doc.substr(start, doc.find("\n\n", start) - start);

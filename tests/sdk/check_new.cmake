@@ -1,5 +1,5 @@
 # `pdyn new` from the outside: the installed pdyn (prefix made by
-# install_sdk.cmake) writes a force, a solver, a collider, a pair and a writer project; each is
+# install_sdk.cmake) writes a force, a solver, a collider, a pair, a bonded and a writer project; each is
 # configured and built against the prefix, runs its scene with the installed
 # pdyn, passes its own CTest tests (the conformance kit and the scene) and
 # `pdyn check`. Refusals are checked first: they are fast.
@@ -25,7 +25,7 @@ foreach(leftover bad gravity thing)
   endif()
 endforeach()
 
-foreach(kind force solver collider pair writer)
+foreach(kind force solver collider pair bonded writer)
   set(name "my_${kind}")
   set(project "${WORK}/${name}")
   # The default folder is ./NAME.
@@ -40,11 +40,13 @@ foreach(kind force solver collider pair writer)
     endif()
   endforeach()
   # The README points to the guide installed with pdyn, a file that exists:
-  # pairs.md for a pair law, plugins.md for the other kinds.
+  # pairs.md for a pair law, bonded.md for a bonded term, plugins.md for the other kinds.
   file(READ "${project}/README.md" readme)
   set(guide plugins)
   if(kind STREQUAL "pair")
     set(guide pairs)
+  elseif(kind STREQUAL "bonded")
+    set(guide bonded)
   endif()
   # (Two ifs: ${CMAKE_MATCH_1} is expanded before the condition is evaluated.)
   if(NOT readme MATCHES "guide is\n([^\n]*/share/doc/pdyn/${guide}\\.md)\\.")
@@ -60,7 +62,7 @@ foreach(kind force solver collider pair writer)
 
   build_project("${project}" "${project}/build")
   set(plugin_kind ${kind})
-  if(kind STREQUAL "pair")  # a pair force is a force plugin
+  if(kind STREQUAL "pair" OR kind STREQUAL "bonded")  # pair and bonded forces are force plugins
     set(plugin_kind force)
   endif()
   if(NOT EXISTS "${project}/build/pdyn_${plugin_kind}_${name}.so")
@@ -103,6 +105,14 @@ foreach(kind force solver collider pair writer)
   if(kind STREQUAL "pair")  # the pair checks ran on the law, none skipped
     foreach(check pair.newton_third_law pair.gradient pair.matches_brute_force
                   pair.continuous_at_cutoff)
+      if(NOT last_output MATCHES "${check} +pass")
+        message(FATAL_ERROR "pdyn check ${name}: ${check} did not pass:\n${last_output}")
+      endif()
+    endforeach()
+  endif()
+  if(kind STREQUAL "bonded")  # the bonded checks ran on the terms, none skipped
+    foreach(check bonded.third_law bonded.gradient bonded.jacobian_exact bonded.jacobian_definite
+                  bonded.matches_terms force.jacobians)
       if(NOT last_output MATCHES "${check} +pass")
         message(FATAL_ERROR "pdyn check ${name}: ${check} did not pass:\n${last_output}")
       endif()

@@ -87,6 +87,7 @@
 // finite differences, and the loop's sum against the terms'.
 #pragma once
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -98,11 +99,9 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <unsupported/Eigen/AutoDiff>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
-#include <unsupported/Eigen/AutoDiff>
 
 #include "pdyn/error.hpp"
 #include "pdyn/force.hpp"
@@ -227,8 +226,8 @@ class Harmonic {
     return jacobians(p, c, dfdx, dfdv, false);
   }
 
-  bool exact_jacobian(const BondedPoint<arity>& p, const Coefficients& c,
-                      BondedMatrix<arity>& dfdx, BondedMatrix<arity>& dfdv) const {
+  bool exact_jacobian(const BondedPoint<arity>& p, const Coefficients& c, BondedMatrix<arity>& dfdx,
+                      BondedMatrix<arity>& dfdv) const {
     return jacobians(p, c, dfdx, dfdv, true);
   }
 
@@ -494,12 +493,12 @@ class BondedForce : public Force, public BondedReference {
  private:
   static constexpr bool kHasJacobian =
       requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c, BondedMatrix<N>& m) {
-        l.jacobian(q, c, m, m);
-      };
+    l.jacobian(q, c, m, m);
+  };
   static constexpr bool kHasExactJacobian =
       requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c, BondedMatrix<N>& m) {
-        l.exact_jacobian(q, c, m, m);
-      };
+    l.exact_jacobian(q, c, m, m);
+  };
 
   Index term_count() const { return static_cast<Index>(terms_.size()); }
   const Coefficients& coefficients(Index s) const {
@@ -657,11 +656,12 @@ class BondedForce : public Force, public BondedReference {
       rest_[to] = in.rest[s];
       if (!in.types.empty()) types_[to] = in.types[s];
     }
-    uniform_rest_ = std::all_of(rest_.begin(), rest_.end(), [&](double r) { return r == rest_[0]; });
+    uniform_rest_ =
+        std::all_of(rest_.begin(), rest_.end(), [&](double r) { return r == rest_[0]; });
     rest0_ = rest_.empty() ? 0.0 : rest_[0];
     if (uniform_rest_) std::vector<double>().swap(rest_);
-    if (!types_.empty() && std::all_of(types_.begin(), types_.end(),
-                                       [&](std::int32_t t) { return t == types_[0]; })) {
+    if (!types_.empty() &&
+        std::all_of(types_.begin(), types_.end(), [&](std::int32_t t) { return t == types_[0]; })) {
       // One type for all: keep its coefficients as type 0's.
       coefficients_ = {coefficients_[static_cast<std::size_t>(types_[0])]};
       std::vector<std::int32_t>().swap(types_);

@@ -102,8 +102,8 @@ TEST(DihedralForce, FlapOnAHingeOscillatesAtTheBendingFrequency) {
     last = z;
   }
   ASSERT_GE(crossings.size(), 2u);
-  const double measured = (crossings.back() - crossings.front()) /
-                          static_cast<double>(crossings.size() - 1);
+  const double measured =
+      (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
   std::cout << "dihedral flap: period " << measured << " s, expected " << period << " s\n";
   EXPECT_NEAR(measured / period, 1.0, 1e-4);
 }
@@ -120,8 +120,8 @@ TEST(DihedralForce, ForceIsMinusTheGradientAndInternal) {
     ASSERT_GT(test::MaxNorm(f), 0.1);
     const double rel = test::MaxNorm(f - test::MinusGradient(sys, 0, 1e-6)) / test::MaxNorm(f);
     const auto b = test::NetForceAndTorque(sys, f);
-    std::cout << "dihedral, seed " << seed << ": |f + grad U| / |f| = " << rel
-              << ", net force " << b.force << ", net torque " << b.torque << "\n";
+    std::cout << "dihedral, seed " << seed << ": |f + grad U| / |f| = " << rel << ", net force "
+              << b.force << ", net torque " << b.torque << "\n";
     EXPECT_LE(rel, 1e-6);
     EXPECT_LE(b.force, 1e-13);
     EXPECT_LE(b.torque, 1e-13);
@@ -156,14 +156,14 @@ particles:
 forces:
 )";
   EXPECT_EQ(test::load_problems(base + "  - { type: dihedral, quads: [[0, 1, 2, 3]], types: [2], "
-                                    "k: [2, 6] }\n"),
+                                       "k: [2, 6] }\n"),
             "test.yaml:9:54: forces[0].types[0]: 2 is not a term type (expected 0..1: k, kd give "
             "2 types)");
   EXPECT_EQ(test::load_problems(base + "  - { type: dihedral, quads: [[0, 1, 2, 1]] }\n"),
             "test.yaml:9:31: forces[0].quads[0]: [0, 1, 2, 1] repeats a particle (expected four "
             "different particles)");
   EXPECT_EQ(test::load_problems(base + "  - { type: dihedral, quads: [[0, 1, 2, 3]], k: [1, 2], "
-                                    "kd: [1, 2, 3] }\n"),
+                                       "kd: [1, 2, 3] }\n"),
             "test.yaml:9:49: forces[0].k: has 2 values (expected 1 value for all term types, or "
             "3, one per type, as the longest coefficient list gives)");
 }
