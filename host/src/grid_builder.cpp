@@ -2,8 +2,11 @@
 // + j v; particle (i, j) gets index base + j nx + i. Springs per Provot's
 // cloth model ("Deformation Constraints in a Mass-Spring Model to Describe
 // Rigid Cloth Behavior", 1995): structural (neighbours), shear (diagonals),
-// bend (second neighbours), each a `spring` force object. It sees the
-// loader only through BuilderHost, like the other builders.
+// bend (second neighbours), each a `spring` force object; and `bending`, a
+// `dihedral` force object on every interior edge of the sheet's
+// triangulation (Baraff & Witkin 1998, section 4.3: bending as the angle
+// between adjacent triangles). It sees the loader only through BuilderHost,
+// like the other builders.
 #include <fmt/format.h>
 
 #include "pdyn/host/scene_specs.hpp"
@@ -37,11 +40,50 @@ std::vector<IndexPair> family_pairs(char kind, std::int64_t nx, std::int64_t ny,
   return pairs;
 }
 
+// The hinges of the sheet cut into triangles: each cell (i, j)..(i+1, j+1)
+// split along its diagonal (i, j)-(i+1, j+1) into (i, j), (i+1, j),
+// (i+1, j+1) and (i, j), (i+1, j+1), (i, j+1). Every edge two triangles
+// share is one quadruple [a, edge, edge, b], a and b the corners opposite
+// the edge: the cells' diagonals, the row edges between rows 1..ny-2 and
+// the column edges between columns 1..nx-2. A flat sheet has phi = pi at
+// every hinge.
+std::vector<IndexQuad> hinge_quads(std::int64_t nx, std::int64_t ny, Index base) {
+  auto id = [&](std::int64_t i, std::int64_t j) { return base + j * nx + i; };
+  std::vector<IndexQuad> quads;
+  if (nx < 2 || ny < 2) return quads;
+  quads.reserve(static_cast<std::size_t>(3 * (nx - 1) * (ny - 1)));
+  for (std::int64_t j = 0; j + 1 < ny; ++j) {
+    for (std::int64_t i = 0; i + 1 < nx; ++i) {
+      // The cell's diagonal, between its two triangles.
+      quads.push_back({id(i + 1, j), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+      // The row edge (i, j)-(i+1, j), between this cell and the one below.
+      if (j >= 1) quads.push_back({id(i + 1, j + 1), id(i, j), id(i + 1, j), id(i, j - 1)});
+      // The column edge (i, j)-(i, j+1), between this cell and the one left.
+      if (i >= 1) quads.push_back({id(i + 1, j + 1), id(i, j), id(i, j + 1), id(i - 1, j)});
+    }
+  }
+  return quads;
+}
+
+// `bending: { k, kd, rest }`: a dihedral force on the sheet's hinges.
+void read_bending(BuilderHost& host, const YAML::Node& g, const std::string& path, std::int64_t nx,
+                  std::int64_t ny, Index base) {
+  const YAML::Node b = g["bending"];
+  if (!b.IsDefined() || b.IsNull()) return;
+  const std::string bp = path + ".bending";
+  if (!host.check_map(b, bp, "bending: { k: N m/rad, kd: N m s/rad }")) return;
+  std::vector<IndexQuad> quads = hinge_quads(nx, ny, base);
+  const bool create = !quads.empty();
+  Params generated;
+  generated.set("quads", std::move(quads));
+  host.add_force("dihedral", b, bp, generated, Params{}, create);
+}
+
 }  // namespace
 
 void read_grid(BuilderHost& host, const YAML::Node& g, const std::string& path) {
   if (!host.check_map(g, path, "grid: { origin, u, v, nx, ny, mass, ... }")) return;
-  auto p = host.read_params(g, path, grid_specs(), {"springs"});
+  auto p = host.read_params(g, path, grid_specs(), {"springs", "bending"});
   if (!p) return;
   const std::int64_t nx = p->integer("nx"), ny = p->integer("ny");
   if (nx > kMaxParticles || ny > kMaxParticles ||
@@ -88,6 +130,7 @@ void read_grid(BuilderHost& host, const YAML::Node& g, const std::string& path) 
   }
   if (p->has("name"))
     host.add_group(p->string("name"), std::move(members), g["name"], path + ".name");
+  read_bending(host, g, path, nx, ny, base);
   const YAML::Node springs = g["springs"];
   if (!springs.IsDefined() || springs.IsNull()) return;
   const std::string sp = path + ".springs";

@@ -108,6 +108,13 @@ std::vector<BuilderSpec> builder_specs() {
          "spring",
          "pairs",
          {"structural", "shear", "bend"},
+         {}},
+        {"bending",
+         "bending stiffness on every interior edge of the triangulated sheet: `dihedral` plugin "
+         "parameters",
+         "dihedral",
+         "quads",
+         {},
          {}}}}};
   for (auto& b : more_builder_specs()) all.push_back(std::move(b));
   return all;

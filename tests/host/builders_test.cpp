@@ -15,6 +15,7 @@
 #include <numbers>
 #include <set>
 
+#include "pdyn/bonded.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
@@ -111,6 +112,43 @@ TEST(ChainBuilder, BendMakesAngleSpringsOnConsecutiveTriples) {
   std::cout << "chain bend: angle energy " << u_angle << " J = " << triples
             << " x k d^2 / 2 (expected " << kN - 2 << ")\n";
   EXPECT_NEAR(triples, kN - 2, 1e-6);
+}
+
+// A 7 x 5 grid with `bending`: one dihedral object with a hinge on every
+// interior edge of the triangulated sheet, (nx-1)(ny-1) diagonals +
+// (nx-1)(ny-2) row edges + (nx-2)(ny-1) column edges, at rest when flat.
+// Rolled onto a cylinder of radius R whose axis runs along v, neighbours
+// along u a chord h apart, each column strip stays a flat facet and adjacent
+// facets meet at the angle theta = 2 asin(h / 2R): only the column edges
+// bend, each by theta, so U = (nx-2)(ny-1) k theta^2 / 2.
+TEST(GridBuilder, BendingPutsADihedralOnEveryInteriorEdge) {
+  constexpr std::int64_t kNx = 7, kNy = 5;
+  constexpr double kK = 0.3, kH = 0.1, kR = 0.4;
+  Scene s = test::load_text(
+      Head("  - grid: { origin: [0, 0, 0], u: [0.1, 0, 0], v: [0, 0.1, 0], nx: 7, ny: 5, "
+           "mass: 0.01, bending: { k: 0.3 } }\n"));
+  ASSERT_EQ(CountObjects(s, "dihedral"), 1);
+  const BondedReference* hinges = nullptr;
+  for (const auto& e : s.system->force_objects()) {
+    if (e.label.rfind("dihedral ", 0) == 0)
+      hinges = dynamic_cast<const BondedReference*>(e.force.get());
+  }
+  ASSERT_NE(hinges, nullptr);
+  EXPECT_EQ(hinges->bonded_terms(),
+            (kNx - 1) * (kNy - 1) + (kNx - 1) * (kNy - 2) + (kNx - 2) * (kNy - 1));
+  EXPECT_NEAR(s.system->potential_energy(), 0.0, 1e-24);
+  const double theta = 2.0 * std::asin(kH / (2.0 * kR));
+  for (std::int64_t j = 0; j < kNy; ++j) {
+    for (std::int64_t i = 0; i < kNx; ++i) {
+      const double a = static_cast<double>(i) * theta;
+      s.system->positions().col(j * kNx + i) =
+          Vec3(kR * std::sin(a), static_cast<double>(j) * kH, kR * (1.0 - std::cos(a)));
+    }
+  }
+  const double expected = static_cast<double>((kNx - 2) * (kNy - 1)) * 0.5 * kK * theta * theta;
+  std::cout << "grid bending on a cylinder: U = " << s.system->potential_energy() << " J, expected "
+            << expected << " J\n";
+  EXPECT_NEAR(s.system->potential_energy(), expected, 1e-12 * expected);
 }
 
 TEST(LatticeBuilder, MakesStructuralAndShearSpringsByDefault) {
