@@ -2,7 +2,7 @@
 // on the state, adding only, finite on degenerate configurations) and what
 // its descriptor and methods claim (internal: zero net force and torque,
 // translation invariance; f = -grad U; analytic Jacobians; dissipative;
-// independence of velocity or time;
+// independence of velocity or time; periodic invariance;
 // and, for a pair force, the pair.* checks of pairs.cpp).
 #include <fmt/format.h>
 
@@ -13,6 +13,8 @@
 #include <functional>
 #include <memory>
 #include <pdyn/local_force.hpp>
+#include <pdyn/pair.hpp>
+#include <pdyn/periodic_invariant.hpp>
 #include <random>
 
 #include "checks.hpp"
@@ -282,6 +284,41 @@ void claim_checks(ForceCase& c, std::vector<CheckResult>& out) {
   }
 }
 
+// A force that declares itself periodic-invariant gives the same forces, to
+// rounding, when half the particles are moved by whole box lengths, as the
+// wrap after a step moves them (velocity Verlet then keeps the forces it
+// evaluated before the wrap). In a periodic box of side L = max(2.5, 3 rc +
+// 1) m around the kit's particles, rc a pair force's cutoff.
+void periodic_check(const PluginDescriptor& d, const Params& params, ForceCase& c,
+                    std::vector<CheckResult>& out) {
+  const char* name = "force.periodic_invariant";
+  if (!periodic_invariant(c.force)) {
+    out.push_back(skip(name, "not declared periodic-invariant (pdyn/periodic_invariant.hpp)"));
+    return;
+  }
+  guarded(out, name, [&] {
+    const auto* pair = dynamic_cast<const PairReference*>(&c.force);
+    const double length = std::max(2.5, pair ? 3.0 * pair->pair_cutoff() + 1.0 : 0.0);
+    State inside = c.home;
+    inside.domain.min = Vec3::Constant(-0.5 * length);
+    inside.domain.max = Vec3::Constant(0.5 * length);
+    inside.domain.periodic = {true, true, true};
+    State shifted = inside;
+    std::uniform_int_distribution<int> axis(0, 2), sign(0, 1);
+    for (Index i = 0; i < shifted.size(); i += 2) {
+      shifted.x(axis(c.rng), i) += sign(c.rng) ? length : -length;
+    }
+    const std::shared_ptr<Force> a(d.create_force(params, context_of(inside)));
+    const std::shared_ptr<Force> b(d.create_force(params, context_of(shifted)));
+    const Matrix3X fa = forces_of(*a, inside), fb = forces_of(*b, shifted);
+    const double err = max_abs(fa - fb), bound = 1e-9 * (1.0 + max_abs(fa));
+    return result(name, err <= bound, err, bound,
+                  fmt::format("|f(x + whole box lengths) - f(x)|_max, N, half the particles moved "
+                              "by +-{:g} m in a periodic box",
+                              length));
+  });
+}
+
 }  // namespace
 
 void force_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
@@ -304,6 +341,7 @@ void force_checks(const PluginDescriptor& d, const Options& o, std::vector<Check
   internal_checks(c, out);
   derivative_checks(c, out);
   claim_checks(c, out);
+  periodic_check(d, params, c, out);
   pair_checks(d, params, *force, rng, out);
   bonded_checks(d, params, *force, rng, out);
 }

@@ -186,9 +186,12 @@ std::optional<double> Stepper::guarded(const Take& take) {
     return fail();
   }
   previous_.swap(next_);  // the next step's last good state, if nobody writes before it
-  // Only after a good step: a failed one leaves the images alone.
-  SystemAssembly(sys_).wrap_positions();
-  version_ = sys_.state_version();
+  // Only after a good step: a failed one leaves the images alone. A wrap
+  // that moved a particle leaves previous_ behind the state (and its image
+  // counts) even when it did not change state_version() (every force
+  // periodic-invariant): the next step copies the state again.
+  const bool moved = SystemAssembly(sys_).wrap_positions();
+  version_ = moved ? ~std::uint64_t{0} : sys_.state_version();
   return h;
 }
 

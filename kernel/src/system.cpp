@@ -11,6 +11,7 @@
 #include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/local_force.hpp"
 #include "pdyn/parallel.hpp"
+#include "pdyn/periodic_invariant.hpp"
 
 namespace pdyn {
 
@@ -114,8 +115,8 @@ void System::set_images(std::vector<std::array<std::int32_t, 3>> images) {
 
 // Wrapping moves x by whole box lengths only, so forces that measure
 // separations by the minimum image see the same system before and after.
-void System::wrap_positions() {
-  if (!domain_.any_periodic()) return;
+bool System::wrap_positions() {
+  if (!domain_.any_periodic()) return false;
   // Not positions(): only a wrap that moves a particle changes the version.
   // Forces evaluated before it stay valid otherwise, bit for bit.
   Eigen::Map<Matrix3X> x(state_.data(), 3, size());
@@ -134,7 +135,15 @@ void System::wrap_positions() {
     x.col(i) = after;
     moved = true;
   }
-  if (moved) touch();
+  // A wrap is a change of the state for a force that measures separations
+  // as given (a spring across a face); not when every force is
+  // periodic-invariant, so that a solver may keep the forces it evaluated
+  // before the wrap (velocity Verlet's end-of-step forces, issue 30).
+  const bool invariant = std::all_of(forces_.begin(), forces_.end(), [](const ForceEntry& e) {
+    return periodic_invariant(*e.force);
+  });
+  if (moved && !invariant) touch();
+  return moved;
 }
 
 void System::set_fixed(Index i, bool fixed) {

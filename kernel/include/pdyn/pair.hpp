@@ -53,6 +53,10 @@
 // -ffp-contract=off (pdyn_add_plugin) so that no compiler fuses the
 // arithmetic of two copies of the pair evaluation differently.
 //
+// Periodic boxes. Every separation is measured to the nearest image, so a
+// PairForce is PeriodicInvariant (pdyn/periodic_invariant.hpp): the wrap
+// after each step does not make velocity Verlet evaluate it again.
+//
 // Checking (PairReference below). Every PairForce also offers the
 // conformance kit (`pdyn check`) what it needs to check the pair loop
 // against the law: the cutoff, a brute-force sum over all pairs (no
@@ -80,6 +84,7 @@
 #include "pdyn/force.hpp"
 #include "pdyn/neighbors.hpp"
 #include "pdyn/parallel.hpp"
+#include "pdyn/periodic_invariant.hpp"
 
 namespace pdyn {
 
@@ -139,7 +144,7 @@ class PairReference {
 /// file). `members`: N flags (a selection) or empty for every particle; only
 /// pairs of two members interact.
 template <class Law>
-class PairForce : public Force, public PairReference {
+class PairForce : public Force, public PairReference, public PeriodicInvariant {
  public:
   PairForce(Law law, double cutoff, double skin, std::vector<std::uint8_t> members = {})
       : law_(std::move(law)),

@@ -170,8 +170,11 @@ class System {
   void set_images(std::vector<std::array<std::int32_t, 3>> images);
   /// Brings every particle back into the box along periodic axes (counting
   /// the box lengths in images()); nothing without a periodic axis. The
-  /// Stepper calls it after each accepted step.
-  void wrap_positions();
+  /// Stepper calls it after each accepted step. Returns true if it moved a
+  /// particle. A move changes state_version() unless every force object is
+  /// periodic-invariant (pdyn/periodic_invariant.hpp): forces evaluated
+  /// before the wrap then stay valid, to rounding.
+  bool wrap_positions();
   /// Runs every collider's collision response; the kernel's runner calls it
   /// after each accepted step of length `h`.
   void respond_to_collisions(double h);

@@ -2,6 +2,7 @@
 // "Viscous Drag"). It removes energy, so it declares itself dissipative.
 #include <pdyn/local_force.hpp>
 #include <pdyn/parallel.hpp>
+#include <pdyn/periodic_invariant.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 
@@ -9,7 +10,9 @@ namespace {
 
 // f_i = -k v_i depends on particle i alone: a LocalForce, which the kernel
 // adds inside its gather pass when it can.
-class Drag final : public pdyn::Force, public pdyn::LocalForce {
+// PeriodicInvariant: it reads velocities only, so a wrap into a periodic box
+// cannot change it (pdyn/periodic_invariant.hpp).
+class Drag final : public pdyn::Force, public pdyn::LocalForce, public pdyn::PeriodicInvariant {
  public:
   Drag(double k, pdyn::Selection selection) : k_(k), selection_(std::move(selection)) {}
 

@@ -2,6 +2,7 @@
 // (Witkin, SIGGRAPH '97 notes, "Gravity").
 #include <pdyn/local_force.hpp>
 #include <pdyn/parallel.hpp>
+#include <pdyn/periodic_invariant.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 
@@ -9,7 +10,9 @@ namespace {
 
 // f_i = m_i g depends on particle i alone: a LocalForce, which the kernel
 // adds inside its gather pass when it can.
-class Gravity final : public pdyn::Force, public pdyn::LocalForce {
+// PeriodicInvariant: a uniform field, so a wrap into a periodic box
+// cannot change it (pdyn/periodic_invariant.hpp).
+class Gravity final : public pdyn::Force, public pdyn::LocalForce, public pdyn::PeriodicInvariant {
  public:
   Gravity(const pdyn::Vec3& g, pdyn::Selection selection)
       : g_(g), selection_(std::move(selection)) {}

@@ -24,9 +24,11 @@
 //       collider (contact forces depend on velocity): a1 was evaluated at
 //       v_half, not at v1;
 //     - nothing but the kernel's step wrote the state since this step ended
-//       (System::state_version(): a collider's response, a wrap that moved
-//       a particle, a checkpoint, an interactive edit, a force added or
-//       removed all change it);
+//       (System::state_version(): a collider's response, a checkpoint, an
+//       interactive edit, a force added or removed all change it, and a
+//       wrap into a periodic box that moved a particle unless every force
+//       is periodic-invariant, pdyn/periodic_invariant.hpp: then a1,
+//       evaluated before the wrap, equals a fresh a0 to rounding);
 //     - no force evaluation has happened since, so the System still holds
 //       a1 (force_evaluations());
 //     - the time is the one a1 was evaluated at, exactly, if any force

@@ -50,7 +50,7 @@ class SystemAssembly {
   void set_images(std::vector<std::array<std::int32_t, 3>> images) const {
     sys_.set_images(std::move(images));
   }
-  void wrap_positions() const { sys_.wrap_positions(); }
+  bool wrap_positions() const { return sys_.wrap_positions(); }
   void respond_to_collisions(double h) const { sys_.respond_to_collisions(h); }
   void set_finite_checks(bool on) const noexcept { sys_.set_finite_checks(on); }
 
