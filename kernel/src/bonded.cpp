@@ -41,6 +41,16 @@ std::vector<HarmonicCoefficients> harmonic_coefficients(const Params& params, st
   return out;
 }
 
+std::vector<ParamSpec> harmonic_params(const std::string& what, const std::string& k_unit,
+                                       const std::string& kd_unit) {
+  return {bonded_types_param(),
+          param::real_list("k", 1.0, k_unit, what + ": one for all term types or one per type")
+              .at_least(0),
+          param::real_list("kd", 0.0, kd_unit,
+                           "damping of its rate: one for all term types or one per type")
+              .at_least(0)};
+}
+
 ParamSpec bonded_types_param() {
   return param::optional("types", ParamType::IntegerList, "",
                          "the type of each term, 0..T-1, choosing its coefficients (one for "

@@ -1,4 +1,6 @@
 """Bad input: Python exceptions with the command line's located messages."""
+import math
+
 import pytest
 
 import pdyn
@@ -104,3 +106,26 @@ def test_solver_change(fall):
     with pytest.raises(pdyn.SceneError, match="is a force plugin, not a solver"):
         fall.set_solver("gravity")
     fall.step(10)
+
+
+PERPENDICULAR = """
+simulation: { dt: 0.001, steps: 1 }
+particles:
+  - { position: [0, 1, 0], mass: 1 }
+  - { position: [0, 0, 0], mass: 1 }
+  - { position: [1, 0, 0], mass: 1 }
+  - { position: [1, 0, 1], mass: 1 }
+"""
+
+
+def test_bonded_quads_and_types_from_python():
+    # Planes at right angles: phi = pi/2; rest pi, so each term has
+    # U = k/2 (pi/2)^2, with k 2 for type 0 and 6 for type 1 (docs/bonded.md).
+    sim = pdyn.loads(PERPENDICULAR, name="hinge.yaml", threads=1)
+    label = sim.add_force("dihedral", quads=[[0, 1, 2, 3], [3, 2, 1, 0]], types=[0, 1],
+                          k=[2, 6], rest=math.pi)
+    assert sim.energies()["potential"][label] == pytest.approx(8 * (math.pi / 2) ** 2 / 2,
+                                                               rel=1e-14)
+    with pytest.raises(pdyn.SceneError, match=r"force.types\[0\]: 2 is not a term type "
+                                              r"\(expected 0..1: k, kd give 2 types\)"):
+        sim.add_force("dihedral", quads=[[0, 1, 2, 3]], types=[2], k=[2, 6])

@@ -41,8 +41,6 @@ struct Geometry {
   }
 };
 
-using Law = pdyn::Harmonic<Geometry>;
-
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
@@ -54,24 +52,20 @@ pdyn::PluginDescriptor describe() {
   d.params = {
       pdyn::param::required("triples", pdyn::ParamType::IndexTriples, "",
                             "particle triples [[i, j, k], ...]; the spring joins i and k"),
-      pdyn::bonded_types_param(),
-      pdyn::param::real_list("k", 100.0, "N/m", "stiffness: one for all types or one per type")
-          .at_least(0),
-      pdyn::param::real_list("kd", 0.0, "N s/m", "damping: one for all types or one per type")
-          .at_least(0),
       pdyn::param::optional("rest", pdyn::ParamType::RealList, "m",
                             "rest distances: one for all triples or one per triple; default: the "
                             "initial distances")
           .at_least(0),
   };
+  // After the terms: `types`, `k` and `kd`, one value per term type.
+  auto shared = pdyn::harmonic_params("stiffness", "N/m", "N s/m");
+  d.params.insert(d.params.begin() + 1, shared.begin(), shared.end());
   d.force_traits.internal = true;  // q is invariant under rigid motions
+  // Terms, types, rest values and coefficients, read and checked in one
+  // place (pdyn::read_bonded and pdyn::harmonic_coefficients, which a law
+  // of your own calls directly: docs/bonded.md).
   d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-    const Law law;
-    // Terms, types and rest values, read and checked in one place.
-    const auto in = pdyn::read_bonded<3>(p, ctx, "triples", {"k", "kd"},
-                                         [&](const auto& x) { return law.measure(x); });
-    return std::make_unique<pdyn::BondedForce<Law>>(
-        law, in, pdyn::harmonic_coefficients(p, in.n_types, "k", "kd"), ctx.particles.size());
+    return pdyn::make_harmonic<Geometry>(p, ctx, "triples");
   };
   return d;
 }

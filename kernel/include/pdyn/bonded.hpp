@@ -94,6 +94,7 @@
 #include <concepts>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -365,6 +366,13 @@ std::vector<HarmonicCoefficients> harmonic_coefficients(const Params& params, st
 
 /// The `types` parameter every bonded plugin declares (see read_bonded).
 ParamSpec bonded_types_param();
+
+/// The parameters of a Harmonic force after its term list: `types`, then
+/// `k` (default 1, in `k_unit`) and `kd` (default 0, in `kd_unit`), each one
+/// value for all term types or one per type; `what` names the stiffness
+/// ("bending stiffness").
+std::vector<ParamSpec> harmonic_params(const std::string& what, const std::string& k_unit,
+                                       const std::string& kd_unit);
 
 /// A force made of bonded terms with law `Law` (see the top of this file).
 template <class Law>
@@ -699,6 +707,19 @@ class BondedForce : public Force, public BondedReference {
   std::vector<Index> incident_;       // N s + a: particle a of boundary term s
   mutable Matrix3X buffer_;           // boundary terms' forces, N
 };
+
+/// The factory of a Harmonic<Geometry> force: its terms from `terms_key`,
+/// `types`, `rest`, `k` and `kd` read by read_bonded and
+/// harmonic_coefficients.
+template <class Geometry>
+std::unique_ptr<Force> make_harmonic(const Params& params, const SceneContext& ctx,
+                                     std::string_view terms_key) {
+  const Harmonic<Geometry> law;
+  const auto in = read_bonded<Geometry::arity>(params, ctx, terms_key, {"k", "kd"},
+                                               [&](const auto& x) { return law.measure(x); });
+  return std::make_unique<BondedForce<Harmonic<Geometry>>>(
+      law, in, harmonic_coefficients(params, in.n_types, "k", "kd"), ctx.particles.size());
+}
 
 // ---- Harmonic's Jacobians ----
 

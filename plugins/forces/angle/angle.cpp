@@ -65,14 +65,8 @@ struct Bend {
   }
 };
 
-using Angle = pdyn::BondedForce<pdyn::Harmonic<Bend>>;
-
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  const pdyn::Harmonic<Bend> law;
-  const auto in = pdyn::read_bonded<3>(p, ctx, "triples", {"k", "kd"},
-                                       [&](const auto& x) { return law.measure(x); });
-  return std::make_unique<Angle>(law, in, pdyn::harmonic_coefficients(p, in.n_types, "k", "kd"),
-                                 ctx.particles.size());
+  return pdyn::make_harmonic<Bend>(p, ctx, "triples");
 }
 
 pdyn::PluginDescriptor describe() {
@@ -86,19 +80,15 @@ pdyn::PluginDescriptor describe() {
   d.params = {
       pdyn::param::required("triples", pdyn::ParamType::IndexTriples, "",
                             "particle triples [[i, j, k], ...]; the angle is at the middle one j"),
-      pdyn::bonded_types_param(),
-      pdyn::param::real_list("k", 1.0, "N m/rad",
-                             "bending stiffness: one for all term types or one per type")
-          .at_least(0),
-      pdyn::param::real_list("kd", 0.0, "N m s/rad",
-                             "damping of the bending rate: one for all term types or one per type")
-          .at_least(0),
       pdyn::param::optional("rest", pdyn::ParamType::RealList, "rad",
                             "rest angles: one for all triples or one per triple; default: the "
                             "initial angles")
           .at_least(0)
           .at_most(std::numbers::pi),
   };
+  // After the terms: types, k, kd (pdyn/bonded.hpp); then rest.
+  auto shared = pdyn::harmonic_params("bending stiffness", "N m/rad", "N m s/rad");
+  d.params.insert(d.params.begin() + 1, shared.begin(), shared.end());
   d.force_traits.internal = true;
   d.create_force = create;
   return d;

@@ -56,14 +56,8 @@ struct Triangle {
   }
 };
 
-using Area = pdyn::BondedForce<pdyn::Harmonic<Triangle>>;
-
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  const pdyn::Harmonic<Triangle> law;
-  const auto in = pdyn::read_bonded<3>(p, ctx, "triples", {"k", "kd"},
-                                       [&](const auto& x) { return law.measure(x); });
-  return std::make_unique<Area>(law, in, pdyn::harmonic_coefficients(p, in.n_types, "k", "kd"),
-                                ctx.particles.size());
+  return pdyn::make_harmonic<Triangle>(p, ctx, "triples");
 }
 
 pdyn::PluginDescriptor describe() {
@@ -77,20 +71,14 @@ pdyn::PluginDescriptor describe() {
   d.params = {
       pdyn::param::required("triples", pdyn::ParamType::IndexTriples, "",
                             "triangles [[i, j, k], ...] of particle indices"),
-      pdyn::bonded_types_param(),
-      pdyn::param::real_list("k", 1.0, "N/m^3",
-                             "area stiffness (U = k/2 (A - A0)^2): one for all term types or one "
-                             "per type")
-          .at_least(0),
-      pdyn::param::real_list("kd", 0.0, "N s/m^3",
-                             "damping of the rate of change of area: one for all term types or "
-                             "one per type")
-          .at_least(0),
       pdyn::param::optional("rest", pdyn::ParamType::RealList, "m^2",
                             "rest areas: one for all triangles or one per triangle; default: the "
                             "initial areas")
           .at_least(0),
   };
+  // After the terms: types, k, kd (pdyn/bonded.hpp); then rest.
+  auto shared = pdyn::harmonic_params("area stiffness (U = k/2 (A - A0)^2)", "N/m^3", "N s/m^3");
+  d.params.insert(d.params.begin() + 1, shared.begin(), shared.end());
   d.force_traits.internal = true;
   d.create_force = create;
   return d;

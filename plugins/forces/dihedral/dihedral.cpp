@@ -80,14 +80,8 @@ struct Dihedral {
   }
 };
 
-using DihedralForce = pdyn::BondedForce<pdyn::Harmonic<Dihedral>>;
-
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  const pdyn::Harmonic<Dihedral> law;
-  const auto in = pdyn::read_bonded<4>(p, ctx, "quads", {"k", "kd"},
-                                       [&](const auto& x) { return law.measure(x); });
-  return std::make_unique<DihedralForce>(
-      law, in, pdyn::harmonic_coefficients(p, in.n_types, "k", "kd"), ctx.particles.size());
+  return pdyn::make_harmonic<Dihedral>(p, ctx, "quads");
 }
 
 pdyn::PluginDescriptor describe() {
@@ -102,19 +96,15 @@ pdyn::PluginDescriptor describe() {
       pdyn::param::required("quads", pdyn::ParamType::IndexQuads, "",
                             "particle quadruples [[i, j, k, l], ...]: triangles (i, j, k) and "
                             "(j, k, l) hinged on the edge j-k"),
-      pdyn::bonded_types_param(),
-      pdyn::param::real_list("k", 1.0, "N m/rad",
-                             "bending stiffness: one for all term types or one per type")
-          .at_least(0),
-      pdyn::param::real_list("kd", 0.0, "N m s/rad",
-                             "damping of the bending rate: one for all term types or one per type")
-          .at_least(0),
       pdyn::param::optional("rest", pdyn::ParamType::RealList, "rad",
                             "rest angles in [-pi, pi] (pi: flat): one for all quadruples or one "
                             "per quadruple; default: the initial angles")
           .at_least(-std::numbers::pi)
           .at_most(std::numbers::pi),
   };
+  // After the terms: types, k, kd (pdyn/bonded.hpp); then rest.
+  auto shared = pdyn::harmonic_params("bending stiffness", "N m/rad", "N m s/rad");
+  d.params.insert(d.params.begin() + 1, shared.begin(), shared.end());
   d.force_traits.internal = true;
   d.create_force = create;
   return d;

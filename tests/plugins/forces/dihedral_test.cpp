@@ -21,14 +21,7 @@ namespace {
 using std::numbers::pi;
 
 // Edge j-k along x; i in the (x, y) plane at y = 1, l at z = 1 above k.
-// F = x_i - x_j = (0, 1, 0), G = x_j - x_k = (-1, 0, 0), H = x_l - x_k =
-// (0, 0, 1): A = F x G = (0, 0, 1), B = H x G = (0, -1, 0), A . B = 0 and
-// (B x A) . G / |G| = 1, so phi = atan2(1, 0) = pi/2. With phi0 = pi and
-// k = 2: U = k/2 (pi/2)^2 = pi^2/4, and the force on l is
-// -k (phi - phi0) |G|/|B|^2 B = 2 (pi/2) (0, -1, 0) = (0, -pi, 0): l is
-// pushed down towards the flat sheet.
-TEST(DihedralForce, PerpendicularPlanesHaveTheExpectedEnergyAndForce) {
-  Scene scene = test::load_text(R"(
+constexpr const char* kPerpendicular = R"(
 simulation: { dt: 0.001, steps: 1 }
 particles:
   - { position: [0, 1, 0], mass: 1 }
@@ -36,8 +29,18 @@ particles:
   - { position: [1, 0, 0], mass: 1 }
   - { position: [1, 0, 1], mass: 1 }
 forces:
-  - { type: dihedral, quads: [[0, 1, 2, 3]], k: 2, rest: [3.141592653589793] }
-)");
+)";
+
+// F = x_i - x_j = (0, 1, 0), G = x_j - x_k = (-1, 0, 0), H = x_l - x_k =
+// (0, 0, 1): A = F x G = (0, 0, 1), B = H x G = (0, -1, 0), A . B = 0 and
+// (B x A) . G / |G| = 1, so phi = atan2(1, 0) = pi/2. With phi0 = pi and
+// k = 2: U = k/2 (pi/2)^2 = pi^2/4, and the force on l is
+// -k (phi - phi0) |G|/|B|^2 B = 2 (pi/2) (0, -1, 0) = (0, -pi, 0): l is
+// pushed down towards the flat sheet.
+TEST(DihedralForce, PerpendicularPlanesHaveTheExpectedEnergyAndForce) {
+  Scene scene = test::load_text(std::string(kPerpendicular) +
+                                "  - { type: dihedral, quads: [[0, 1, 2, 3]], k: 2, rest: "
+                                "[3.141592653589793] }\n");
   EXPECT_NEAR(scene.system->potential_energy(), pi * pi / 4.0, 1e-14);
   const Matrix3X f = test::ForcesOf(*scene.system, 0);
   EXPECT_NEAR((f.col(3) - Vec3(0.0, -pi, 0.0)).norm(), 0.0, 1e-14);
@@ -131,30 +134,14 @@ TEST(DihedralForce, ForceIsMinusTheGradientAndInternal) {
 // Two terms of the perpendicular configuration above, of types 0 and 1
 // with k = [2, 6]: U = (2 + 6)/2 (pi/2)^2.
 TEST(DihedralForce, TypesChooseEachTermsCoefficients) {
-  Scene scene = test::load_text(R"(
-simulation: { dt: 0.001, steps: 1 }
-particles:
-  - { position: [0, 1, 0], mass: 1 }
-  - { position: [0, 0, 0], mass: 1 }
-  - { position: [1, 0, 0], mass: 1 }
-  - { position: [1, 0, 1], mass: 1 }
-forces:
-  - { type: dihedral, quads: [[0, 1, 2, 3], [3, 2, 1, 0]], types: [0, 1], k: [2, 6],
-      rest: [3.141592653589793] }
-)");
+  Scene scene = test::load_text(std::string(kPerpendicular) +
+                                "  - { type: dihedral, quads: [[0, 1, 2, 3], [3, 2, 1, 0]], types: "
+                                "[0, 1], k: [2, 6], rest: [3.141592653589793] }\n");
   EXPECT_NEAR(scene.system->potential_energy(), 4.0 * pi * pi / 4.0, 1e-13);
 }
 
 TEST(DihedralForce, BadTypesAreRefusedWithTheirPlace) {
-  const std::string base = R"(
-simulation: { dt: 0.001, steps: 1 }
-particles:
-  - { position: [0, 1, 0], mass: 1 }
-  - { position: [0, 0, 0], mass: 1 }
-  - { position: [1, 0, 0], mass: 1 }
-  - { position: [1, 0, 1], mass: 1 }
-forces:
-)";
+  const std::string base = kPerpendicular;
   EXPECT_EQ(test::load_problems(base + "  - { type: dihedral, quads: [[0, 1, 2, 3]], types: [2], "
                                        "k: [2, 6] }\n"),
             "test.yaml:9:54: forces[0].types[0]: 2 is not a term type (expected 0..1: k, kd give "
