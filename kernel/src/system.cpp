@@ -139,10 +139,12 @@ bool System::wrap_positions() {
   // as given (a spring across a face); not when every force is
   // periodic-invariant, so that a solver may keep the forces it evaluated
   // before the wrap (velocity Verlet's end-of-step forces, issue 30).
-  const bool invariant = std::all_of(forces_.begin(), forces_.end(), [](const ForceEntry& e) {
-    return periodic_invariant(*e.force);
-  });
-  if (moved && !invariant) touch();
+  // (Asked only when something moved: most steps wrap nobody.)
+  auto invariant = [this] {
+    return std::all_of(forces_.begin(), forces_.end(),
+                       [](const ForceEntry& e) { return periodic_invariant(*e.force); });
+  };
+  if (moved && !invariant()) touch();
   return moved;
 }
 
