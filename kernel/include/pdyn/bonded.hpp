@@ -343,11 +343,9 @@ BondedInput<N> read_bonded(const Params& params, const SceneContext& ctx,
                          static_cast<long>(s));
       }
     }
-    in.types.assign(in.terms.size(), static_cast<std::int32_t>(given[0]));
-    if (given.size() > 1) {
-      for (std::size_t s = 0; s < given.size(); ++s) {
-        in.types[s] = static_cast<std::int32_t>(given[s]);
-      }
+    in.types.resize(in.terms.size());
+    for (std::size_t s = 0; s < in.types.size(); ++s) {
+      in.types[s] = static_cast<std::int32_t>(given.size() == 1 ? given[0] : given[s]);
     }
   }
   const auto& x = ctx.particles.x;
