@@ -89,6 +89,9 @@ class Loader final : public BuilderHost {
                                          const ParamSpec& spec);
   std::optional<ParamValue> read_named_reals(const YAML::Node& n, const std::string& path,
                                              const ParamSpec& spec);
+  template <class List, class ReadOne>
+  std::optional<List> read_list(const YAML::Node& n, const std::string& path, const ParamSpec& spec,
+                                ReadOne&& read_one);
   std::optional<ParamValue> read_integer_list(const YAML::Node& n, const std::string& path,
                                               const ParamSpec& spec);
   std::optional<std::int64_t> read_integer(const YAML::Node& n, const std::string& path,

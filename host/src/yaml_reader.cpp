@@ -349,26 +349,36 @@ std::optional<ParamValue> Loader::read_boolean(const YAML::Node& n, const std::s
   return std::nullopt;
 }
 
+// [x, ...] read element by element with read_one(node, path), which returns
+// an optional element and reports a bad one; every bad element is reported.
+template <class List, class ReadOne>
+std::optional<List> Loader::read_list(const YAML::Node& n, const std::string& path,
+                                      const ParamSpec& spec, ReadOne&& read_one) {
+  if (!n.IsSequence()) {
+    error(n, path, fmt::format("{}: is not a list (expected {})", path, expectation(spec)));
+    return std::nullopt;
+  }
+  List out;
+  out.reserve(n.size());
+  bool ok = true;
+  for (std::size_t e = 0; e < n.size(); ++e) {
+    auto x = read_one(n[e], fmt::format("{}[{}]", path, e));
+    if (x)
+      out.push_back(*x);
+    else
+      ok = false;
+  }
+  if (!ok) return std::nullopt;
+  return out;
+}
+
 std::optional<ParamValue> Loader::read_value(const YAML::Node& n, const std::string& path,
                                              const ParamSpec& spec, Index n_particles) {
   auto list_of = [&](auto&& read_one) -> std::optional<ParamValue> {
     using T = typename std::decay_t<decltype(*read_one(n, path))>;
-    if (!n.IsSequence()) {
-      error(n, path, fmt::format("{}: is not a list (expected {})", path, expectation(spec)));
-      return std::nullopt;
-    }
-    std::vector<T> out;
-    out.reserve(n.size());
-    bool ok = true;
-    for (std::size_t e = 0; e < n.size(); ++e) {
-      auto x = read_one(n[e], fmt::format("{}[{}]", path, e));
-      if (x)
-        out.push_back(*x);
-      else
-        ok = false;
-    }
-    if (!ok) return std::nullopt;
-    return ParamValue(std::move(out));
+    if (auto xs = read_list<std::vector<T>>(n, path, spec, read_one))
+      return ParamValue(std::move(*xs));
+    return std::nullopt;
   };
   ParamSpec element = spec;
   switch (spec.type) {
@@ -437,22 +447,11 @@ std::optional<ParamValue> Loader::read_integer_list(const YAML::Node& n, const s
     if (auto x = read_integer(n, path, element)) return ParamValue(IntegerValues{*x});
     return std::nullopt;
   }
-  if (!n.IsSequence()) {
-    error(n, path, fmt::format("{}: is not a list (expected {})", path, expectation(spec)));
-    return std::nullopt;
-  }
-  IntegerValues out;
-  bool ok = true;
-  for (std::size_t e = 0; e < n.size(); ++e) {
-    auto x = read_integer(n[e], fmt::format("{}[{}]", path, e), element);
-    if (x) {
-      out.push_back(*x);
-    } else {
-      ok = false;
-    }
-  }
-  if (!ok) return std::nullopt;
-  return ParamValue(std::move(out));
+  auto xs = read_list<IntegerValues>(n, path, spec, [&](const YAML::Node& e, const std::string& p) {
+    return read_integer(e, p, element);
+  });
+  if (xs) return ParamValue(std::move(*xs));
+  return std::nullopt;
 }
 
 // { name: number, ... }: names are identifiers, so that a plugin can use
