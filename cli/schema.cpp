@@ -374,6 +374,10 @@ Json make_schema(const PluginRegistry& registry) {
   const Json simulation = simulation_schema();
   const auto [output, top_checkpoint] = output_schemas();
   const Json items = particle_items(registry);
+  Json velocities = object(velocities_specs(), false);
+  velocities["description"] =
+      "Maxwell-Boltzmann initial velocities at a temperature (temperature or kT), with a seed";
+  velocities["oneOf"] = Json::array({{{"required", {"temperature"}}}, {{"required", {"kT"}}}});
   auto plugin_list = [](const char* def) {
     return Json{{"type", Json::array({"array", "null"})},
                 {"items", {{"$ref", std::string("#/$defs/") + def}}}};
@@ -390,6 +394,7 @@ Json make_schema(const PluginRegistry& registry) {
                 {"output", output},
                 {"checkpoint", top_checkpoint},
                 {"particles", {{"type", "array"}, {"minItems", 1}, {"items", {{"oneOf", items}}}}},
+                {"velocities", velocities},
                 {"forces", plugin_list("force")},
                 {"colliders", plugin_list("collider")}}},
               {"additionalProperties", false},

@@ -3,6 +3,10 @@
 # docs/performance.md "Lennard-Jones melt"): the same 32,000 atoms from the
 # same initial state, 100 velocity-Verlet steps of 0.005, thermo side by side
 # and the time per atom-step, 1 thread / 1 MPI rank and 2 threads / 2 ranks.
+# Then (issue 30) the temperature and pressure of `pdyn run`'s energy writer
+# against LAMMPS's thermo (bench/thermo_vs_lammps.sh), and whole `pdyn run`
+# processes of the documented scene against `lmp` (bench/lj_run_vs_lammps.sh:
+# the default path's ratio).
 #
 #   bash scripts/lammps_compare.sh [BUILD_DIR]     (default: build)
 #
@@ -69,3 +73,7 @@ print("pdyn 2 threads vs 1: %.3fx; LAMMPS 2 ranks vs 1: %.3fx" %
       (med([r[1] / r[3] for r in rows]), med([r[0] / r[2] for r in rows])))
 PY
 uptime
+echo "== temperature and pressure: pdyn run's energy writer against LAMMPS's thermo"
+bash bench/thermo_vs_lammps.sh "$build"
+echo "== the default path: whole pdyn run processes against lmp"
+ROUNDS=$rounds bash bench/lj_run_vs_lammps.sh "$build"

@@ -19,6 +19,7 @@ case "$what" in demo|test) ;; *) echo "usage: $0 demo|test" >&2; exit 2 ;; esac
 packages=(
   g++ cmake ninja-build ccache     # toolchain (ccache: rebuilds are copies)
   libeigen3-dev                    # math and state vectors
+  librandom123-dev                 # reproducible noise (pdyn/random.hpp), header-only
   libboost-dev                     # Boost.DLL (plugin loading), header-only here
   libyaml-cpp-dev                  # scenes
   libmuparser-dev pkg-config       # the field force's expressions

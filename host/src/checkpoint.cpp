@@ -1,4 +1,4 @@
-// The checkpoint file format, version 5 (native byte order, x86-64):
+// The checkpoint file format, version 6 (native byte order, x86-64):
 //
 //   "PDYNCKPT"                8 bytes magic
 //   u32 format version        Checkpoint::kFormatVersion
@@ -10,9 +10,12 @@
 // i64 next_frame, u8 has_dense, u64 N, f64[6N] state, f64[N] mass, u8[N] fixed,
 // i32[3N] images (x, y, z per particle), u64 count, count x (string label,
 // bytes state), u64 writers, writers x (string path, bytes mark, i8
-// wrote_state, u64 pending, pending x bytes frame). A string
-// or byte block is a u64 length and its bytes.
+// wrote_state, u64 pending, pending x bytes frame), u8 has_reused, f64[3N]
+// reused accelerations if has_reused. A string or byte block is a u64
+// length and its bytes.
 //
+// Version 5 is version 6 without the reused accelerations (a resumed run
+// then evaluates the forces afresh at its first step).
 // Version 4 is version 5 without the pending frames (read as none).
 // Version 3 ended with 2 x (string path, u64 bytes, u32 crc) instead of the
 // writers: the frames CSV and the energy CSV, which are today's csv and
@@ -157,7 +160,12 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
     tail.pod<std::uint64_t>(m.pending.size());
     for (const auto& frame : m.pending) tail.bytes(frame.data(), frame.size());
   }
+  const bool reused = c.reused.cols() == static_cast<Index>(n) && n > 0;
+  tail.pod<std::uint8_t>(reused ? 1 : 0);
   payload += tail.data();
+  if (reused) {
+    payload.append(reinterpret_cast<const char*>(c.reused.data()), 3 * n * sizeof(double));
+  }
 
   ByteWriter file;
   std::string out(kMagic, sizeof(kMagic));
@@ -359,6 +367,10 @@ Checkpoint read_checkpoint(const fs::path& path) {
     }
   }
   read_plugins_and_outputs(r, c, version, payload.size());
+  if (version >= 6 && r.pod<std::uint8_t>() != 0) {
+    c.reused.resize(3, static_cast<Index>(n));
+    for (Index k = 0; k < c.reused.size(); ++k) c.reused.data()[k] = r.pod<double>();
+  }
   if (!r.done()) r.fail("unexpected bytes after the last field");
   return c;
 }

@@ -3,14 +3,16 @@
 #include <fmt/format.h>
 
 #include <cstring>
+#include <limits>
 #include <type_traits>
 
 #include "pdyn/error.hpp"
+#include "pdyn/thermo.hpp"
 
 namespace pdyn {
 
-void FrameSnapshot::capture(const System& sys, std::int64_t frame_step, bool with_force,
-                            bool with_energy) {
+void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_t frame_step,
+                            bool with_force, bool with_energy) {
   const ParticleView p = sys.view();
   step = frame_step;
   t = p.t;
@@ -26,6 +28,15 @@ void FrameSnapshot::capture(const System& sys, std::int64_t frame_step, bool wit
   if (with_force) force = sys.forces();
   kinetic_energy = with_energy ? sys.kinetic_energy() : 0.0;
   potential_energy = with_energy ? sys.potential_energy() : 0.0;
+  virial = 0.0;
+  virial_missing.clear();
+  reservoir_energy = 0.0;
+  if (with_energy) {
+    VirialSum w = total_virial(sys);
+    virial = w.value;
+    virial_missing = std::move(w.missing);
+    reservoir_energy = total_reservoir_energy(sys, solver);
+  }
 }
 
 Frame FrameSnapshot::frame(bool with_force, bool with_energy) const {
@@ -40,6 +51,9 @@ Frame FrameSnapshot::frame(bool with_force, bool with_energy) const {
   if (with_energy) {
     f.kinetic_energy = kinetic_energy;
     f.potential_energy = potential_energy;
+    f.virial = virial;
+    f.virial_missing = virial_missing;
+    f.reservoir_energy = reservoir_energy;
   }
   return f;
 }
@@ -50,7 +64,9 @@ namespace {
 // u8[N] fixed, f64[3] min, f64[3] max, u8[3] periodic, u64 n + f64[n]
 // radius, u64 n + i32[n] type, u64 n + i32[3n] images, u8 has_force,
 // f64[3N] force if has_force, f64 kinetic, f64 potential.
-constexpr std::uint32_t kVersion = 1;
+// Version 2 (pdyn 0.8.0) appends f64 virial, f64 reservoir energy, u64 n +
+// char[n] virial_missing. Version 1 is still read (a 0.7 checkpoint's).
+constexpr std::uint32_t kVersion = 2;
 
 struct Out {
   std::vector<std::uint8_t> bytes;
@@ -127,15 +143,19 @@ std::vector<std::uint8_t> FrameSnapshot::encode() const {
   if (has_force) o.raw(force.data(), 3 * n * sizeof(double));
   o.pod(kinetic_energy);
   o.pod(potential_energy);
+  o.pod(virial);
+  o.pod(reservoir_energy);
+  o.array(virial_missing.data(), virial_missing.size());
   return std::move(o.bytes);
 }
 
 FrameSnapshot FrameSnapshot::decode(std::span<const std::uint8_t> data) {
   In in{data};
   FrameSnapshot s;
-  if (const auto version = in.pod<std::uint32_t>(); version != kVersion) {
+  const auto version = in.pod<std::uint32_t>();
+  if (version != 1 && version != kVersion) {
     throw Error(
-        fmt::format("a pending output frame has version {} (expected {})", version, kVersion));
+        fmt::format("a pending output frame has version {} (expected 1 to {})", version, kVersion));
   }
   s.step = in.pod<std::int64_t>();
   s.t = in.pod<double>();
@@ -162,6 +182,16 @@ FrameSnapshot FrameSnapshot::decode(std::span<const std::uint8_t> data) {
   }
   s.kinetic_energy = in.pod<double>();
   s.potential_energy = in.pod<double>();
+  if (version >= 2) {
+    s.virial = in.pod<double>();
+    s.reservoir_energy = in.pod<double>();
+    std::vector<char> missing;
+    in.array(missing);
+    s.virial_missing.assign(missing.begin(), missing.end());
+  } else {
+    s.virial = std::numeric_limits<double>::quiet_NaN();
+    s.virial_missing = "(a frame from pdyn 0.7)";
+  }
   if (in.at != data.size()) {
     throw Error(fmt::format("a pending output frame has {} unexpected bytes at its end",
                             data.size() - in.at));

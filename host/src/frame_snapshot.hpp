@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "pdyn/domain.hpp"
@@ -30,11 +31,16 @@ struct FrameSnapshot {
   bool has_force = false;
   Matrix3X force;                                       ///< N (3 x N), when has_force
   double kinetic_energy = 0.0, potential_energy = 0.0;  ///< J, when asked for
+  double virial = 0.0;            ///< J, when asked for (NaN: virial_missing has none)
+  std::string virial_missing;     ///< the first force without a virial
+  double reservoir_energy = 0.0;  ///< J, when asked for
 
   /// Copies the System's current state as the frame of `step`, with its total
-  /// forces (the caller has computed them) and energies when asked for. Once
-  /// the buffers have their size, it allocates nothing.
-  void capture(const System& sys, std::int64_t step, bool with_force, bool with_energy);
+  /// forces (the caller has computed them) and energies, virial and the
+  /// thermostats' energy (`solver`'s included, if not null) when asked for.
+  /// Once the buffers have their size, it allocates nothing.
+  void capture(const System& sys, const Solver* solver, std::int64_t step, bool with_force,
+               bool with_energy);
   /// The frame a writer is handed, viewing this snapshot: the forces and
   /// energies only where `force` / `energy` (what the writer asked for).
   Frame frame(bool force, bool energy) const;

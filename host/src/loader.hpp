@@ -21,6 +21,7 @@
 #include "pdyn/domain.hpp"
 #include "pdyn/host/resolve.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/host/velocities.hpp"
 #include "scene_builders.hpp"
 #include "written_paths.hpp"
 
@@ -156,6 +157,8 @@ class Loader final : public BuilderHost {
   bool read_periodic(const YAML::Node& n, const std::string& path, std::array<bool, 3>& out);
   void read_particles(const YAML::Node& n);
   void check_inside_box();
+  void read_velocities(const YAML::Node& n);  // scene_velocities.cpp
+  void apply_velocities(Matrix3X& v, const Eigen::VectorXd& m);
   // ---- particles and boxes from files (scene_files.cpp) ----
   std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
                                     const char* expected,
@@ -222,6 +225,8 @@ class Loader final : public BuilderHost {
   std::size_t beside_ = 0;  // the writer whose path gives the default checkpoint's
   YAML::Node checkpoint_node_;
   std::string checkpoint_key_;
+  std::optional<VelocitySpec> velocities_;  // `velocities:`, when given and valid
+  YAML::Node velocities_node_;
 };
 
 }  // namespace pdyn::loading

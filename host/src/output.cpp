@@ -228,7 +228,7 @@ void Output::dispatch(std::int64_t step, bool current, bool extra,
   finish_frames();  // the snapshot is free, and failures so far are known
   if (force) scene_.system->compute_accelerations();
   const auto t0 = Clock::now();
-  snapshot_.capture(sys_, step, force, energy);
+  snapshot_.capture(sys_, scene_.solver.get(), step, force, energy);
   stalled_seconds_ += seconds_since(t0);
   bool queued = false;
   for (auto& s : slots_) {

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "pdyn/force_reuse.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/runner.hpp"
@@ -138,6 +139,13 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
     assembly.set_images(c.images);
   }
   sys.set_time(c.time);
+  // Last, after every write above: the end-of-step accelerations the solver
+  // kept when the checkpoint was taken stand in for its next a0 again
+  // (pdyn/force_reuse.hpp), as in the uninterrupted run.
+  if (auto* holder = dynamic_cast<ForceReuseHolder*>(scene.solver.get());
+      holder != nullptr && c.reused.cols() == sys.size()) {
+    holder->restore_kept_accelerations(sys, c.reused);
+  }
 }
 
 Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step) {
@@ -151,6 +159,9 @@ Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step) {
   c.mass = sys.masses();
   c.fixed = sys.fixed();
   c.images = sys.images();
+  if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene.solver.get())) {
+    if (const Matrix3X* a1 = holder->kept_accelerations(sys)) c.reused = *a1;
+  }
   {
     const crash::CallScope call(scene.solver_label, "save_state");
     c.plugin_states.emplace_back(scene.solver_label, scene.solver->save_state());

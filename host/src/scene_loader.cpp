@@ -28,6 +28,7 @@
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/side_files.hpp"
+#include "pdyn/step_aware.hpp"
 #include "pdyn/text.hpp"
 
 namespace pdyn {
@@ -536,13 +537,13 @@ YAML::Node Loader::parse(const std::string& text) {
   if (!root.IsDefined() || root.IsNull()) {
     diags_.push_back({file_ + ":1:1",
                       "the scene is empty (expected the sections simulation, "
-                      "particles, and optionally output, forces, colliders)"});
+                      "particles, and optionally velocities, output, forces, colliders)"});
     fail();
   }
   if (!root.IsMap()) {
     error(root, "",
           "the scene is not a mapping (expected the sections simulation, particles, "
-          "and optionally output, forces, colliders)");
+          "and optionally velocities, output, forces, colliders)");
     fail();
   }
   return root;
@@ -611,6 +612,7 @@ void Loader::assemble_system(Scene& scene) {
     v.col(i) = v_[i];
     m(i) = m_[i];
   }
+  apply_velocities(v, m);
   scene.system = std::make_unique<System>();
   const SystemAssembly assembly(*scene.system);
   assembly.set_particles(x, v, m, fixed_);
@@ -648,10 +650,12 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
   auto keep = [&](PendingPlugin& p, PluginKind kind) {
     scene.uses.push_back({kind, p.record->descriptor->name, label(p), std::move(p.params)});
   };
+  std::vector<const PendingPlugin*> step_aware;  // forces that need fixed steps
   for (auto* list : {&builder_forces_, &forces}) {
     for (auto& p : *list) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
       if (!f) continue;
+      if (dynamic_cast<const StepAware*>(f.get()) != nullptr) step_aware.push_back(&p);
       assembly.add_force(std::move(f), label(p));
       scene.libraries[label(p)] = p.record->library;
       scene.force_traits[label(p)] = p.record->descriptor->force_traits;
@@ -672,6 +676,16 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
     scene.solver_params = p.params;
     scene.libraries[label(p)] = p.record->library;
   }
+  // A force held over a step scales with the step's length
+  // (pdyn/step_aware.hpp), which an adaptive solver chooses itself.
+  if (scene.solver && scene.solver->adaptive()) {
+    for (const PendingPlugin* p : step_aware) {
+      error(p->node, p->path,
+            fmt::format("{}: {} draws a force held over each fixed step; {} chooses its own "
+                        "step lengths (expected a fixed-step solver: verlet, rk4, euler, ...)",
+                        p->path, p->record->descriptor->name, scene.solver_name));
+    }
+  }
   for (const auto& w : scene.output.writers) scene.libraries[w.label] = w.record.library;
 }
 
@@ -684,10 +698,13 @@ Scene Loader::load(const std::string& text) {
   root_.reset(root);
   scene.canonical_text = canonical_text(root);
 
-  check_keys(root, "", {"simulation", "output", "checkpoint", "particles", "forces", "colliders"});
+  check_keys(
+      root, "",
+      {"simulation", "output", "checkpoint", "particles", "velocities", "forces", "colliders"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
   check_inside_box();
+  read_velocities(root["velocities"]);
   std::vector<PendingPlugin> forces, colliders, solvers;
   read_plugin_list(root["forces"], "forces", PluginKind::Force, forces);
   read_plugin_list(root["colliders"], "colliders", PluginKind::Collider, colliders);
@@ -730,6 +747,14 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
     case PluginKind::Force: {
       auto f = create(p, [&] { return registry_.create_force(*rec, p.params, ctx); });
       if (!f) fail();
+      if (dynamic_cast<const StepAware*>(f.get()) != nullptr && scene.solver &&
+          scene.solver->adaptive()) {
+        diags_.push_back({file_, fmt::format("{}: {} draws a force held over each fixed step; {} "
+                                             "chooses its own step lengths (expected a "
+                                             "fixed-step solver: verlet, rk4, euler, ...)",
+                                             path, name, scene.solver_name)});
+        fail();
+      }
       SystemAssembly(sys).add_force(std::move(f), label);
       scene.force_traits[label] = rec->descriptor->force_traits;
       break;
@@ -743,6 +768,15 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
     case PluginKind::Solver: {
       auto s = create(p, [&] { return registry_.create_solver(*rec, p.params, ctx); });
       if (!s) fail();
+      for (const auto& entry : sys.force_objects()) {
+        if (s->adaptive() && dynamic_cast<const StepAware*>(entry.force.get()) != nullptr) {
+          diags_.push_back({file_, fmt::format("{}: {} chooses its own step lengths; {} draws a "
+                                               "force held over each fixed step (expected a "
+                                               "fixed-step solver: verlet, rk4, euler, ...)",
+                                               path, name, entry.label)});
+          fail();
+        }
+      }
       scene.solver = std::move(s);
       scene.solver_name = name;
       scene.solver_label = label;

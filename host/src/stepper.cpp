@@ -17,6 +17,7 @@
 #include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/solver.hpp"
+#include "pdyn/step_aware.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn {
@@ -89,6 +90,18 @@ Index first_non_finite(const System& sys) {
   return -1;
 }
 
+// Tells the forces that hold a value over a step (pdyn/step_aware.hpp)
+// which step comes: its start time and length. Again for a replayed step, so
+// that the replay draws what the step drew.
+void begin_step(System& sys, double h) {
+  for (const auto& entry : sys.force_objects()) {
+    if (auto* aware = dynamic_cast<StepAware*>(entry.force.get())) {
+      const crash::CallScope call(entry.label, "begin_step");
+      aware->begin_step(sys.time(), h);
+    }
+  }
+}
+
 }  // namespace
 
 // The two state buffers are allocated and their pages touched here, before
@@ -106,6 +119,7 @@ Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
 std::optional<double> Stepper::step_to(double t_end) {
   return guarded([&] {
     const double h = t_end - sys_.time();
+    begin_step(sys_, h);
     const crash::CallScope call(*label_, "step");
     solver_.step(sys_, h);
     sys_.set_time(t_end);

@@ -257,11 +257,17 @@ class Simulation:
         self._core.evaluate_forces()
 
     # ---- observables ----
-    def energies(self):
+    def energies(self, extra_dof=3):
         """{"kinetic": K, "potential": {label: U}, "total": K + sum U}, J.
-        Forces without a potential (drag) are not listed."""
-        e = self._core.energies()
+        Forces without a potential (drag) are not listed. Also, as the energy
+        writer's columns: "dof" (3 N_free - extra_dof; 3 removes the total
+        momentum, as LAMMPS), "kT" (2 K / dof, J), "temperature" (K),
+        "pressure" (the virial pressure, Pa; None in open space or when a
+        force reports no virial), "reservoir" (energy thermostats took out,
+        J) and "conserved" (total + reservoir)."""
+        e = self._core.energies(float(extra_dof))
         e["total"] = e["kinetic"] + sum(e["potential"].values())
+        e["conserved"] = e["total"] + e["reservoir"]
         return e
 
     def kinetic_energy(self):

@@ -5,9 +5,11 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <cmath>
 #include <pdyn/host/assembly.hpp>
 #include <pdyn/host/registry.hpp>
 #include <pdyn/host/simulation.hpp>
+#include <pdyn/thermo.hpp>
 
 #include "bindings.hpp"
 #include "convert.hpp"
@@ -219,7 +221,7 @@ class PySimulation {
     return out;
   }
 
-  py::dict energies() const {
+  py::dict energies(double extra_dof) const {
     const System& s = sim_.system();
     py::dict potential;
     const ParticleView p = s.view();
@@ -229,6 +231,15 @@ class PySimulation {
     py::dict out;
     out["kinetic"] = s.kinetic_energy();
     out["potential"] = potential;
+    // Temperature and pressure as the energy writer's columns (pdyn/thermo.hpp);
+    // the pressure is None in open space or when a force reports no virial.
+    const VirialSum w = total_virial(s);
+    const Thermo th = thermo(p, w.value, extra_dof);
+    out["dof"] = th.dof;
+    out["kT"] = th.kT;
+    out["temperature"] = th.temperature;
+    out["pressure"] = std::isfinite(th.pressure) ? py::object(py::float_(th.pressure)) : py::none();
+    out["reservoir"] = total_reservoir_energy(s, sim_.scene().solver.get());
     return out;
   }
 
@@ -346,7 +357,7 @@ void bind_simulation(py::module_& m) {
       .def("_add_plugin", &PySimulation::add_plugin)
       .def("_add_python_force", &PySimulation::add_python_force)
       .def("remove", &PySimulation::remove)
-      .def("energies", &PySimulation::energies)
+      .def("energies", &PySimulation::energies, py::arg("extra_dof") = 3.0)
       .def("_add_particles", &PySimulation::add_particles)
       .def("set_masses", &PySimulation::set_masses)
       .def("set_fixed", &PySimulation::set_fixed)

@@ -90,7 +90,8 @@ BASE_SCENE = {
     ],
     "forces": [{"type": "gravity"}],
 }
-SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "checkpoint"}
+SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "checkpoint",
+                  "velocities"}
 
 CPP_PRELUDE = ["<pdyn/plugin.hpp>", "<pdyn/contact.hpp>", "<pdyn/targets.hpp>",
                "<pdyn/shape.hpp>", "<pdyn/pair.hpp>", "<pdyn/conformance.hpp>", "<cmath>"]

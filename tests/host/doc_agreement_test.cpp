@@ -89,6 +89,7 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
       "forces:\n"
       "  - { type: gravity }\n"
       "  - { type: drag, k: 0.1 }\n"
+      "  - { type: langevin, kT: 1, damp: 1 }\n"
       "  - { type: field, force: ['-x', '0', '0'], potential: 'x^2/2' }\n"
       "  - { type: anchor, ids: [0], points: [[0, 0, 0]] }\n"
       "  - { type: attractor, center: [5, 5, 5] }\n"

@@ -128,6 +128,40 @@ TEST(ResumeIdentity, SplitRunEqualsWholeRun) {
   EXPECT_GE(tested, 2 * 3) << "expected at least euler, midpoint and rk4";
 }
 
+// A periodic Lennard-Jones liquid under velocity Verlet: the solver reuses
+// its end-of-step forces across the wraps into the box (evaluated before the
+// wrap, so they differ from a fresh evaluation in the last bits), and the
+// checkpoint carries them (pdyn/force_reuse.hpp): the resumed run is the
+// uninterrupted run's bits, with and without reuse_forces, and for the
+// Nose-Hoover solver built on the same reuse.
+TEST(ResumeIdentity, PeriodicLiquidResumesWithTheReusedForces) {
+  for (const std::string solver : {"{ type: verlet }", "{ type: verlet, reuse_forces: true }",
+                                   "{ type: nose_hoover, kT: 1, tdamp: 0.5 }"}) {
+    SCOPED_TRACE(solver);
+    const fs::path dir = temp_dir("resume-liquid");
+    fs::copy_file(source_path("tests/scenes/thermo/thermo_start.data"), dir / "start.data");
+    write_file(dir / "liquid.yaml",
+               "simulation: { dt: 0.005, steps: 300, solver: " + solver +
+                   ", box: { file: start.data } }\n"
+                   "particles:\n"
+                   "  - file: start.data\n"
+                   "forces:\n"
+                   "  - { type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, skin: 0.3 }\n"
+                   "output:\n"
+                   "  path: out/frames.csv\n"
+                   "  every: 150\n"
+                   "  checkpoint: { path: out/run.ckpt }\n");
+    auto whole = pdyn_in(dir, {"run", "liquid.yaml", "-q"});
+    ASSERT_EQ(whole.status, 0) << whole.err;
+    const std::string reference = read_bytes(dir / "out/frames.csv");
+    auto first = pdyn_in(dir, {"run", "liquid.yaml", "--steps", "173", "-q"});
+    ASSERT_EQ(first.status, 0) << first.err;
+    auto rest = pdyn_in(dir, {"run", "liquid.yaml", "--resume", "out/run.ckpt", "-q"});
+    ASSERT_EQ(rest.status, 0) << rest.err;
+    EXPECT_EQ(read_bytes(dir / "out/frames.csv"), reference);
+  }
+}
+
 TEST(ResumeIdentity, ResumingAtTheEndRewritesTheSameFiles) {
   // Step 100 is not a regular frame (every 7): the checkpoint leaves the
   // final frame out of its record, and a run resumed with nothing left to

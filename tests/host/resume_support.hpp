@@ -22,7 +22,9 @@
 #include <thread>
 #include <vector>
 
+#include "pdyn/conformance.hpp"
 #include "pdyn/host/checkpoint.hpp"
+#include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
 extern char** environ;
@@ -30,6 +32,25 @@ extern char** environ;
 namespace pdyn::test {
 
 namespace fs = std::filesystem;
+
+/// The solver entry `{ type: NAME, ... }` with the parameters a solver
+/// cannot do without (a thermostat's temperature and damping time) at the
+/// values `pdyn check` builds it with (conformance::sample_params).
+inline std::string solver_entry(const std::string& name) {
+  const PluginRecord* rec = shipped_plugins().find(PluginKind::Solver, name);
+  if (rec == nullptr) return "{ type: " + name + " }";
+  const Params p = conformance::sample_params(*rec->descriptor, 1);
+  std::string entry = "{ type: " + name;
+  for (const ParamSpec& spec : rec->descriptor->params) {
+    if (!p.has(spec.name)) continue;
+    if (spec.type == ParamType::Real) {
+      entry += ", " + spec.name + ": " + Num(p.real(spec.name));
+    } else if (spec.type == ParamType::Integer) {
+      entry += ", " + spec.name + ": " + std::to_string(p.integer(spec.name));
+    }
+  }
+  return entry + " }";
+}
 
 /// A 6 x 6 sheet joined by the grid builder's three spring families, under
 /// gravity and drag, falling onto a floor plane it reaches after ~0.1 s
@@ -43,7 +64,7 @@ inline std::string sheet_scene(const std::string& solver, int every = 5, int ckp
   s << "simulation:\n"
     << "  dt: " << dt << "\n"
     << "  steps: 200\n"
-    << "  solver: { type: " << solver << " }\n"
+    << "  solver: " << solver_entry(solver) << "\n"
     << "output:\n"
     << "  path: out/frames.csv\n"
     << "  every: " << every << "\n"
@@ -83,7 +104,7 @@ inline std::string periodic_scene(const std::string& solver, int every = 5, int 
   s << "simulation:\n"
     << "  dt: 0.001\n"
     << "  steps: 200\n"
-    << "  solver: { type: " << solver << " }\n"
+    << "  solver: " << solver_entry(solver) << "\n"
     << "  box: { min: [0, 0, -1000], max: [0.2, 0.3, 1000], periodic: [true, true, false] }\n"
     << "output:\n"
     << "  path: out/frames.csv\n"

@@ -109,6 +109,7 @@
 #include "pdyn/parallel.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/plugin.hpp"
+#include "pdyn/thermo.hpp"
 
 namespace pdyn {
 
@@ -374,7 +375,7 @@ std::vector<ParamSpec> harmonic_params(const std::string& what, const std::strin
 
 /// A force made of bonded terms with law `Law` (see the top of this file).
 template <class Law>
-class BondedForce : public Force, public BondedReference {
+class BondedForce : public Force, public BondedReference, public VirialSource {
  public:
   static constexpr int N = Law::arity;
   static_assert(N >= 2 && N <= 4, "a bonded term joins 2, 3 or 4 particles");
@@ -433,6 +434,18 @@ class BondedForce : public Force, public BondedReference {
     double u = 0.0;
     for (Index s = 0; s < term_count(); ++s) u += law_(point(p, s), coefficients(s)).energy;
     return u;
+  }
+
+  /// Sum over the terms of sum_a (x_a - x_0) . f_a (pdyn/thermo.hpp), J:
+  /// the positions as given, as the terms measure them.
+  double virial(const ParticleView& p) const override {
+    double w = 0.0;
+    for (Index s = 0; s < term_count(); ++s) {
+      const BondedTerm<N> t = law_(point(p, s), coefficients(s));
+      const Vec3 x0 = p.x.col(terms_[s][0]);
+      for (int a = 1; a < N; ++a) w += (p.x.col(terms_[s][a]) - x0).dot(t.force[a]);
+    }
+    return w;
   }
 
   /// The law's jacobian() of every term, in term order; false (numerical

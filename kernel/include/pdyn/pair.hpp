@@ -85,6 +85,7 @@
 #include "pdyn/neighbors.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/periodic_invariant.hpp"
+#include "pdyn/thermo.hpp"
 
 namespace pdyn {
 
@@ -144,7 +145,10 @@ class PairReference {
 /// file). `members`: N flags (a selection) or empty for every particle; only
 /// pairs of two members interact.
 template <class Law>
-class PairForce : public Force, public PairReference, public PeriodicInvariant {
+class PairForce : public Force,
+                  public PairReference,
+                  public PeriodicInvariant,
+                  public VirialSource {
  public:
   PairForce(Law law, double cutoff, double skin, std::vector<std::uint8_t> members = {})
       : law_(std::move(law)),
@@ -172,6 +176,16 @@ class PairForce : public Force, public PairReference, public PeriodicInvariant {
       u += evaluate(p, i, j, d, r2).energy;
     });
     return u;
+  }
+
+  /// Sum over the pairs closer than the cutoff of (x_i - x_j) . f_ij, the
+  /// separation to the nearest image (pdyn/thermo.hpp), J.
+  double virial(const ParticleView& p) const override {
+    double w = 0.0;
+    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2) {
+      w += d.dot(evaluate(p, i, j, d, r2).force);
+    });
+    return w;
   }
 
   const Law& law() const noexcept { return law_; }

@@ -28,6 +28,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "pdyn/particles.hpp"
@@ -75,6 +76,18 @@ struct Frame {
   double kinetic_energy = 0.0, potential_energy = 0.0;
 
   double time() const noexcept { return particles.t; }
+
+  // Since pdyn 0.8.0, appended (a writer built against an earlier SDK reads
+  // the members above where they always were). Like the energies, only for a
+  // writer whose traits ask for energy.
+  /// The virial W of every force (pdyn/thermo.hpp: total_virial), J; NaN
+  /// when some force reports none, which `virial_missing` then names.
+  double virial = 0.0;
+  std::string_view virial_missing;
+  /// The energy thermostats have taken out of the particles so far, J
+  /// (pdyn/thermo.hpp: EnergyReservoir): kinetic + potential + this is
+  /// conserved by a Nose-Hoover chain.
+  double reservoir_energy = 0.0;
 };
 
 /// What a writer tells the host before it is created.

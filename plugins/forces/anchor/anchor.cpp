@@ -19,6 +19,7 @@
 #include <cstring>
 #include <pdyn/plugin.hpp>
 #include <pdyn/targets.hpp>
+#include <pdyn/thermo.hpp>
 #include <unordered_set>
 
 namespace {
@@ -26,8 +27,11 @@ namespace {
 using pdyn::Index;
 using pdyn::Vec3;
 
-class Anchor final : public pdyn::Force, public pdyn::MovableTargets {
+class Anchor final : public pdyn::Force, public pdyn::MovableTargets, public pdyn::VirialSource {
  public:
+  /// From outside the system: no virial (pdyn/thermo.hpp), as LAMMPS's fixes.
+  double virial(const pdyn::ParticleView&) const override { return 0.0; }
+
   Anchor(std::vector<Index> ids, std::vector<Vec3> targets, double ks, double kd, double rest)
       : ids_(std::move(ids)), targets_(std::move(targets)), ks_(ks), kd_(kd), rest_(rest) {}
 

@@ -22,14 +22,18 @@
 #include <cmath>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
+#include <pdyn/thermo.hpp>
 
 namespace {
 
 using pdyn::Index;
 using pdyn::Vec3;
 
-class Attractor final : public pdyn::Force {
+class Attractor final : public pdyn::Force, public pdyn::VirialSource {
  public:
+  /// From outside the system: no virial (pdyn/thermo.hpp), as LAMMPS's fixes.
+  double virial(const pdyn::ParticleView&) const override { return 0.0; }
+
   Attractor(Vec3 center, double strength, double softening, double exponent,
             pdyn::Selection selection)
       : center_(center),

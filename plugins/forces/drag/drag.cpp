@@ -5,6 +5,7 @@
 #include <pdyn/periodic_invariant.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
+#include <pdyn/thermo.hpp>
 
 namespace {
 
@@ -12,8 +13,14 @@ namespace {
 // adds inside its gather pass when it can.
 // PeriodicInvariant: it reads velocities only, so a wrap into a periodic box
 // cannot change it (pdyn/periodic_invariant.hpp).
-class Drag final : public pdyn::Force, public pdyn::LocalForce, public pdyn::PeriodicInvariant {
+class Drag final : public pdyn::Force,
+                   public pdyn::LocalForce,
+                   public pdyn::PeriodicInvariant,
+                   public pdyn::VirialSource {
  public:
+  /// From outside the system: no virial (pdyn/thermo.hpp), as LAMMPS's fixes.
+  double virial(const pdyn::ParticleView&) const override { return 0.0; }
+
   Drag(double k, pdyn::Selection selection) : k_(k), selection_(std::move(selection)) {}
 
   void add_forces(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f) override {

@@ -23,6 +23,7 @@
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
 #include <pdyn/text.hpp>
+#include <pdyn/thermo.hpp>
 #include <string>
 #include <vector>
 
@@ -172,8 +173,11 @@ std::string explain(const mu::ParserError& e, const std::string& expr, const std
                      expected);
 }
 
-class Field final : public pdyn::Force {
+class Field final : public pdyn::Force, public pdyn::VirialSource {
  public:
+  /// From outside the system: no virial (pdyn/thermo.hpp), as LAMMPS's fixes.
+  double virial(const pdyn::ParticleView&) const override { return 0.0; }
+
   Field(const Field&) = delete;
   Field& operator=(const Field&) = delete;
 

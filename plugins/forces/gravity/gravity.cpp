@@ -5,6 +5,7 @@
 #include <pdyn/periodic_invariant.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/selection.hpp>
+#include <pdyn/thermo.hpp>
 
 namespace {
 
@@ -12,8 +13,14 @@ namespace {
 // adds inside its gather pass when it can.
 // PeriodicInvariant: a uniform field, so a wrap into a periodic box
 // cannot change it (pdyn/periodic_invariant.hpp).
-class Gravity final : public pdyn::Force, public pdyn::LocalForce, public pdyn::PeriodicInvariant {
+class Gravity final : public pdyn::Force,
+                      public pdyn::LocalForce,
+                      public pdyn::PeriodicInvariant,
+                      public pdyn::VirialSource {
  public:
+  /// From outside the system: no virial (pdyn/thermo.hpp), as LAMMPS's fixes.
+  double virial(const pdyn::ParticleView&) const override { return 0.0; }
+
   Gravity(const pdyn::Vec3& g, pdyn::Selection selection)
       : g_(g), selection_(std::move(selection)) {}
 

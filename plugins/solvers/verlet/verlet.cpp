@@ -18,23 +18,12 @@
 //
 // * The end-of-step forces a1 are reused as the next step's a0 (one force
 //   evaluation per step, as LAMMPS's velocity Verlet does) only when that
-//   gives the same bits as evaluating a0 afresh:
-//     - every force declares that it does not depend on velocity
-//       (Force::dependence(); the default claims it does), and there is no
-//       collider (contact forces depend on velocity): a1 was evaluated at
-//       v_half, not at v1;
-//     - nothing but the kernel's step wrote the state since this step ended
-//       (System::state_version(): a collider's response, a checkpoint, an
-//       interactive edit, a force added or removed all change it, and a
-//       wrap into a periodic box that moved a particle unless every force
-//       is periodic-invariant, pdyn/periodic_invariant.hpp: then a1,
-//       evaluated before the wrap, equals a fresh a0 to rounding);
-//     - no force evaluation has happened since, so the System still holds
-//       a1 (force_evaluations());
-//     - the time is the one a1 was evaluated at, exactly, if any force
-//       depends on time.
-//   Otherwise a0 is evaluated at the start of the step, as it always was
-//   before pdyn 0.4.
+//   gives the same bits as evaluating a0 afresh: every force declares that
+//   it does not depend on velocity, there is no collider, nothing but the
+//   kernel's step wrote the state or evaluated the forces since, and the
+//   time matches if a force reads it (pdyn::ForceReuse, pdyn/force_reuse.hpp,
+//   lists the conditions). Otherwise a0 is evaluated at the start of the
+//   step, as it always was before pdyn 0.4.
 // * With velocity-independent forces the step is the textbook one written in
 //   place, v += h/2 a0, x += h v, evaluate, v += h/2 a1, with no scratch
 //   state. The same operations in the same order as the general form
@@ -49,6 +38,7 @@
 //   to within rounding.
 #include <algorithm>
 #include <cmath>
+#include <pdyn/force_reuse.hpp>
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
@@ -57,21 +47,32 @@ namespace {
 
 using pdyn::Index;
 
-class Verlet final : public pdyn::Solver {
+class Verlet final : public pdyn::Solver, public pdyn::ForceReuseHolder {
  public:
   explicit Verlet(bool promise) : promise_(promise) {}
 
+  // A checkpoint carries the kept a1 (pdyn/force_reuse.hpp).
+  const pdyn::Matrix3X* kept_accelerations(const pdyn::System& sys) const override {
+    if (promise_) return promised_.still_valid(sys) ? &promised_.a1 : nullptr;
+    return reuse_.current(sys);
+  }
+  void restore_kept_accelerations(const pdyn::System& sys, const pdyn::Matrix3X& a1) override {
+    if (promise_) {
+      promised_.remember(sys, a1);
+    } else {
+      reuse_.restore(sys, a1);
+    }
+  }
+
   void step(pdyn::System& sys, double h) override {
-    // Read before this step takes its own writable views of the state.
-    const bool untouched = sys.state_version() == version_;
+    // Asked before this step takes its own writable views of the state.
     const double t0 = sys.time();
     const Needs needs = needs_of(sys);
     const pdyn::Matrix3X* reusable = nullptr;
     if (promise_) {
       if (promised_.still_valid(sys)) reusable = &promised_.a1;
-    } else if (a1_ != nullptr && &sys == system_ && a1_->cols() == sys.size() && untouched &&
-               sys.force_evaluations() == evaluations_ && (!needs.time || t0 == t1_)) {
-      reusable = a1_;
+    } else {
+      reusable = reuse_.kept(sys, needs);
     }
     auto x = sys.positions();
     auto v = sys.velocities();
@@ -113,29 +114,17 @@ class Verlet final : public pdyn::Solver {
       return;
     }
     // Valid as the next a0 only if nothing writes or evaluates before it.
-    a1_ = needs.velocity ? nullptr : &a1;
-    system_ = &sys;  // a host may hand the solver another System (Python's add_particles)
-    t1_ = sys.time();
-    evaluations_ = sys.force_evaluations();
-    version_ = sys.state_version();
+    reuse_.keep(sys, a1, needs);
   }
 
  private:
-  struct Needs {
-    bool velocity = false;  // some force or collider depends on velocity
-    bool time = false;      // some force depends on time
-  };
+  using Needs = pdyn::ForceReuse::Needs;
 
+  // The promise stands for the forces' declarations: only a collider makes
+  // the step read velocities.
   Needs needs_of(const pdyn::System& sys) const {
-    Needs needs;
-    needs.velocity = !sys.collider_objects().empty();
-    if (promise_) return needs;
-    for (const auto& entry : sys.force_objects()) {
-      const pdyn::StateDependence d = entry.force->dependence();
-      needs.velocity = needs.velocity || d.velocity;
-      needs.time = needs.time || d.time;
-    }
-    return needs;
+    if (promise_) return Needs{!sys.collider_objects().empty(), false};
+    return pdyn::ForceReuse::needs(sys);
   }
 
   // reuse_forces: true keeps the rule it had before forces declared their
@@ -183,15 +172,8 @@ class Verlet final : public pdyn::Solver {
 
   bool promise_;
   Promised promised_;
-  pdyn::Matrix3X half_;  // v_half for velocity-dependent forces, sized on first use
-  // The last step's end: the System's a1 (or nullptr if it cannot be reused),
-  // the time it was evaluated at, and the counters that tell whether anything
-  // happened to the System since.
-  const pdyn::Matrix3X* a1_ = nullptr;
-  const pdyn::System* system_ = nullptr;
-  double t1_ = 0.0;
-  std::uint64_t evaluations_ = 0;
-  std::uint64_t version_ = 0;
+  pdyn::Matrix3X half_;     // v_half for velocity-dependent forces, sized on first use
+  pdyn::ForceReuse reuse_;  // the last step's a1, while it may stand in for a0
 };
 
 pdyn::PluginDescriptor describe() {

@@ -34,11 +34,14 @@ struct WriterMark {
 };
 
 struct Checkpoint {
+  /// Version 6 adds the accelerations a velocity-Verlet solver keeps for
+  /// its next step (pdyn/force_reuse.hpp): the resumed run's first step
+  /// reuses them as the uninterrupted run would, and gives the same bits.
   /// Version 5 adds each writer's pending frames. Version 4 holds one mark
   /// per writer (output list); versions 3 (image
   /// counts, frames and energy marks) and 2 (no image counts: read as 0)
   /// are still read, their two marks as the csv and energy writers' marks.
-  static constexpr std::uint32_t kFormatVersion = 5;
+  static constexpr std::uint32_t kFormatVersion = 6;
   static constexpr std::uint32_t kOldestReadableVersion = 2;
 
   std::string scene_file;           ///< where the scene came from (for messages)
@@ -58,6 +61,9 @@ struct Checkpoint {
   std::vector<std::pair<std::string, std::vector<std::uint8_t>>> plugin_states;
   /// One per writer of the scene's output, in scene order.
   std::vector<WriterMark> outputs;
+  /// Version 6: the end-of-step accelerations (m/s^2, 3 x N) the solver
+  /// would reuse as its next step's a0 (ForceReuseHolder), or empty.
+  Matrix3X reused;
 
   /// The mark of the writer whose path is `path`, or nullptr.
   const WriterMark* output(const std::string& path) const;

@@ -24,6 +24,8 @@ std::vector<ParamSpec> output_specs();
 /// the writer plugin's own parameters: path, every, fields. A writer's
 /// parameters may not take these names (the registry refuses it).
 std::vector<ParamSpec> writer_entry_keys();
+/// `velocities:` (Maxwell-Boltzmann initial velocities, pdyn/host/velocities.hpp).
+std::vector<ParamSpec> velocities_specs();
 /// `output.checkpoint:`, and the top-level `checkpoint:` of a scene whose
 /// `output:` is a list.
 std::vector<ParamSpec> checkpoint_specs();

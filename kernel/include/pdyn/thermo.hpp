@@ -1,0 +1,87 @@
+// pdyn/thermo.hpp — temperature and pressure of a particle system, and the
+// two optional interfaces they need from plugins.
+//
+// The kinetic temperature is the equipartition estimate
+//   k_B T = 2 K / N_f,   K = sum_i m_i |v_i|^2 / 2 over the free particles,
+// with N_f = 3 N_free - extra degrees of freedom (3 by default: the total
+// momentum, as LAMMPS's `compute temp` removes it). The pressure is the
+// virial estimate (Allen & Tildesley, "Computer Simulation of Liquids",
+// 2nd ed., eq. 2.61)
+//   P = (2 K + W) / (3 V),   W = sum over interacting pairs of r_ij . f_ij,
+// where r_ij = x_i - x_j is measured to the nearest periodic image and f_ij
+// is the force on i from j. Forces report W through VirialSource; external
+// forces (gravity, drag, a field, a thermostat) contribute none, as LAMMPS's
+// fixes contribute none unless asked.
+//
+// Units: SI. Scenes in reduced (Lennard-Jones) units read as SI give
+// k_B T in "J" that is LAMMPS's T* (its k_B is 1), and P in "Pa" that is P*.
+#pragma once
+
+#include <string>
+
+#include "pdyn/particles.hpp"
+
+namespace pdyn {
+
+class System;
+
+/// Boltzmann's constant, J/K (exact since the 2019 SI).
+inline constexpr double kBoltzmann = 1.380649e-23;
+
+/// Optional interface of a force: its virial. Found with dynamic_cast on the
+/// Force (forces built against an earlier SDK keep their vtable). Every
+/// PairForce and BondedForce implements it, and the shipped external forces
+/// (which return 0); a force without it makes the pressure unknown rather than
+/// silently wrong (total_virial()).
+class VirialSource {
+ public:
+  virtual ~VirialSource();  // defined in the kernel: one type_info for every library
+  /// W = sum over this force's interactions of r . f (J): for a pair, (x_i -
+  /// x_j) . f_ij with the separation to the nearest image; for a term over
+  /// several particles, sum_a (x_a - x_0) . f_a (translation-invariant, since
+  /// the term's forces sum to zero). 0 for a force from outside the system.
+  virtual double virial(const ParticleView& p) const = 0;
+};
+
+/// Optional interface of a force or a solver that exchanges energy with a
+/// reservoir (a thermostat): the energy it has taken out of the particles so
+/// far, J. K + U + reservoir_energy() is then the conserved quantity (for a
+/// Nose-Hoover chain, its extended energy). Carried in save_state() by the
+/// object, so that a resumed run continues it.
+class EnergyReservoir {
+ public:
+  virtual ~EnergyReservoir();
+  virtual double reservoir_energy() const = 0;
+};
+
+/// The sum of every force's virial in `sys`, J.
+struct VirialSum {
+  double value = 0.0;
+  /// The label of the first force without VirialSource (the pressure is
+  /// unknown then), or empty.
+  std::string missing;
+};
+VirialSum total_virial(const System& sys);
+
+class Solver;
+/// The energy every EnergyReservoir among `sys`'s forces and `solver` (if
+/// not null) has taken out of the particles, J.
+double total_reservoir_energy(const System& sys, const Solver* solver);
+
+/// Temperature and pressure of a state.
+struct Thermo {
+  double dof = 0.0;          ///< degrees of freedom N_f = 3 N_free - extra (>= 0)
+  double kinetic = 0.0;      ///< K over the free particles, J
+  double kT = 0.0;           ///< k_B T = 2 K / N_f, J (0 when N_f = 0)
+  double temperature = 0.0;  ///< T = kT / k_B, K
+  double volume = 0.0;       ///< the box's volume, m^3; NaN in open space
+  double virial = 0.0;       ///< W, J (as given)
+  double pressure = 0.0;     ///< (2 K + W) / (3 V), Pa; NaN in open space or W NaN
+};
+
+/// Temperature and pressure of the state `p` with the virial `virial` (J; NaN
+/// when unknown), removing `extra_dof` degrees of freedom (3: the momentum).
+/// Sums in particle order: the same bits for any thread count.
+Thermo thermo(const ParticleView& p, double virial, double extra_dof = 3.0);
+
+}  // namespace pdyn

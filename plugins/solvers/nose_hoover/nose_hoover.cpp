@@ -1,0 +1,352 @@
+// nose_hoover: velocity Verlet in a Nose-Hoover chain thermostat at k_B T
+// (Martyna, Klein & Tuckerman, J. Chem. Phys. 97, 2635 (1992); integrated
+// as Martyna, Tuckerman, Tobias & Klein, Mol. Phys. 87, 1117 (1996), and as
+// LAMMPS's `fix nvt`). The free particles' velocities are coupled to a
+// chain of M thermostats with positions eta_j and velocities xi_j:
+//
+//   dx/dt = v,   dv/dt = F/m - xi_1 v,   deta_j/dt = xi_j,
+//   dxi_1/dt = (2K - N_f kT) / Q_1 - xi_1 xi_2,
+//   dxi_j/dt = (Q_{j-1} xi_{j-1}^2 - kT) / Q_j - xi_j xi_{j+1}   (j >= 2, xi_{M+1} = 0),
+//
+// with K the free particles' kinetic energy, N_f = 3 N_free - extra_dof
+// (as the energy writer counts them, pdyn/thermo.hpp), Q_1 = N_f kT tau^2
+// and Q_j = kT tau^2: each thermostat's natural period is about 2 pi tau.
+// The extended energy
+//
+//   H' = K + U + sum_j Q_j xi_j^2 / 2 + N_f kT eta_1 + kT sum_{j>=2} eta_j
+//
+// is conserved; reservoir_energy() (pdyn::EnergyReservoir) is its part
+// beyond K + U, so the energy writer's `conserved` column is H'.
+//
+// One step of h is the Trotter splitting of MTK 1996 (LAMMPS's
+// initial_integrate and final_integrate with `tloop 1`):
+//
+//   chain half step (h/2) -> v += h/2 a0 -> x += h v -> evaluate a1
+//   -> v += h/2 a1 -> chain half step (h/2).
+//
+// A chain half step of d = h/2 (half_step below, LAMMPS's
+// nhc_temp_integrate) moves xi_M .. xi_1 by d/2 each, every one between two
+// scalings by exp(-d/4 xi_{j+1}); scales the free particles' velocities by
+// exp(-d xi_1), and 2K by its square (not summed again, as LAMMPS);
+// advances every eta_j by d xi_j; and moves xi_1 .. xi_M by d/2 again. The
+// step is time-reversible and second order; it is not symplectic.
+//
+// The particle update is verlet's, operation for operation (v += h/2 a0,
+// x += h v, v += h/2 a1; with velocity-dependent forces or a collider,
+// verlet's predictor: a1 sees v0 + h a0), so with the chain inert the bits
+// are verlet's. The chain is inert when N_f <= 0 (a single particle with
+// the default extra_dof 3): there is no temperature to control, the
+// velocities are left alone and eta, xi stay 0. Fixed particles have v = 0
+// (the kernel keeps them so), which the scaling keeps without a branch.
+//
+// Force reuse: the end-of-step accelerations stand in for the next step's
+// a0 under verlet's conditions (pdyn::ForceReuse, pdyn/force_reuse.hpp):
+// one force evaluation per step when every force reads positions only. The
+// chain's own drag -xi_1 v is not a force: it acts through the scalings,
+// between the evaluations, so it does not stop the reuse.
+//
+// Threads: the particle loops are pdyn::parallel_chunks, as verlet's. 2K,
+// which the chain needs twice per step, is a fixed-chunk reduction: chunks
+// of kChunk particles at fixed offsets (the same for any thread count),
+// each summed in particle order, then the chunks' sums added in chunk
+// order: the same bits for any thread count. The end-of-step sum is taken
+// in the pass that adds h/2 a1; the start-of-step one is a pass of its own
+// (the state may have been written between steps, and a resumed run must
+// compute what the uninterrupted one did).
+//
+// Checkpoints carry eta, xi and N_f (save_state), bit for bit. The chain's
+// new values are kept only when the step ends with them finite: a step that
+// throws or blows up (the Stepper then restores the particles' last good
+// state) leaves the chain as it was.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <pdyn/error.hpp>
+#include <pdyn/force_reuse.hpp>
+#include <pdyn/parallel.hpp>
+#include <pdyn/plugin.hpp>
+#include <pdyn/system.hpp>
+#include <pdyn/thermo.hpp>
+#include <span>
+#include <vector>
+
+namespace {
+
+using pdyn::Index;
+
+constexpr int kMaxChain = 10;
+// Columns per chunk, of the particle loops and of the 2K reduction.
+constexpr Index kChunk = pdyn::kChunkElements / 3;
+
+constexpr char kMagic[4] = {'n', 'h', 'c', 'h'};
+constexpr std::uint32_t kStateVersion = 1;
+
+// Calls body(c, b, e) for chunk c = [b, e) = [c k, min(n, (c + 1) k)) of
+// [0, n), every chunk once: each thread of parallel_ranges takes the chunks
+// that start in its range. The chunks do not depend on the thread count.
+template <class Body>
+void fixed_chunks(Index n, Index k, Body&& body) {
+  pdyn::parallel_ranges(n, [&](Index begin, Index end) {
+    for (Index c = (begin + k - 1) / k; c * k < end; ++c) body(c, c * k, std::min(n, (c + 1) * k));
+  });
+}
+
+// The thermostats: positions eta_j, velocities xi_j (1/s). xi[M] stays 0,
+// the end of the chain.
+struct Chain {
+  std::array<double, kMaxChain> eta{};
+  std::array<double, kMaxChain + 1> xi{};
+};
+
+class NoseHoover final : public pdyn::Solver,
+                         public pdyn::EnergyReservoir,
+                         public pdyn::ForceReuseHolder {
+ public:
+  NoseHoover(double kT, double tdamp, int chain, double extra_dof)
+      : kT_(kT), tau2_(tdamp * tdamp), m_(chain), extra_dof_(extra_dof) {}
+
+  void step(pdyn::System& sys, double h) override {
+    const pdyn::ForceReuse::Needs needs = pdyn::ForceReuse::needs(sys);
+    const pdyn::Matrix3X* kept = reuse_.kept(sys, needs);  // before this step's writable views
+    const double t0 = sys.time();
+    const Index n = sys.size();
+    const double dof = degrees_of_freedom(sys);
+    const bool on = dof > 0;
+    Chain next = chain_;
+    auto x = sys.positions();
+    auto v = sys.velocities();
+    const double s0 =
+        on ? half_step(next, dof, update_then_twice_k(sys, [](Index, Index) {}), 0.5 * h) : 1.0;
+    const pdyn::Matrix3X& a0 = kept != nullptr ? *kept : sys.compute_accelerations();
+    if (!needs.velocity) {
+      pdyn::parallel_chunks(n, kChunk, [&](Index b, Index e) {
+        if (on) v.middleCols(b, e - b) *= s0;
+        v.middleCols(b, e - b) += (0.5 * h) * a0.middleCols(b, e - b);  // v_half
+        x.middleCols(b, e - b) += h * v.middleCols(b, e - b);
+      });
+    } else {
+      half_.resize(3, n);  // no-op after the first step
+      pdyn::parallel_chunks(n, kChunk, [&](Index b, Index e) {
+        const Index m = e - b;
+        if (on) v.middleCols(b, m) *= s0;
+        half_.middleCols(b, m) = v.middleCols(b, m) + (0.5 * h) * a0.middleCols(b, m);
+        x.middleCols(b, m) += h * half_.middleCols(b, m);
+        v.middleCols(b, m) += h * a0.middleCols(b, m);  // predictor, only seen by a1's forces
+      });
+    }
+    sys.set_time(t0 + h);
+
+    const pdyn::Matrix3X& a1 = sys.compute_accelerations();
+    const double twice_k = update_then_twice_k(sys, [&](Index b, Index e) {
+      if (!needs.velocity) {
+        v.middleCols(b, e - b) += (0.5 * h) * a1.middleCols(b, e - b);
+      } else {
+        v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
+      }
+    });
+    if (on) {
+      const double s1 = half_step(next, dof, twice_k, 0.5 * h);
+      pdyn::parallel_chunks(n, kChunk, [&](Index b, Index e) { v.middleCols(b, e - b) *= s1; });
+    }
+    if (finite(next)) {
+      chain_ = next;
+      dof_ = dof;
+    }
+    reuse_.keep(sys, a1, needs);  // after the step's last write
+  }
+
+  // A checkpoint carries the kept a1 (pdyn/force_reuse.hpp).
+  const pdyn::Matrix3X* kept_accelerations(const pdyn::System& sys) const override {
+    return reuse_.current(sys);
+  }
+  void restore_kept_accelerations(const pdyn::System& sys, const pdyn::Matrix3X& a1) override {
+    reuse_.restore(sys, a1);
+  }
+
+  double reservoir_energy() const override {
+    const std::array<double, kMaxChain> q = thermostat_masses(dof_);
+    double e = 0.0;
+    for (int j = 0; j < m_; ++j) e += 0.5 * q[j] * chain_.xi[j] * chain_.xi[j];
+    e += dof_ * kT_ * chain_.eta[0];
+    for (int j = 1; j < m_; ++j) e += kT_ * chain_.eta[j];
+    return e;
+  }
+
+  // magic, version, M (4 bytes each), N_f, eta_1..eta_M, xi_1..xi_M (8 each).
+  std::vector<std::uint8_t> save_state() const override {
+    std::vector<std::uint8_t> bytes(state_bytes(m_));
+    std::uint8_t* p = bytes.data();
+    auto put = [&p](const void* src, std::size_t k) {
+      std::memcpy(p, src, k);
+      p += k;
+    };
+    const auto m = static_cast<std::uint32_t>(m_);
+    put(kMagic, 4);
+    put(&kStateVersion, 4);
+    put(&m, 4);
+    put(&dof_, 8);
+    put(chain_.eta.data(), 8 * static_cast<std::size_t>(m_));
+    put(chain_.xi.data(), 8 * static_cast<std::size_t>(m_));
+    return bytes;
+  }
+
+  void restore_state(std::span<const std::uint8_t> bytes) override {
+    std::uint32_t version = 0, m = 0;
+    if (bytes.size() >= 12) {
+      std::memcpy(&version, bytes.data() + 4, 4);
+      std::memcpy(&m, bytes.data() + 8, 4);
+    }
+    Chain c;
+    double dof = 0.0;
+    const bool framed = bytes.size() == state_bytes(m_) &&
+                        std::memcmp(bytes.data(), kMagic, 4) == 0 && version == kStateVersion &&
+                        m == static_cast<std::uint32_t>(m_);
+    if (framed) {
+      const std::uint8_t* p = bytes.data() + 12;
+      std::memcpy(&dof, p, 8);
+      std::memcpy(c.eta.data(), p + 8, 8 * static_cast<std::size_t>(m_));
+      std::memcpy(c.xi.data(), p + 8 + 8 * static_cast<std::size_t>(m_),
+                  8 * static_cast<std::size_t>(m_));
+    }
+    if (!framed || !finite(c) || !(dof >= 0 && std::isfinite(dof))) {
+      throw pdyn::Error(fmt::format(
+          "nose_hoover: the checkpoint's solver state is not one this nose_hoover (chain: {}) "
+          "wrote ({} bytes; expected {} bytes starting with 'nhch' version {}, chain length {}, "
+          "then finite numbers)",
+          m_, bytes.size(), state_bytes(m_), kStateVersion, m_));
+    }
+    chain_ = c;
+    dof_ = dof;
+  }
+
+ private:
+  static std::size_t state_bytes(int m) { return 12 + 8 + 16 * static_cast<std::size_t>(m); }
+
+  static bool finite(const Chain& c) {
+    return std::all_of(c.eta.begin(), c.eta.end(), [](double y) { return std::isfinite(y); }) &&
+           std::all_of(c.xi.begin(), c.xi.end(), [](double y) { return std::isfinite(y); });
+  }
+
+  // N_f = 3 N_free - extra_dof, at least 0 (pdyn::thermo's count).
+  double degrees_of_freedom(const pdyn::System& sys) const {
+    const auto& fixed = sys.fixed();
+    const auto nailed = std::count_if(fixed.begin(), fixed.end(), [](auto f) { return f != 0; });
+    return std::max(0.0, 3.0 * static_cast<double>(sys.size() - nailed) - extra_dof_);
+  }
+
+  // Q_1 = N_f kT tau^2, Q_j = kT tau^2.
+  std::array<double, kMaxChain> thermostat_masses(double dof) const {
+    std::array<double, kMaxChain> q{};
+    q.fill(kT_ * tau2_);
+    q[0] = dof * kT_ * tau2_;
+    return q;
+  }
+
+  // Calls update(b, e) on the fixed chunks of the particles, then returns
+  // 2K = sum_i m_i |v_i|^2 of the velocities it leaves: each chunk's sum in
+  // particle order, the chunks' sums in chunk order (fixed_chunks: the same
+  // bits for any thread count). Fixed particles add m 0 = 0.
+  template <class Update>
+  double update_then_twice_k(const pdyn::System& sys, Update&& update) {
+    const Index n = sys.size();
+    const auto v = sys.velocities();
+    const Eigen::VectorXd& mass = sys.masses();
+    partial_.resize((n + kChunk - 1) / kChunk);  // no-op after the first step
+    fixed_chunks(n, kChunk, [&](Index c, Index b, Index e) {
+      update(b, e);
+      double s = 0.0;
+      for (Index i = b; i < e; ++i) s += mass(i) * v.col(i).squaredNorm();
+      partial_[static_cast<std::size_t>(c)] = s;
+    });
+    double sum = 0.0;
+    for (const double s : partial_) sum += s;
+    return sum;
+  }
+
+  // One chain half step of length d (h/2), from 2K = `twice_k` of the
+  // velocities before it: updates `c` and returns the factor
+  // exp(-d xi_1) that scales the velocities (see the top of this file).
+  double half_step(Chain& c, double dof, double twice_k, double d) const {
+    const std::array<double, kMaxChain> q = thermostat_masses(dof);
+    auto force = [&](int j) {  // G_j, 1/s^2
+      return j == 0 ? (twice_k - dof * kT_) / q[0]
+                    : (q[j - 1] * c.xi[j - 1] * c.xi[j - 1] - kT_) / q[j];
+    };
+    auto kick = [&](int j) {
+      const double f = std::exp(-0.25 * d * c.xi[j + 1]);
+      c.xi[j] = (c.xi[j] * f + force(j) * (0.5 * d)) * f;
+    };
+    for (int j = m_ - 1; j >= 0; --j) kick(j);
+    const double scale = std::exp(-d * c.xi[0]);
+    twice_k *= scale * scale;
+    for (int j = 0; j < m_; ++j) c.eta[j] += d * c.xi[j];
+    for (int j = 0; j < m_; ++j) kick(j);
+    return scale;
+  }
+
+  double kT_, tau2_;
+  int m_;
+  double extra_dof_;
+  Chain chain_;
+  double dof_ = 0.0;             // N_f of the last step, for reservoir_energy()
+  std::vector<double> partial_;  // 2K per fixed chunk
+  pdyn::Matrix3X half_;          // v_half for velocity-dependent forces, sized on first use
+  pdyn::ForceReuse reuse_;       // the last step's a1, while it may stand in for a0
+};
+
+// k_B T from `temperature` (K) or `kT` (J): exactly one of them.
+double target_kT(const pdyn::Params& p) {
+  const bool kelvin = p.has("temperature"), energy = p.has("kT");
+  if (kelvin == energy) {
+    throw pdyn::ParamError(kelvin ? "kT" : "temperature",
+                           fmt::format("{} (expected temperature: T in K, or kT: k_B T in J for "
+                                       "reduced units)",
+                                       kelvin ? "gives temperature too" : "no temperature given"));
+  }
+  return kelvin ? pdyn::kBoltzmann * p.real("temperature") : p.real("kT");
+}
+
+pdyn::PluginDescriptor describe() {
+  pdyn::PluginDescriptor d;
+  d.kind = pdyn::PluginKind::Solver;
+  d.name = "nose_hoover";
+  d.version = "1.0.0";
+  d.description =
+      "velocity Verlet in a Nose-Hoover chain thermostat at temperature T (MTK 1996, as LAMMPS's "
+      "fix nvt); order 2, conserves K + U + reservoir";
+  d.solver_traits.order = 2;
+  d.solver_traits.symplectic = false;
+  d.params = {
+      pdyn::param::optional("temperature", pdyn::ParamType::Real, "K",
+                            "the target temperature (or give kT)")
+          .greater_than(0),
+      pdyn::param::optional("kT", pdyn::ParamType::Real, "J",
+                            "k_B T, the target temperature in energy units (reduced units: "
+                            "LAMMPS's T*)")
+          .greater_than(0)
+          .with_sample(1.0),
+      pdyn::param::required_real("tdamp", "s",
+                                 "damping time tau; LAMMPS suggests about 100 time steps")
+          .greater_than(0),
+      pdyn::param::integer("chain", 3, "thermostats in the chain, M")
+          .at_least(1)
+          .at_most(kMaxChain),
+      pdyn::param::real("extra_dof", 3.0, "",
+                        "degrees of freedom removed from 3 N_free for N_f (3: the total momentum, "
+                        "as the energy writer)")
+          .at_least(0),
+  };
+  d.create_solver = [](const pdyn::Params& p, const pdyn::SceneContext&) {
+    return std::make_unique<NoseHoover>(target_kT(p), p.real("tdamp"),
+                                        static_cast<int>(p.integer("chain")), p.real("extra_dof"));
+  };
+  return d;
+}
+
+}  // namespace
+
+PDYN_PLUGIN(describe)

@@ -1,0 +1,21 @@
+#!/usr/bin/env python3
+"""LAMMPS thermo output (a log file, or the screen output on stdin) to the
+CSV reference.thermo: header step,temp,press,pe,ke,etotal, one row per thermo
+line, the values exactly as LAMMPS printed them (format float %.17g).
+    lmp -in make_reference.lmp -log none | python3 extract_thermo.py > reference.thermo
+"""
+import sys
+
+HEADER = ["Step", "Temp", "Press", "PotEng", "KinEng", "TotEng"]
+
+lines = (open(sys.argv[1]) if len(sys.argv) > 1 else sys.stdin).read().splitlines()
+start = next(i for i, l in enumerate(lines) if l.split() == HEADER)
+print("step,temp,press,pe,ke,etotal")
+for line in lines[start + 1:]:
+    if line.startswith("Loop time"):
+        break
+    fields = line.split()
+    assert len(fields) == len(HEADER), line
+    int(fields[0])
+    [float(f) for f in fields[1:]]
+    print(",".join(fields))
