@@ -7,8 +7,10 @@
 # alternates the runs, LAMMPS 1 rank, pdyn 1 thread, LAMMPS 2 ranks, pdyn 2
 # threads, ROUNDS times (default 5), and prints each round's loop times and
 # the median ratios: pdyn's is the time `pdyn run` reports for its steps
-# (which includes the first force evaluation and list build that LAMMPS's
-# "Loop time" leaves to its setup), LAMMPS's the log's "Loop time".
+# ("the steps X s": after the set-up force evaluation and first frames, as
+# LAMMPS's "Loop time" is after its setup), LAMMPS's the log's "Loop time".
+# Each round also times both whole processes (load, set-up, output and
+# exit included), and their median ratio is printed too.
 #
 #   bash bench/lj_run_vs_lammps.sh [BUILD_DIR]      (default: build)
 #
@@ -40,28 +42,36 @@ forces:
   - { type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, skin: 0.3 }
 SCENE
 lammps_loop() {  # ranks -> the log's Loop time, s
-  local log="log.$1"
+  local log="log.$1" t0 t1
+  t0=$(date +%s.%N)
   if [[ $1 == 1 ]]; then
     (cd "$out" && lmp -in in.lj -log "$log" -screen none)
   else
     (cd "$out" && mpirun --allow-run-as-root --oversubscribe -np "$1" lmp -in in.lj -log "$log" -screen none)
   fi
+  t1=$(date +%s.%N)
+  echo "$t0 $t1" >"$out/lammps.wall"
   awk '/^Loop time of/{print $4}' "$out/$log"
 }
 pdyn_loop() {  # threads -> the steps' time pdyn run reports, s; checks one evaluation per step
-  local text
+  local text t0 t1
+  t0=$(date +%s.%N)
   text=$(cd "$out" && "../../$pdyn" run melt.yaml --threads "$1")
+  t1=$(date +%s.%N)
+  echo "$t0 $t1" >"$out/pdyn.wall"
   grep -q "pdyn: 101 force evaluations" <<<"$text" ||
     { echo "lj_run_vs_lammps: expected 101 force evaluations:" >&2; echo "$text" >&2; exit 1; }
-  sed -n 's/^pdyn: 100 steps of .* in \([0-9.e+-]*\) s.*/\1/p' <<<"$text"
+  sed -n 's/^pdyn: 100 steps of .* (the steps \([0-9.e+-]*\) s).*/\1/p' <<<"$text"
 }
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-declare -a r1 r2
+declare -a r1 r2 w1 w2
 printf '| round | LAMMPS 1 rank, s | pdyn 1 thread, s | ratio | LAMMPS 2 ranks, s | pdyn 2 threads, s | ratio |\n|---|---|---|---|---|---|---|\n'
 for ((k = 1; k <= rounds; ++k)); do
-  l1=$(lammps_loop 1); p1=$(pdyn_loop 1)
+  wall_ratio() { awk -v p="$(cat "$out/pdyn.wall")" -v l="$(cat "$out/lammps.wall")" \
+    'BEGIN{split(p, a, " "); split(l, b, " "); printf "%.3f", (a[2] - a[1]) / (b[2] - b[1])}'; }
+  l1=$(lammps_loop 1); p1=$(pdyn_loop 1); w1+=("$(wall_ratio)")
   if command -v mpirun >/dev/null; then l2=$(lammps_loop 2); else l2=nan; fi
-  p2=$(pdyn_loop 2)
+  p2=$(pdyn_loop 2); w2+=("$(wall_ratio)")
   a=$(awk -v p="$p1" -v l="$l1" 'BEGIN{printf "%.3f", p / l}')
   b=$(awk -v p="$p2" -v l="$l2" 'BEGIN{printf "%.3f", (l == "nan") ? 0 : p / l}')
   r1+=("$a"); r2+=("$b")
@@ -69,4 +79,5 @@ for ((k = 1; k <= rounds; ++k)); do
 done
 median() { printf '%s\n' "$@" | sort -g | awk '{v[NR]=$1} END{print (NR % 2) ? v[(NR+1)/2] : (v[NR/2] + v[NR/2+1]) / 2}'; }
 echo "median pdyn / LAMMPS: 1 thread / 1 rank $(median "${r1[@]}") (target <= 1.0), 2 threads / 2 ranks $(median "${r2[@]}") (target <= 1.0)"
+echo "median whole-process wall time, pdyn run / lmp: 1 thread / 1 rank $(median "${w1[@]}"), 2 threads / 2 ranks $(median "${w2[@]}")"
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

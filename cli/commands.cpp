@@ -139,12 +139,12 @@ void print_run_summary(std::ostream& out, const Scene& scene, const RunResult& r
       checkpoint ? fmt::format("{} (resumed at step {}; {} in all)",
                                count_of(r.steps_done - first, "step"), first, r.steps_done)
                  : count_of(r.steps_done, "step");
-  out << fmt::format("pdyn: {} of {} with {} to t = {} s in {:.3g} s{}\n", steps,
-                     count_of(scene.system->size(), "particle"), scene.solver_name, r.time, wall,
-                     scene.solver->adaptive()
-                         ? fmt::format(" ({} accepted, {} rejected)",
-                                       count_of(r.counts.accepted, "step"), r.counts.rejected)
-                         : "");
+  out << fmt::format(
+      "pdyn: {} of {} with {} to t = {} s in {:.3g} s (the steps {:.3g} s){}\n", steps,
+      count_of(scene.system->size(), "particle"), scene.solver_name, r.time, wall, r.loop_seconds,
+      scene.solver->adaptive() ? fmt::format(" ({} accepted, {} rejected)",
+                                             count_of(r.counts.accepted, "step"), r.counts.rejected)
+                               : "");
   // The cost of the run: what a solver or a plugin change is judged by.
   const std::uint64_t evaluations = scene.system->force_evaluations() - evaluations_before;
   const double particle_steps =

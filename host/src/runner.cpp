@@ -19,10 +19,12 @@
 #include <utility>
 
 #include "output.hpp"
+#include "pdyn/force_reuse.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/stepper.hpp"
 #include "pdyn/host/threads.hpp"
+#include "pdyn/step_aware.hpp"
 #include "pdyn/text.hpp"
 
 namespace pdyn {
@@ -462,6 +464,23 @@ void run_adaptive(Loop& loop, std::int64_t k0) {
 
 }  // namespace
 
+// The set-up before the steps, as LAMMPS's `run` computes the forces before
+// its loop: a solver that reuses its end-of-step forces (velocity Verlet,
+// pdyn/force_reuse.hpp) gets the first step's a0 evaluated here, at the same
+// state and time as its first step would (the same bits). Not when a force
+// is told each step first (pdyn/step_aware.hpp), nor when the solver already
+// holds forces (a resumed run's, from its checkpoint).
+void set_up_forces(Scene& scene) {
+  System& sys = *scene.system;
+  auto* holder = dynamic_cast<ForceReuseHolder*>(scene.solver.get());
+  if (holder == nullptr || holder->kept_accelerations(sys) != nullptr) return;
+  for (const auto& f : sys.force_objects()) {
+    if (dynamic_cast<const StepAware*>(f.force.get()) != nullptr) return;
+  }
+  if (ForceReuse::needs(sys).velocity) return;
+  holder->restore_kept_accelerations(sys, sys.compute_accelerations());
+}
+
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
   set_threads(options.threads > 0 ? options.threads
@@ -510,11 +529,15 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   }
   result.steps_done = k0;
   if (result.exit_code == 0) {
+    if (!adaptive) set_up_forces(scene);
+    const auto loop_start = std::chrono::steady_clock::now();
     if (adaptive) {
       run_adaptive(loop, k0);
     } else {
       run_fixed(loop, k0);
     }
+    result.loop_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
   }
   // A run resumed at its very end takes no step; its final frame is due.
   if (result.exit_code == 0) {

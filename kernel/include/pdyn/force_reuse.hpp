@@ -101,8 +101,14 @@ class ForceReuse {
   /// For a host resuming from a checkpoint, after the System's state, time
   /// and images are set: `a1` (what current() gave when the checkpoint was
   /// taken, copied) stands in for the next a0 on `sys` unless something
-  /// writes or evaluates first.
+  /// writes or evaluates first. A host's set-up may give the accelerations
+  /// it evaluated at the current state too. Ignored when some force or
+  /// collider reads velocities.
   void restore(const System& sys, const Matrix3X& a1) {
+    if (needs(sys).velocity) {  // a1 was evaluated at other velocities
+      a1_ = nullptr;
+      return;
+    }
     restored_ = a1;
     a1_ = &restored_;
     system_ = &sys;

@@ -53,6 +53,9 @@ struct RunResult {
   /// frames for the output thread, waiting for it and committing (what
   /// output adds to the run when a core is free for the output thread).
   double output_writing = 0.0, output_stalled = 0.0;
+  /// The steps' loop, s: from after the set-up (the first force evaluation,
+  /// the first frames) to the last step, as LAMMPS's "Loop time" counts.
+  double loop_seconds = 0.0;
 };
 
 /// Runs `scene` to its end: steps the solver, applies collider responses
