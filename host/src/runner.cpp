@@ -481,6 +481,18 @@ void set_up_forces(Scene& scene) {
   holder->restore_kept_accelerations(sys, sys.compute_accelerations());
 }
 
+// The steps after the set-up, timed as LAMMPS times its loop; returns s.
+double run_steps(Loop& loop, std::int64_t k0, bool adaptive) {
+  if (!adaptive) set_up_forces(loop.scene);
+  const auto start = std::chrono::steady_clock::now();
+  if (adaptive) {
+    run_adaptive(loop, k0);
+  } else {
+    run_fixed(loop, k0);
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
   set_threads(options.threads > 0 ? options.threads
@@ -528,17 +540,7 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
     }
   }
   result.steps_done = k0;
-  if (result.exit_code == 0) {
-    if (!adaptive) set_up_forces(scene);
-    const auto loop_start = std::chrono::steady_clock::now();
-    if (adaptive) {
-      run_adaptive(loop, k0);
-    } else {
-      run_fixed(loop, k0);
-    }
-    result.loop_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
-  }
+  if (result.exit_code == 0) result.loop_seconds = run_steps(loop, k0, adaptive);
   // A run resumed at its very end takes no step; its final frame is due.
   if (result.exit_code == 0) {
     out.emit_extra(result.steps_done);

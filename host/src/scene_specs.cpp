@@ -3,6 +3,7 @@
 // them with the same reader as plugin parameters, and `pdyn schema` lists them.
 #include "pdyn/host/scene_specs.hpp"
 
+#include "pdyn/thermo.hpp"
 #include "scene_builders.hpp"
 
 namespace pdyn {
@@ -93,20 +94,21 @@ std::vector<ParamSpec> writer_entry_keys() {
 }
 
 std::vector<ParamSpec> velocities_specs() {
-  return {
-      param::optional("temperature", ParamType::Real, "K", "draw at this temperature (or kT)")
-          .at_least(0),
-      param::optional("kT", ParamType::Real, "J",
-                      "k_B T, the temperature in energy units (reduced units: LAMMPS's T*)")
-          .at_least(0),
-      param::integer("seed", 1, "random seed, 0 to 4294967295").at_least(0).at_most(4294967295.0),
-      param::boolean("zero_momentum", true, "remove the total momentum"),
-      param::boolean("scale", true,
-                     "scale to exactly the temperature (3 n - 3 degrees of freedom, 3 n "
-                     "without zero_momentum)"),
-      param::optional("group", ParamType::String, "",
-                      "only this group (a builder's name:); default: every free particle"),
-  };
+  std::vector<ParamSpec> specs = temperature_params("the temperature to draw at", false);
+  specs.insert(
+      specs.end(),
+      {
+          param::integer("seed", 1, "random seed, 0 to 4294967295")
+              .at_least(0)
+              .at_most(4294967295.0),
+          param::boolean("zero_momentum", true, "remove the total momentum"),
+          param::boolean("scale", true,
+                         "scale to exactly the temperature (3 n - 3 degrees of freedom, 3 n "
+                         "without zero_momentum)"),
+          param::optional("group", ParamType::String, "",
+                          "only this group (a builder's name:); default: every free particle"),
+      });
+  return specs;
 }
 
 std::vector<ParamSpec> checkpoint_specs() {

@@ -17,16 +17,14 @@ void Loader::read_velocities(const YAML::Node& n) {
   if (!check_map(n, path, "velocities: { temperature: T, seed: N }")) return;
   auto p = read_params(n, path, velocities_specs(), {}, -1);
   if (!p) return;
-  const bool kelvin = p->has("temperature"), energy = p->has("kT");
-  if (kelvin == energy) {
-    error(n, path,
-          fmt::format("{}: {} (expected temperature: T in K, or kT: k_B T in J for reduced "
-                      "units)",
-                      path, kelvin ? "gives both temperature and kT" : "gives no temperature"));
+  VelocitySpec spec;
+  try {
+    spec.kT = temperature_kT(*p);
+  } catch (const ParamError& e) {
+    const YAML::Node at = n[e.param()].IsDefined() ? n[e.param()] : n;
+    error(at, path + "." + e.param(), fmt::format("{}.{}: {}", path, e.param(), e.what()));
     return;
   }
-  VelocitySpec spec;
-  spec.kT = kelvin ? kBoltzmann * p->real("temperature") : p->real("kT");
   spec.seed = static_cast<std::uint64_t>(p->integer("seed"));
   spec.zero_momentum = p->boolean("zero_momentum");
   spec.scale = p->boolean("scale");

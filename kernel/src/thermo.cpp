@@ -1,9 +1,12 @@
 #include "pdyn/thermo.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "pdyn/error.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
 
@@ -11,6 +14,34 @@ namespace pdyn {
 
 VirialSource::~VirialSource() = default;
 EnergyReservoir::~EnergyReservoir() = default;
+
+std::vector<ParamSpec> temperature_params(const std::string& what, bool positive) {
+  ParamSpec kelvin = param::optional("temperature", ParamType::Real, "K", what + " (or give kT)");
+  ParamSpec energy =
+      param::optional("kT", ParamType::Real, "J",
+                      "k_B T, " + what + " in energy units (reduced units: LAMMPS's T*)");
+  for (ParamSpec* s : {&kelvin, &energy}) {
+    if (positive) {
+      s->greater_than(0);
+    } else {
+      s->at_least(0);
+    }
+  }
+  energy.with_sample(1.0);
+  return {kelvin, energy};
+}
+
+double temperature_kT(const Params& p) {
+  const bool kelvin = p.has("temperature"), energy = p.has("kT");
+  constexpr const char* kExpected = "temperature: T in K, or kT: k_B T in J for reduced units";
+  if (!kelvin && !energy) {
+    throw ParamError("temperature", fmt::format("no temperature given (expected {})", kExpected));
+  }
+  if (kelvin && energy) {
+    throw ParamError("kT", fmt::format("given with temperature (expected one of {})", kExpected));
+  }
+  return kelvin ? kBoltzmann * p.real("temperature") : p.real("kT");
+}
 
 VirialSum total_virial(const System& sys) {
   VirialSum sum;

@@ -119,8 +119,9 @@ TEST(Velocities, EachBadValueGetsItsLocatedError) {
       {"{ kT: -0.5 }",
        "test.yaml:6:19: velocities.kT: -0.5 is out of range (expected a number >= 0 in J)"},
       {"{ temperature: 1, kT: 2 }",
-       "test.yaml:6:13: velocities: gives both temperature and kT " + both},
-      {"{ seed: 3 }", "test.yaml:6:13: velocities: gives no temperature " + both},
+       "test.yaml:6:35: velocities.kT: given with temperature (expected one of temperature: T in "
+       "K, or kT: k_B T in J for reduced units)"},
+      {"{ seed: 3 }", "test.yaml:6:13: velocities.temperature: no temperature given " + both},
       {"{ kT: 1, seed: -1 }",
        "test.yaml:6:28: velocities.seed: -1 is out of range (expected a whole number in [0, "
        "4294967295])"},

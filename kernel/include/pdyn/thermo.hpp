@@ -18,7 +18,9 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
+#include "pdyn/params.hpp"
 #include "pdyn/particles.hpp"
 
 namespace pdyn {
@@ -27,6 +29,18 @@ class System;
 
 /// Boltzmann's constant, J/K (exact since the 2019 SI).
 inline constexpr double kBoltzmann = 1.380649e-23;
+
+/// The parameters that give a temperature, in one place for every plugin and
+/// scene section that takes one (langevin, nose_hoover, `velocities:`):
+/// `temperature` (K) or `kT` (J: k_B T, for scenes in reduced units, where
+/// it is LAMMPS's T*), exactly one of them. `what` names it in the docs
+/// ("the bath's temperature"); `positive`: 0 is refused too (a Nose-Hoover
+/// chain's masses scale with it). `kT` has the sample 1 J for `pdyn check`.
+std::vector<ParamSpec> temperature_params(const std::string& what, bool positive);
+
+/// k_B T (J) from temperature_params()'s keys. Throws ParamError naming the
+/// key when neither or both are given.
+double temperature_kT(const Params& p);
 
 /// Optional interface of a force: its virial. Found with dynamic_cast on the
 /// Force (forces built against an earlier SDK keep their vtable). Every

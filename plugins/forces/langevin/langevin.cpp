@@ -16,8 +16,6 @@
 // the seed, the bits of the step's start time and the particle's index: the
 // same for any thread count, for a step replayed after a fault and for a run
 // resumed from a checkpoint, with no generator state to save.
-#include <fmt/format.h>
-
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -105,18 +103,6 @@ class Langevin final : public pdyn::Force,
   double h_ = 0.0;
 };
 
-// k_B T from `temperature` (K) or `kT` (J): exactly one of them.
-double bath_energy(const pdyn::Params& p) {
-  const bool kelvin = p.has("temperature"), energy = p.has("kT");
-  if (kelvin == energy) {
-    throw pdyn::ParamError(kelvin ? "kT" : "temperature",
-                           fmt::format("{} (expected temperature: T in K, or kT: k_B T in J for "
-                                       "reduced units)",
-                                       kelvin ? "gives temperature too" : "no temperature given"));
-  }
-  return kelvin ? pdyn::kBoltzmann * p.real("temperature") : p.real("kT");
-}
-
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
@@ -125,25 +111,20 @@ pdyn::PluginDescriptor describe() {
   d.description =
       "Langevin thermostat: drag -m v / damp plus a random force at temperature T, "
       "reproducible for a seed";
-  d.params = {
-      pdyn::param::optional("temperature", pdyn::ParamType::Real, "K",
-                            "the bath's temperature (or give kT)")
-          .at_least(0),
-      pdyn::param::optional("kT", pdyn::ParamType::Real, "J",
-                            "k_B T, the bath's temperature in energy units (reduced units: "
-                            "LAMMPS's T*)")
-          .at_least(0)
-          .with_sample(1.0),
-      pdyn::param::required_real("damp", "s", "damping time tau: the drag is m v / tau")
-          .greater_than(0),
-      pdyn::param::integer("seed", 1, "random seed, 0 to 4294967295")
-          .at_least(0)
-          .at_most(4294967295.0),
-  };
+  d.params = pdyn::temperature_params("the bath's temperature", false);
+  d.params.insert(
+      d.params.end(),
+      {
+          pdyn::param::required_real("damp", "s", "damping time tau: the drag is m v / tau")
+              .greater_than(0),
+          pdyn::param::integer("seed", 1, "random seed, 0 to 4294967295")
+              .at_least(0)
+              .at_most(4294967295.0),
+      });
   for (auto& s : pdyn::selection_params()) d.params.push_back(std::move(s));
   d.force_traits.dissipative = false;  // the noise does positive work
   d.create_force = [](const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-    return std::make_unique<Langevin>(bath_energy(p), p.real("damp"),
+    return std::make_unique<Langevin>(pdyn::temperature_kT(p), p.real("damp"),
                                       static_cast<std::uint64_t>(p.integer("seed")),
                                       pdyn::Selection::from_params(p, ctx));
   };

@@ -298,18 +298,6 @@ class NoseHoover final : public pdyn::Solver,
   pdyn::ForceReuse reuse_;       // the last step's a1, while it may stand in for a0
 };
 
-// k_B T from `temperature` (K) or `kT` (J): exactly one of them.
-double target_kT(const pdyn::Params& p) {
-  const bool kelvin = p.has("temperature"), energy = p.has("kT");
-  if (kelvin == energy) {
-    throw pdyn::ParamError(kelvin ? "kT" : "temperature",
-                           fmt::format("{} (expected temperature: T in K, or kT: k_B T in J for "
-                                       "reduced units)",
-                                       kelvin ? "gives temperature too" : "no temperature given"));
-  }
-  return kelvin ? pdyn::kBoltzmann * p.real("temperature") : p.real("kT");
-}
-
 pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Solver;
@@ -320,28 +308,24 @@ pdyn::PluginDescriptor describe() {
       "fix nvt); order 2, conserves K + U + reservoir";
   d.solver_traits.order = 2;
   d.solver_traits.symplectic = false;
-  d.params = {
-      pdyn::param::optional("temperature", pdyn::ParamType::Real, "K",
-                            "the target temperature (or give kT)")
-          .greater_than(0),
-      pdyn::param::optional("kT", pdyn::ParamType::Real, "J",
-                            "k_B T, the target temperature in energy units (reduced units: "
-                            "LAMMPS's T*)")
-          .greater_than(0)
-          .with_sample(1.0),
-      pdyn::param::required_real("tdamp", "s",
-                                 "damping time tau; LAMMPS suggests about 100 time steps")
-          .greater_than(0),
-      pdyn::param::integer("chain", 3, "thermostats in the chain, M")
-          .at_least(1)
-          .at_most(kMaxChain),
-      pdyn::param::real("extra_dof", 3.0, "",
-                        "degrees of freedom removed from 3 N_free for N_f (3: the total momentum, "
-                        "as the energy writer)")
-          .at_least(0),
-  };
+  d.params = pdyn::temperature_params("the target temperature", true);
+  d.params.insert(
+      d.params.end(),
+      {
+          pdyn::param::required_real("tdamp", "s",
+                                     "damping time tau; LAMMPS suggests about 100 time steps")
+              .greater_than(0),
+          pdyn::param::integer("chain", 3, "thermostats in the chain, M")
+              .at_least(1)
+              .at_most(kMaxChain),
+          pdyn::param::real(
+              "extra_dof", 3.0, "",
+              "degrees of freedom removed from 3 N_free for N_f (3: the total momentum, "
+              "as the energy writer)")
+              .at_least(0),
+      });
   d.create_solver = [](const pdyn::Params& p, const pdyn::SceneContext&) {
-    return std::make_unique<NoseHoover>(target_kT(p), p.real("tdamp"),
+    return std::make_unique<NoseHoover>(pdyn::temperature_kT(p), p.real("tdamp"),
                                         static_cast<int>(p.integer("chain")), p.real("extra_dof"));
   };
   return d;

@@ -147,8 +147,10 @@ TEST(Langevin, EachBadValueGetsItsLocatedError) {
             "in K)");
   EXPECT_EQ(with("{ type: langevin, damp: 1 }"),
             "test.yaml:5:5: forces[0].temperature: no temperature given " + expected);
-  EXPECT_EQ(with("{ type: langevin, kT: 1, temperature: 1, damp: 1 }"),
-            "test.yaml:5:27: forces[0].kT: gives temperature too " + expected);
+  EXPECT_EQ(
+      with("{ type: langevin, kT: 1, temperature: 1, damp: 1 }"),
+      "test.yaml:5:27: forces[0].kT: given with temperature (expected one of temperature: T in "
+      "K, or kT: k_B T in J for reduced units)");
   EXPECT_EQ(with("{ type: langevin, kT: 1, damp: 1, seed: 4294967296 }"),
             "test.yaml:5:45: forces[0].seed: 4294967296 is out of range (expected a whole "
             "number in [0, 4294967295])");

@@ -297,7 +297,8 @@ TEST(NoseHoover, EachBadValueGetsItsLocatedError) {
   EXPECT_EQ(with("{ type: nose_hoover, tdamp: 0.5 }"),
             "test.yaml:1:43: simulation.solver.temperature: no temperature given " + expected);
   EXPECT_EQ(with("{ type: nose_hoover, kT: 1, temperature: 100, tdamp: 0.5 }"),
-            "test.yaml:1:68: simulation.solver.kT: gives temperature too " + expected);
+            "test.yaml:1:68: simulation.solver.kT: given with temperature (expected one of "
+            "temperature: T in K, or kT: k_B T in J for reduced units)");
   EXPECT_EQ(with("{ type: nose_hoover, kT: 0, tdamp: 0.5 }"),
             "test.yaml:1:68: simulation.solver.kT: 0 is out of range (expected a number > 0 in J)");
   EXPECT_EQ(with("{ type: nose_hoover, temperature: -3, tdamp: 0.5 }"),
