@@ -3,6 +3,8 @@
 // loop (step, set time, collide).
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -15,8 +17,10 @@
 #include "pdyn/force.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/host/stepper.hpp"
 #include "pdyn/solver.hpp"
 #include "pdyn/system.hpp"
+#include "support/test_support.hpp"
 
 namespace pdyn::test {
 
@@ -70,6 +74,31 @@ inline void TakeStep(Scene& scene, std::int64_t k, double h) {
   scene.system->set_time(static_cast<double>(k) * h);
   SystemAssembly(*scene.system).respond_to_collisions(h);
   SystemAssembly(*scene.system).wrap_positions();  // as the Stepper does after a good step
+}
+
+/// LAMMPS's Lennard-Jones liquid (tests/scenes/thermo: 256 atoms, fcc at
+/// density 0.8442, T* = 1.44, in its periodic box) stepped by `solver` (a
+/// `solver:` entry), under lennard_jones (epsilon = sigma = 1, cutoff 2.5,
+/// shifted to 0 there if `shift`) and the force entries `more` ("  - {...}\n").
+inline Scene LjLiquid(const std::string& solver, const std::string& more = "", bool shift = false) {
+  const std::string data = source_path("tests/scenes/thermo/thermo_start.data").string();
+  return load_text("simulation: { dt: 0.005, steps: 1, solver: " + solver +
+                   ", box: { file: " + data + " } }\nparticles:\n  - file: " + data +
+                   "\nforces:\n  - { type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, "
+                   "skin: 0.3, shift: " +
+                   (shift ? "true" : "false") + " }\n" + more);
+}
+
+/// Steps `scene` through a Stepper, as pdyn run does (the forces told each
+/// step's start and length, pdyn/step_aware.hpp; the wrap; the rollback),
+/// `steps` steps of scene.dt, calling each(k) after step k.
+template <class Each>
+void StepThrough(Scene& scene, std::int64_t steps, Each&& each) {
+  Stepper stepper(*scene.system, *scene.solver, scene.solver_label);
+  for (std::int64_t k = 1; k <= steps; ++k) {
+    ASSERT_TRUE(stepper.step_to(static_cast<double>(k) * scene.dt)) << stepper.fault().what;
+    each(k);
+  }
 }
 
 }  // namespace pdyn::test

@@ -15,6 +15,7 @@
 #include "pdyn/host/stepper.hpp"
 #include "pdyn/system.hpp"
 #include "pdyn/thermo.hpp"
+#include "support/physics_support.hpp"
 #include "support/statistics.hpp"
 #include "support/test_support.hpp"
 
@@ -35,17 +36,6 @@ std::string ideal_gas(double dt, double damp, const std::string& extra = "") {
          test::Num(damp) + ", seed: 5 }\n" + extra;
 }
 
-// Steps `scene` through the Stepper (which tells the force each step's
-// start and length), calling each(k) after step k.
-template <class Each>
-void run(Scene& scene, std::int64_t steps, Each&& each) {
-  Stepper stepper(*scene.system, *scene.solver, scene.solver_label);
-  for (std::int64_t k = 1; k <= steps; ++k) {
-    ASSERT_TRUE(stepper.step_to(static_cast<double>(k) * scene.dt)) << stepper.fault().what;
-    each(k);
-  }
-}
-
 TEST(Langevin, AnIdealGasReachesTheSchemesStationaryTemperature) {
   // With a = -v / tau + r, r held over the step with variance 2 kT / (m tau
   // h), pdyn's verlet (a1 at the predictor v0 + h a0) maps v0 to c v0 + b r,
@@ -60,7 +50,7 @@ TEST(Langevin, AnIdealGasReachesTheSchemesStationaryTemperature) {
   std::vector<double> kt;  // 2 K / (3 N), each step after the first 500 (100 tau)
   std::vector<double> z;   // v sqrt(m / (expected kT)), standard normal: every 50th step,
                            // when c^50 = 5e-5 of the last sample's velocity is left
-  run(scene, 3500, [&](std::int64_t k) {
+  test::StepThrough(scene, 3500, [&](std::int64_t k) {
     if (k <= 500) return;
     kt.push_back(thermo(s.view(), 0.0, 0.0).kT);
     if (k % 50 != 0) return;
@@ -83,20 +73,11 @@ TEST(Langevin, AnIdealGasReachesTheSchemesStationaryTemperature) {
 TEST(Langevin, ALiquidStartedHotterHoldsTheBathsTemperature) {
   // LAMMPS's 256-atom melt at T* = 1.44 (tests/scenes/thermo), in a bath at
   // k_B T = 1 with tau = 100 steps: h / tau = 0.01, a bias of order 1e-4.
-  const std::string data = test::source_path("tests/scenes/thermo/thermo_start.data").string();
-  Scene scene = test::load_text(
-      "simulation: { dt: 0.005, steps: 1, solver: { type: verlet }, box: { file: " + data +
-      " } }\n"
-      "particles:\n"
-      "  - file: " +
-      data +
-      "\n"
-      "forces:\n"
-      "  - { type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, skin: 0.3 }\n"
-      "  - { type: langevin, kT: 1, damp: 0.5, seed: 9 }\n");
+  Scene scene =
+      test::LjLiquid("{ type: verlet }", "  - { type: langevin, kT: 1, damp: 0.5, seed: 9 }\n");
   const System& s = *scene.system;
   std::vector<double> kt;
-  run(scene, 6000, [&](std::int64_t k) {
+  test::StepThrough(scene, 6000, [&](std::int64_t k) {
     if (k > 1000) kt.push_back(thermo(s.view(), 0.0).kT);
   });
   const test::MeanError m = test::block_average(kt);

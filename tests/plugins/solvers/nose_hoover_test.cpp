@@ -20,22 +20,13 @@
 #include "pdyn/parallel.hpp"
 #include "pdyn/system.hpp"
 #include "pdyn/thermo.hpp"
+#include "plugins/solvers/solver_support.hpp"
 #include "support/physics_support.hpp"
 #include "support/statistics.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {
-
-// Steps `scene` through the Stepper, calling each(k) after step k.
-template <class Each>
-void NhRun(Scene& scene, std::int64_t steps, Each&& each) {
-  Stepper stepper(*scene.system, *scene.solver, scene.solver_label);
-  for (std::int64_t k = 1; k <= steps; ++k) {
-    ASSERT_TRUE(stepper.step_to(static_cast<double>(k) * scene.dt)) << stepper.fault().what;
-    each(k);
-  }
-}
 
 double NhReservoir(const Scene& scene) {
   return total_reservoir_energy(*scene.system, scene.solver.get());
@@ -49,19 +40,7 @@ bool NhSameBits(const Scene& a, const Scene& b) {
 // LAMMPS's melt (tests/scenes/thermo): 256 atoms on fcc at density 0.8442,
 // T* = 1.44, in its periodic box; the potential shifted to 0 at the cutoff,
 // so that the energy is continuous.
-Scene NhLiquid(const std::string& solver) {
-  const std::string data = test::source_path("tests/scenes/thermo/thermo_start.data").string();
-  return test::load_text("simulation: { dt: 0.005, steps: 1, solver: " + solver +
-                         ", box: { file: " + data +
-                         " } }\n"
-                         "particles:\n"
-                         "  - file: " +
-                         data +
-                         "\n"
-                         "forces:\n"
-                         "  - { type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, shift: "
-                         "true, skin: 0.3 }\n");
-}
+Scene NhLiquid(const std::string& solver) { return test::LjLiquid(solver, "", true); }
 
 TEST(NoseHoover, ALiquidHoldsTheTargetTemperatureAndConservesTheExtendedEnergy) {
   // tau = 0.5 = 100 steps, as LAMMPS suggests; 4000 steps = 40 tau.
@@ -74,7 +53,7 @@ TEST(NoseHoover, ALiquidHoldsTheTargetTemperatureAndConservesTheExtendedEnergy) 
   std::vector<double> kt;
   double worst = 0.0, last = 0.0;
   const std::int64_t steps = 4000;
-  NhRun(scene, steps, [&](std::int64_t k) {
+  test::StepThrough(scene, steps, [&](std::int64_t k) {
     if (k > steps / 2) kt.push_back(thermo(s.view(), 0.0).kT);
     if (k % 10 == 0) {
       last = (s.kinetic_energy() + s.potential_energy() + NhReservoir(scene) - h0) / n;
@@ -102,23 +81,14 @@ TEST(NoseHoover, ALiquidHoldsTheTargetTemperatureAndConservesTheExtendedEnergy) 
 // The cluster of verlet_reuse_test: 27 Lennard-Jones atoms and gravity,
 // positions only. With a force that claims velocity dependence (Nothing)
 // every step evaluates a0; the states are the same bits.
-Scene NhCluster(const std::string& solver) {
-  std::string s = "simulation: { dt: 0.002, steps: 1, solver: " + solver + " }\nparticles:\n";
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      for (int c = 0; c < 3; ++c)
-        s += "  - { position: [" + std::to_string(1.12 * a) + ", " + std::to_string(1.12 * b) +
-             ", " + std::to_string(1.12 * c + 0.05 * a) + "], mass: 1 }\n";
-  s += "forces:\n  - { type: lennard_jones }\n  - { type: gravity, g: [0, 0, -9.81] }\n";
-  return test::load_text(s);
-}
+Scene NhCluster(const std::string& solver) { return test::LjCluster(solver); }
 
 TEST(NoseHoover, OneForceEvaluationPerStepGivesTheSameBitsAsTwo) {
   const std::string solver = "{ type: nose_hoover, kT: 0.3, tdamp: 0.05 }";
   Scene once = NhCluster(solver), twice = NhCluster(solver);
   SystemAssembly(*twice.system).add_force(std::make_shared<test::Nothing>(), "nothing");
-  NhRun(once, 300, [](std::int64_t) {});
-  NhRun(twice, 300, [](std::int64_t) {});
+  test::StepThrough(once, 300, [](std::int64_t) {});
+  test::StepThrough(twice, 300, [](std::int64_t) {});
   EXPECT_EQ(once.system->force_evaluations(), 301u);
   EXPECT_EQ(twice.system->force_evaluations(), 600u);
   EXPECT_TRUE(NhSameBits(once, twice));
@@ -142,7 +112,7 @@ Eigen::VectorXd NhLatticeRun(int threads, const std::string& kd, double* reservo
   std::normal_distribution<double> normal(0.0, 1.0);
   auto v = scene.system->velocities();
   for (Index i = 0; i < v.cols(); ++i) v.col(i) = Vec3(normal(rng), normal(rng), normal(rng));
-  NhRun(scene, 30, [](std::int64_t) {});
+  test::StepThrough(scene, 30, [](std::int64_t) {});
   EXPECT_EQ(max_threads(), threads);
   *reservoir = NhReservoir(scene);
   return scene.system->state();
@@ -201,7 +171,7 @@ TEST(NoseHoover, AResumedRunIsTheSameBits) {
 // it could not have written are refused.
 TEST(NoseHoover, TheCheckpointBytesAreChecked) {
   Scene a = NhCluster("{ type: nose_hoover, kT: 0.3, tdamp: 0.05, chain: 4 }");
-  NhRun(a, 50, [](std::int64_t) {});
+  test::StepThrough(a, 50, [](std::int64_t) {});
   const std::vector<std::uint8_t> bytes = a.solver->save_state();
   EXPECT_EQ(bytes.size(), 12u + 8u + 16u * 4u);
   Scene b = NhCluster("{ type: nose_hoover, kT: 0.3, tdamp: 0.05, chain: 4 }");
@@ -252,8 +222,8 @@ TEST(NoseHoover, AnInertChainIsVerletAndItsReservoirStaysZero) {
   Scene nh = NhWell("{ type: nose_hoover, kT: 1, tdamp: 0.1 }", 1);
   Scene vv = NhWell("{ type: verlet }", 1);
   EXPECT_EQ(NhReservoir(nh), 0.0);
-  NhRun(nh, 500, [](std::int64_t) {});
-  NhRun(vv, 500, [](std::int64_t) {});
+  test::StepThrough(nh, 500, [](std::int64_t) {});
+  test::StepThrough(vv, 500, [](std::int64_t) {});
   EXPECT_TRUE(NhSameBits(nh, vv));
   EXPECT_EQ(NhReservoir(nh), 0.0);
   EXPECT_EQ(nh.system->force_evaluations(), 501u);
@@ -270,7 +240,7 @@ TEST(NoseHoover, TheReservoirStartsAtZeroAndTheExtendedEnergyIsConservedToSecond
     const System& s = *two.system;
     EXPECT_EQ(NhReservoir(two), 0.0);
     const double e0 = s.kinetic_energy() + s.potential_energy();
-    NhRun(two, 2000 << k, [&](std::int64_t) {
+    test::StepThrough(two, 2000 << k, [&](std::int64_t) {
       worst[k] = std::max(
           worst[k], std::abs(s.kinetic_energy() + s.potential_energy() + NhReservoir(two) - e0));
     });

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "pdyn/force.hpp"
@@ -12,6 +13,22 @@
 #include "support/test_support.hpp"
 
 namespace pdyn::test {
+
+/// 27 Lennard-Jones atoms in a slightly sheared 3 x 3 x 3 cube under gravity
+/// (forces on positions only), stepped by `solver` (a `solver:` entry),
+/// `extra` inserted before `particles:` (colliders, a periodic box).
+inline Scene LjCluster(const std::string& solver = "{ type: verlet }",
+                       const std::string& extra = "") {
+  std::string s =
+      "simulation: { dt: 0.002, steps: 1, solver: " + solver + " }\n" + extra + "particles:\n";
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      for (int c = 0; c < 3; ++c)
+        s += "  - { position: [" + std::to_string(1.12 * a) + ", " + std::to_string(1.12 * b) +
+             ", " + std::to_string(1.12 * c + 0.05 * a) + "], mass: 1 }\n";
+  s += "forces:\n  - { type: lennard_jones }\n  - { type: gravity, g: [0, 0, -9.81] }\n";
+  return load_text(s);
+}
 
 /// Slope of log(error) against log(h), least squares.
 inline double FittedOrder(const std::vector<double>& h, const std::vector<double>& error) {

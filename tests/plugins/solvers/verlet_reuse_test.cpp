@@ -14,6 +14,7 @@
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/stepper.hpp"
 #include "pdyn/system.hpp"
+#include "plugins/solvers/solver_support.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
@@ -28,15 +29,7 @@ void add_nothing(Scene& scene) {
 // on positions only), `extra` appended to the scene text (colliders, a
 // periodic box, more forces, solver parameters).
 Scene cluster(const std::string& solver = "{ type: verlet }", const std::string& extra = "") {
-  std::string s =
-      "simulation: { dt: 0.002, steps: 1, solver: " + solver + " }\n" + extra + "particles:\n";
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b)
-      for (int c = 0; c < 3; ++c)
-        s += "  - { position: [" + std::to_string(1.12 * a) + ", " + std::to_string(1.12 * b) +
-             ", " + std::to_string(1.12 * c + 0.05 * a) + "], mass: 1 }\n";
-  s += "forces:\n  - { type: lennard_jones }\n  - { type: gravity, g: [0, 0, -9.81] }\n";
-  return test::load_text(s);
+  return test::LjCluster(solver, extra);
 }
 
 std::uint64_t run(Scene& scene, int steps, double dt = 0.002) {
