@@ -598,6 +598,23 @@ void Loader::read_solver(const YAML::Node& root, std::vector<PendingPlugin>& sol
   }
 }
 
+namespace {
+
+// Why `force` cannot run with `solver`, or "": a force held over each fixed
+// step (pdyn/step_aware.hpp) scales with the step's length, which an
+// adaptive solver chooses itself. One message for a scene and for a force
+// or solver added to a running simulation.
+std::string fixed_step_conflict(const Force& force, const std::string& force_name,
+                                const Solver& solver, const std::string& solver_name) {
+  if (!solver.adaptive() || dynamic_cast<const StepAware*>(&force) == nullptr) return {};
+  return fmt::format(
+      "{} draws a force held over each fixed step; {} chooses its own step "
+      "lengths (expected a fixed-step solver: verlet, rk4, euler, ...)",
+      force_name, solver_name);
+}
+
+}  // namespace
+
 // The System with the particles, the box, radii, types and image counts the
 // sections read: before any force or collider exists, so that their
 // factories see all of it in SceneContext::particles.
@@ -650,12 +667,12 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
   auto keep = [&](PendingPlugin& p, PluginKind kind) {
     scene.uses.push_back({kind, p.record->descriptor->name, label(p), std::move(p.params)});
   };
-  std::vector<const PendingPlugin*> step_aware;  // forces that need fixed steps
+  std::vector<std::pair<const PendingPlugin*, const Force*>> created;  // checked with the solver
   for (auto* list : {&builder_forces_, &forces}) {
     for (auto& p : *list) {
       auto f = create(p, [&] { return registry_.create_force(*p.record, p.params, ctx); });
       if (!f) continue;
-      if (dynamic_cast<const StepAware*>(f.get()) != nullptr) step_aware.push_back(&p);
+      created.emplace_back(&p, f.get());
       assembly.add_force(std::move(f), label(p));
       scene.libraries[label(p)] = p.record->library;
       scene.force_traits[label(p)] = p.record->descriptor->force_traits;
@@ -676,15 +693,11 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
     scene.solver_params = p.params;
     scene.libraries[label(p)] = p.record->library;
   }
-  // A force held over a step scales with the step's length
-  // (pdyn/step_aware.hpp), which an adaptive solver chooses itself.
-  if (scene.solver && scene.solver->adaptive()) {
-    for (const PendingPlugin* p : step_aware) {
-      error(p->node, p->path,
-            fmt::format("{}: {} draws a force held over each fixed step; {} chooses its own "
-                        "step lengths (expected a fixed-step solver: verlet, rk4, euler, ...)",
-                        p->path, p->record->descriptor->name, scene.solver_name));
-    }
+  for (const auto& [p, force] : created) {
+    const std::string why = scene.solver ? fixed_step_conflict(*force, p->record->descriptor->name,
+                                                               *scene.solver, scene.solver_name)
+                                         : std::string();
+    if (!why.empty()) error(p->node, p->path, fmt::format("{}: {}", p->path, why));
   }
   for (const auto& w : scene.output.writers) scene.libraries[w.label] = w.record.library;
 }
@@ -747,13 +760,12 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
     case PluginKind::Force: {
       auto f = create(p, [&] { return registry_.create_force(*rec, p.params, ctx); });
       if (!f) fail();
-      if (dynamic_cast<const StepAware*>(f.get()) != nullptr && scene.solver &&
-          scene.solver->adaptive()) {
-        diags_.push_back({file_, fmt::format("{}: {} draws a force held over each fixed step; {} "
-                                             "chooses its own step lengths (expected a "
-                                             "fixed-step solver: verlet, rk4, euler, ...)",
-                                             path, name, scene.solver_name)});
-        fail();
+      if (scene.solver) {
+        const std::string why = fixed_step_conflict(*f, name, *scene.solver, scene.solver_name);
+        if (!why.empty()) {
+          diags_.push_back({file_, fmt::format("{}: {}", path, why)});
+          fail();
+        }
       }
       SystemAssembly(sys).add_force(std::move(f), label);
       scene.force_traits[label] = rec->descriptor->force_traits;
@@ -769,11 +781,9 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
       auto s = create(p, [&] { return registry_.create_solver(*rec, p.params, ctx); });
       if (!s) fail();
       for (const auto& entry : sys.force_objects()) {
-        if (s->adaptive() && dynamic_cast<const StepAware*>(entry.force.get()) != nullptr) {
-          diags_.push_back({file_, fmt::format("{}: {} chooses its own step lengths; {} draws a "
-                                               "force held over each fixed step (expected a "
-                                               "fixed-step solver: verlet, rk4, euler, ...)",
-                                               path, name, entry.label)});
+        const std::string why = fixed_step_conflict(*entry.force, entry.label, *s, name);
+        if (!why.empty()) {
+          diags_.push_back({file_, fmt::format("{}: {}", path, why)});
           fail();
         }
       }
