@@ -313,8 +313,8 @@ int cmd_plugins(const Common& c, bool json, std::ostream& out) {
   }
   out << fmt::format("{:<9} {:<{}} {:<{}} {:<{}} {}\n", "KIND", "NAME", name_w, "VERSION",
                      version_w, "TRAITS", traits_w, "DESCRIPTION");
-  for (PluginKind kind :
-       {PluginKind::Force, PluginKind::Solver, PluginKind::Collider, PluginKind::Writer}) {
+  for (PluginKind kind : {PluginKind::Force, PluginKind::Solver, PluginKind::Collider,
+                          PluginKind::Writer, PluginKind::Constraint}) {
     for (const auto& r : registry.plugins()) {
       const PluginDescriptor& d = *r.descriptor;
       if (d.kind != kind) continue;

@@ -236,6 +236,7 @@ Json plugin_defs(const PluginRegistry& registry) {
   defs["collider"] = plugin_entry(registry, PluginKind::Collider);
   defs["solver"] = plugin_entry(registry, PluginKind::Solver);
   defs["writer"] = plugin_entry(registry, PluginKind::Writer);
+  defs["constraint"] = plugin_entry(registry, PluginKind::Constraint);
 
   return defs;
 }
@@ -267,8 +268,14 @@ Json simulation_schema() {
                                               {"additionalProperties", false}}})}};
   box["description"] =
       "the simulation box: periodic along some axes, open (not a wall) along the others";
+  Json constraint_force = object(constraint_force_specs(), false);
+  constraint_force["type"] = Json::array({"object", "null"});
+  constraint_force["description"] =
+      "Witkin's constraint force: feedback terms and conjugate gradients' settings";
   Json simulation = object(simulation_specs(), false,
-                           Json{{"solver", {{"$ref", "#/$defs/solver"}}}, {"box", box}});
+                           Json{{"solver", {{"$ref", "#/$defs/solver"}}},
+                                {"box", box},
+                                {"constraint_force", constraint_force}});
   simulation["description"] = "time step, run length and solver (default rk4)";
   simulation["oneOf"] = Json::array({{{"required", {"steps"}}}, {{"required", {"duration"}}}});
   return simulation;
@@ -396,7 +403,8 @@ Json make_schema(const PluginRegistry& registry) {
                 {"particles", {{"type", "array"}, {"minItems", 1}, {"items", {{"oneOf", items}}}}},
                 {"velocities", velocities},
                 {"forces", plugin_list("force")},
-                {"colliders", plugin_list("collider")}}},
+                {"colliders", plugin_list("collider")},
+                {"constraints", plugin_list("constraint")}}},
               {"additionalProperties", false},
               {"$defs", defs}};
   return schema;

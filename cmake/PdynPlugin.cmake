@@ -1,4 +1,4 @@
-# pdyn_add_plugin(NAME KIND force|solver|collider|writer SOURCES file.cpp ...)
+# pdyn_add_plugin(NAME KIND force|solver|collider|writer|constraint SOURCES file.cpp ...)
 #
 # Builds one loadable pdyn plugin: a MODULE library named pdyn_<kind>_<name>.so
 # (no "lib" prefix) with hidden symbols except the two entry points that
@@ -13,8 +13,9 @@
 # PDYN_PLUGIN_INSTALL_DIR to "" before calling it for no install rule.
 function(pdyn_add_plugin name)
   cmake_parse_arguments(PARSE_ARGV 1 ARG "" "KIND;OUTPUT_DIRECTORY" "SOURCES")
-  if(NOT ARG_KIND MATCHES "^(force|solver|collider|writer)$")
-    message(FATAL_ERROR "pdyn_add_plugin(${name}): KIND must be force, solver, collider or writer")
+  if(NOT ARG_KIND MATCHES "^(force|solver|collider|writer|constraint)$")
+    message(FATAL_ERROR
+      "pdyn_add_plugin(${name}): KIND must be force, solver, collider, writer or constraint")
   endif()
   if(NOT name MATCHES "^[a-z0-9_]+$")
     message(FATAL_ERROR "pdyn_add_plugin(${name}): the name must match [a-z0-9_]+")

@@ -6,8 +6,11 @@
 // and one unknown key) and fed to the real scene loader in a small scene
 // text, through the same entry point `pdyn run` uses. So what is checked is
 // exactly what a user of the plugin will see: a SceneError whose message names
-// the offending key. A baseline scene holding only the sample values must load,
-// which also catches a descriptor whose own defaults break its own bounds.
+// the offending key. The plugin sits where a scene holds its kind (`forces:`,
+// `colliders:`, `output:`, the top-level `constraints:` list, or the
+// simulation's solver). A baseline scene holding only the sample values must
+// load, which also catches a descriptor whose own defaults break its own
+// bounds.
 #include <fmt/format.h>
 
 #include <cmath>
@@ -23,8 +26,9 @@ namespace pdyn::conformance::detail {
 
 namespace {
 
-// A solver for the scenes of force and collider plugins, which need one; the
-// loader's default (rk4) is not in the kit's registry. Never stepped.
+// A solver for the scenes of force, collider, writer and constraint plugins,
+// which need one; the loader's default (rk4) is not in the kit's registry.
+// Never stepped.
 class NoStep final : public Solver {
  public:
   void step(System& sys, double h) override { sys.set_time(sys.time() + h); }
@@ -271,6 +275,9 @@ std::string scene_text(const PluginDescriptor& d, const Params& sample, const Ma
   } else if (d.kind == PluginKind::Writer) {
     s += "output:\n" + indent(item, "  - ", "    ");
     item_path = "output[0]";
+  } else if (d.kind == PluginKind::Constraint) {
+    s += "constraints:\n" + indent(item, "  - ", "    ");
+    item_path = "constraints[0]";
   }
   return s;
 }

@@ -54,6 +54,12 @@ void collider_checks(const PluginDescriptor& d, const Options& o, std::vector<Ch
 /// in a scratch folder, complete only after commit, read back, resumed.
 void writer_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);
 
+/// constraints.cpp: construct.defaults and the constraint.* checks: a
+/// well-formed pattern, deterministic, read-only, finite when particles
+/// coincide, satisfied where made, and J, c_t and b against finite
+/// differences of C.
+void constraint_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);
+
 // ---- checks of every kind ----
 
 /// threads.cpp: "threads.two_systems": two systems, each with its own plugin

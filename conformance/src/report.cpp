@@ -98,6 +98,9 @@ void check_sequence(const PluginDescriptor& d, const Options& o, std::vector<Che
         // checks their own), a scene of bad values does.
         detail::writer_checks(d, o, out);
         break;
+      case PluginKind::Constraint:
+        detail::constraint_checks(d, o, out);
+        break;
     }
     // Only for a plugin that can be built at all: the rest would fail for
     // the same reason as construct.defaults.

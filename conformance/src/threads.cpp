@@ -2,7 +2,9 @@
 // own plugin object, stepped in two threads at once, must end bit-identical
 // to the same runs in one thread. Every step is taken by a pdyn::Stepper, as
 // in a run; force and collider plugins are stepped by the kit's symplectic
-// Euler, a solver plugin by itself.
+// Euler, a solver plugin by itself, a constraint plugin by the kit's rk4: a
+// free fall from rest under Witkin's constraint force (with feedback, so that
+// every value the constraint writes, C, c_t, b and J, steers the motion).
 //
 // Scenes are independent, so a host may run two of them at once (a parameter
 // sweep, a GUI next to a batch run). A plugin that keeps mutable state outside
@@ -46,6 +48,50 @@ class SymplecticEuler final : public Solver {
   }
 };
 
+// The kit's solver for constraint plugins: the classic fourth-order
+// Runge-Kutta method through derivative(), each evaluation of which adds the
+// constraint force.
+class KitRk4 final : public Solver {
+ public:
+  void step(System& sys, double h) override {
+    const double t0 = sys.time();
+    y0_ = sys.state();
+    k_.resize(y0_.size());
+    sys.derivative(k_);
+    sum_ = k_;
+    sys.state() = y0_ + (0.5 * h) * k_;
+    sys.set_time(t0 + 0.5 * h);
+    sys.derivative(k_);
+    sum_ += 2.0 * k_;
+    sys.state() = y0_ + (0.5 * h) * k_;
+    sys.derivative(k_);
+    sum_ += 2.0 * k_;
+    sys.state() = y0_ + h * k_;
+    sys.set_time(t0 + h);
+    sys.derivative(k_);
+    sum_ += k_;
+    sys.state() = y0_ + (h / 6.0) * sum_;
+  }
+
+ private:
+  Eigen::VectorXd y0_, k_, sum_;
+};
+
+// A constraint plugin's system: gravity, the object made from the system's
+// initial state, and feedback (ks = 100 1/s^2, kd = 20 1/s: critically
+// damped at 10 rad/s, well inside rk4's stability at 5 ms).
+std::unique_ptr<Solver> add_constraint_under_test(System& sys, const PluginDescriptor& d,
+                                                  const Params& params, const std::string& label) {
+  const SceneContext ctx{sys.view(), nullptr};
+  SystemAssembly(sys).add_force(std::make_shared<Constant>(Vec3(0.5, -0.3, -9.81)),
+                                "conformance gravity");
+  SystemAssembly(sys).add_constraint(std::shared_ptr<Constraint>(d.create_constraint(params, ctx)),
+                                     label);
+  SystemAssembly(sys).set_constraint_feedback({.ks = 100.0, .kd = 20.0});
+  SystemAssembly(sys).enable_constraint_force(true);
+  return std::make_unique<KitRk4>();
+}
+
 // What a failed step says: the fault's `what` (which names the plugin object
 // at fault, except for a solver's own exception), or what happened.
 std::string fault_text(const StepFault& f) {
@@ -66,10 +112,12 @@ struct Run {
 
 Run separate_run(const PluginDescriptor& d, const Params& params, std::uint64_t seed) {
   static const std::string kKitSolver = "conformance symplectic Euler";
+  static const std::string kKitRk4 = "conformance rk4";
   static const std::string kUnderTest = "under test";
   std::mt19937_64 r(seed);
   State s = random_state(r);
   if (d.kind == PluginKind::Collider) s.x *= 0.5;  // near the origin, where default obstacles are
+  if (d.kind == PluginKind::Constraint) s.v.setZero();  // from rest: no rod collapses at once
   auto sys = std::make_unique<System>();
   SystemAssembly(*sys).set_particles(s.x, s.v, s.mass, s.fixed);
   SystemAssembly(*sys).set_radii(s.radius);
@@ -94,11 +142,17 @@ Run separate_run(const PluginDescriptor& d, const Params& params, std::uint64_t 
                                         kUnderTest);
       solver = std::make_unique<SymplecticEuler>();
       break;
+    case PluginKind::Constraint:
+      solver = add_constraint_under_test(*sys, d, params, kUnderTest);
+      break;
     case PluginKind::Writer:  // writers are not stepped (report.cpp never asks)
       solver = std::make_unique<SymplecticEuler>();
       break;
   }
-  Stepper stepper(*sys, *solver, d.kind == PluginKind::Solver ? kUnderTest : kKitSolver);
+  Stepper stepper(*sys, *solver,
+                  d.kind == PluginKind::Solver       ? kUnderTest
+                  : d.kind == PluginKind::Constraint ? kKitRk4
+                                                     : kKitSolver);
   const double t0 = sys->time();
   for (int k = 1; k <= kThreadSteps; ++k) {
     if (!stepper.step_to(t0 + k * kThreadStep)) {

@@ -146,8 +146,10 @@ class Loader final : public BuilderHost {
   YAML::Node parse(const std::string& text);
   void read_solver(const YAML::Node& root, std::vector<PendingPlugin>& solvers);
   void assemble_system(Scene& scene);
+  void read_constraint_force(const YAML::Node& n, Scene& scene);
   void create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
                       std::vector<PendingPlugin>& colliders,
+                      std::vector<PendingPlugin>& constraints,
                       const std::vector<PendingPlugin>& solvers);
 
   // ---- sections ----

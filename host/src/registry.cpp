@@ -67,6 +67,44 @@ std::string load_failure(const std::string& what, const fs::path& file) {
   return why;
 }
 
+// PluginDescriptor as plugins built for ABI 6 lay it out: the same members
+// in the same order, without those ABI 7 appended. Its members must be
+// exactly ABI 6's (docs/plugins.md, "ABI"); tests/host/registry_test.cpp
+// loads a plugin built from ABI 6's headers through it.
+struct DescriptorAbi6 {
+  PluginKind kind = PluginKind::Force;
+  std::string name;
+  std::string version;
+  std::string description;
+  std::vector<ParamSpec> params;
+  ForceTraits force_traits;
+  SolverTraits solver_traits;
+  ForceFactory create_force;
+  SolverFactory create_solver;
+  ColliderFactory create_collider;
+  WriterTraits writer_traits;
+  WriterFactory create_writer;
+  WriterReader read_back;
+};
+
+std::shared_ptr<const PluginDescriptor> upgrade(const DescriptorAbi6& old) {
+  auto d = std::make_shared<PluginDescriptor>();
+  d->kind = old.kind;
+  d->name = old.name;
+  d->version = old.version;
+  d->description = old.description;
+  d->params = old.params;
+  d->force_traits = old.force_traits;
+  d->solver_traits = old.solver_traits;
+  d->create_force = old.create_force;
+  d->create_solver = old.create_solver;
+  d->create_collider = old.create_collider;
+  d->writer_traits = old.writer_traits;
+  d->create_writer = old.create_writer;
+  d->read_back = old.read_back;
+  return d;
+}
+
 // Checks what the host relies on before listing a plugin.
 std::string descriptor_problem(const PluginDescriptor& d) {
   if (!is_valid_plugin_name(d.name)) {
@@ -78,7 +116,8 @@ std::string descriptor_problem(const PluginDescriptor& d) {
   const bool has_factory = (d.kind == PluginKind::Force && d.create_force) ||
                            (d.kind == PluginKind::Solver && d.create_solver) ||
                            (d.kind == PluginKind::Collider && d.create_collider) ||
-                           (d.kind == PluginKind::Writer && d.create_writer);
+                           (d.kind == PluginKind::Writer && d.create_writer) ||
+                           (d.kind == PluginKind::Constraint && d.create_constraint);
   if (!has_factory) return fmt::format("descriptor has no {} factory", kind_name(d.kind));
   std::set<std::string> seen;
   for (const auto& p : d.params) {
@@ -121,6 +160,8 @@ const char* kind_name(PluginKind kind) {
       return "collider";
     case PluginKind::Writer:
       return "writer";
+    case PluginKind::Constraint:
+      return "constraint";
   }
   return "?";
 }
@@ -199,16 +240,27 @@ bool PluginRegistry::load_library(const fs::path& file) {
     return false;
   }
   const std::uint32_t abi = lib->get<std::uint32_t() noexcept>(kAbiSymbol)();
-  if (abi != kAbiVersion) {
+  if (abi < kOldestAbiVersion || abi > kAbiVersion) {
     fault(file, hint,
-          fmt::format("plugin ABI version {} does not match the kernel's ABI version {} "
-                      "(rebuild the plugin against this pdyn)",
-                      abi, kAbiVersion));
+          fmt::format("plugin ABI version {} is not one this kernel loads (expected {} to {}: "
+                      "rebuild the plugin against this pdyn)",
+                      abi, kOldestAbiVersion, kAbiVersion));
     return false;
   }
   const PluginDescriptor* d = nullptr;
+  std::shared_ptr<const PluginDescriptor> upgraded;
   try {
-    d = lib->get<const PluginDescriptor*()>(kDescriptorSymbol)();
+    if (abi == 6) {
+      // An ABI 6 descriptor ends before create_constraint: copy the members
+      // it has into a descriptor of this ABI, which the record keeps.
+      const auto* old = lib->get<const DescriptorAbi6*()>(kDescriptorSymbol)();
+      if (old != nullptr) {
+        upgraded = upgrade(*old);
+        d = upgraded.get();
+      }
+    } else {
+      d = lib->get<const PluginDescriptor*()>(kDescriptorSymbol)();
+    }
   } catch (const std::exception& e) {
     fault(file, hint, fmt::format("descriptor threw: {}", e.what()));
     return false;
@@ -217,7 +269,12 @@ bool PluginRegistry::load_library(const fs::path& file) {
     fault(file, hint, "descriptor is null");
     return false;
   }
+  if (abi == 6 && d->kind == PluginKind::Constraint) {
+    fault(file, hint, "plugin ABI version 6 has no constraint kind (expected ABI 7 or later)");
+    return false;
+  }
   if (!admit(*d, file, hint, std::static_pointer_cast<void>(lib))) return false;
+  plugins_.back().owned_descriptor = std::move(upgraded);
   if (lib->has(kBuildFlagsSymbol)) {
     plugins_.back().optimised =
         (lib->get<std::uint32_t() noexcept>(kBuildFlagsSymbol)() & kBuildOptimised) != 0;
@@ -240,7 +297,7 @@ bool PluginRegistry::admit(const PluginDescriptor& d, const fs::path& file, cons
           fmt::format("plugin '{}' is already provided by {}", d.name, other->library.string()));
     return false;
   }
-  plugins_.push_back({&d, file, std::move(handle), std::nullopt});
+  plugins_.push_back({&d, file, std::move(handle), std::nullopt, nullptr});
   return true;
 }
 
@@ -302,6 +359,12 @@ std::shared_ptr<Solver> PluginRegistry::create_solver(const PluginRecord& r, con
 std::shared_ptr<Collider> PluginRegistry::create_collider(const PluginRecord& r, const Params& p,
                                                           const SceneContext& ctx) const {
   return keep_loaded(r.descriptor->create_collider(p, ctx), r);
+}
+
+std::shared_ptr<Constraint> PluginRegistry::create_constraint(const PluginRecord& r,
+                                                              const Params& p,
+                                                              const SceneContext& ctx) const {
+  return keep_loaded(r.descriptor->create_constraint(p, ctx), r);
 }
 
 std::shared_ptr<Writer> create_writer(const PluginRecord& r, const Params& p,

@@ -56,8 +56,12 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   if (!check_map(n, "simulation", "simulation: { dt: ..., steps: ..., solver: { type: ... } }")) {
     return;
   }
-  auto p = read_params(n, "simulation", simulation_specs(), {"solver", "box"}, -1);
+  auto p =
+      read_params(n, "simulation", simulation_specs(), {"solver", "box", "constraint_force"}, -1);
   if (n["box"].IsDefined() && !n["box"].IsNull()) read_box(n["box"]);
+  if (n["constraint_force"].IsDefined() && !n["constraint_force"].IsNull()) {
+    read_constraint_force(n["constraint_force"], scene);
+  }
   if (p) {
     scene.dt = p->real("dt");
     if (p->has("threads")) scene.threads = static_cast<int>(p->integer("threads"));
@@ -99,6 +103,18 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
       }
     }
   }
+}
+
+// Witkin's feedback terms and the CG settings of the constraint force.
+void Loader::read_constraint_force(const YAML::Node& n, Scene& scene) {
+  const std::string path = "simulation.constraint_force";
+  if (!check_map(n, path, "constraint_force: { ks: ..., kd: ..., tolerance: ... }")) return;
+  auto p = read_params(n, path, constraint_force_specs(), {}, -1);
+  if (!p) return;
+  scene.constraint_feedback.ks = p->real("ks");
+  scene.constraint_feedback.kd = p->real("kd");
+  scene.constraint_feedback.tolerance = p->real("tolerance");
+  scene.constraint_feedback.max_iterations = p->integer("max_iterations");
 }
 
 void Loader::read_particles(const YAML::Node& n) {
@@ -655,6 +671,7 @@ void Loader::assemble_system(Scene& scene) {
 // large spring list).
 void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
                             std::vector<PendingPlugin>& colliders,
+                            std::vector<PendingPlugin>& constraints,
                             const std::vector<PendingPlugin>& solvers) {
   scene.groups = groups_;
   const SceneContext ctx{scene.system->view(), &scene.groups};
@@ -686,6 +703,19 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
     scene.libraries[label(p)] = p.record->library;
     keep(p, PluginKind::Collider);
   }
+  assembly.set_constraint_feedback(scene.constraint_feedback);
+  for (auto& p : constraints) {
+    auto c = create(p, [&] { return registry_.create_constraint(*p.record, p.params, ctx); });
+    if (!c) continue;
+    try {
+      assembly.add_constraint(std::move(c), label(p));
+    } catch (const Error& e) {  // a pattern naming a particle the scene does not have
+      error(p.node, p.path, fmt::format("{}: {}", p.path, e.what()));
+      continue;
+    }
+    scene.libraries[label(p)] = p.record->library;
+    keep(p, PluginKind::Constraint);
+  }
   for (const auto& p : solvers) {
     scene.solver = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
     scene.solver_name = p.record->descriptor->name;
@@ -713,14 +743,16 @@ Scene Loader::load(const std::string& text) {
 
   check_keys(
       root, "",
-      {"simulation", "output", "checkpoint", "particles", "velocities", "forces", "colliders"});
+      {"simulation", "output", "checkpoint", "particles", "velocities", "forces", "colliders",
+       "constraints"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
   check_inside_box();
   read_velocities(root["velocities"]);
-  std::vector<PendingPlugin> forces, colliders, solvers;
+  std::vector<PendingPlugin> forces, colliders, constraints, solvers;
   read_plugin_list(root["forces"], "forces", PluginKind::Force, forces);
   read_plugin_list(root["colliders"], "colliders", PluginKind::Collider, colliders);
+  read_plugin_list(root["constraints"], "constraints", PluginKind::Constraint, constraints);
   read_solver(root, solvers);
   read_output(root["output"], root["checkpoint"], scene);
   if (!diags_.empty()) fail();
@@ -728,7 +760,7 @@ Scene Loader::load(const std::string& text) {
   // Assemble. Everything is valid as far as the descriptors can tell; the
   // factories may still refuse values (ParamError), reported the same way.
   assemble_system(scene);
-  create_plugins(scene, forces, colliders, solvers);
+  create_plugins(scene, forces, colliders, constraints, solvers);
   if (!diags_.empty()) fail();
   return scene;
 }
@@ -777,6 +809,17 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
       SystemAssembly(sys).add_collider(std::move(c), label);
       break;
     }
+    case PluginKind::Constraint: {
+      auto c = create(p, [&] { return registry_.create_constraint(*rec, p.params, ctx); });
+      if (!c) fail();
+      try {
+        SystemAssembly(sys).add_constraint(std::move(c), label);
+      } catch (const Error& e) {
+        diags_.push_back({file_, fmt::format("{}: {}", path, e.what())});
+        fail();
+      }
+      break;
+    }
     case PluginKind::Solver: {
       auto s = create(p, [&] { return registry_.create_solver(*rec, p.params, ctx); });
       if (!s) fail();
@@ -795,8 +838,8 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
       return label;
     }
     case PluginKind::Writer:  // writers belong to a scene's output list, not to its system
-      diags_.push_back({file_, fmt::format("{}: '{}' is a writer (expected a force, collider or "
-                                           "solver)",
+      diags_.push_back({file_, fmt::format("{}: '{}' is a writer (expected a force, collider, "
+                                           "constraint or solver)",
                                            path, name)});
       fail();
   }

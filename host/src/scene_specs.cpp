@@ -27,6 +27,20 @@ std::vector<ParamSpec> simulation_specs() {
   };
 }
 
+std::vector<ParamSpec> constraint_force_specs() {
+  return {
+      param::real("ks", 0.0, "1/s^2", "feedback on the constraint values C (pulls drift back)")
+          .at_least(0),
+      param::real("kd", 0.0, "1/s", "feedback on their rates Cdot (damps drift)").at_least(0),
+      param::real("tolerance", 1e-12, "",
+                  "conjugate gradients' relative residual for the multipliers")
+          .greater_than(0)
+          .at_most(1e-2),
+      param::integer("max_iterations", 0, "conjugate gradients' limit (0: 10 x rows + 100)")
+          .at_least(0),
+  };
+}
+
 std::vector<ParamSpec> particle_specs() {
   std::vector<ParamSpec> specs = {
       param::required_vec3("position", "m", "initial position"),

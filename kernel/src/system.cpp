@@ -7,6 +7,7 @@
 #include <cmath>
 #include <utility>
 
+#include "constraint_force.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/local_force.hpp"
@@ -245,17 +246,66 @@ void check_finite(const Matrix3X& f, const std::string& label) {
 
 }  // namespace
 
+void System::add_constraint(std::shared_ptr<Constraint> constraint, std::string label) {
+  if (!constraint) throw Error(fmt::format("{}: no constraint object", label));
+  if (!constraint_force_) constraint_force_ = std::make_shared<ConstraintForce>();
+  constraint_force_->add(*constraint, label, size());
+  constraints_.push_back({std::move(constraint), std::move(label)});
+  touch();
+}
+
+void System::set_constraint_feedback(const ConstraintFeedback& feedback) {
+  if (!(feedback.ks >= 0.0) || !(feedback.kd >= 0.0) || !std::isfinite(feedback.ks) ||
+      !std::isfinite(feedback.kd) || !(feedback.tolerance > 0.0) || feedback.max_iterations < 0) {
+    throw Error("System::set_constraint_feedback: expected finite ks >= 0, kd >= 0, tolerance > 0 "
+                "and max_iterations >= 0");
+  }
+  feedback_ = feedback;
+  touch();
+}
+
+Index System::constraint_rows() const noexcept {
+  return constraint_force_ ? constraint_force_->rows() : 0;
+}
+
+double System::constraint_error() const {
+  if (!constraint_force_ || constraint_force_->rows() == 0) return 0.0;
+  evaluate_constraints();
+  return constraint_force_->max_error();
+}
+
+// Each object writes its rows; a throw, a resized output or a non-finite
+// value is reported with the object's label, as for a force.
+void System::evaluate_constraints() const {
+  if (constraint_force_->max_particle() >= size()) {
+    throw Error(fmt::format("constraints: a constraint names particle {} but the system has {} "
+                            "particles",
+                            constraint_force_->max_particle(), size()));
+  }
+  const ParticleView p = view();
+  for (std::size_t k = 0; k < constraints_.size(); ++k) {
+    const auto& entry = constraints_[k];
+    ConstraintValues& values = constraint_force_->prepare(k);
+    guarded(entry.label, "evaluate", [&] { entry.constraint->evaluate(p, values); });
+    if (std::string problem = constraint_force_->gather(k); !problem.empty()) {
+      throw PluginRuntimeError(entry.label, problem);
+    }
+  }
+}
+
 // Witkin's loop, steps 1 and 2 (clear accumulators, invoke force objects),
-// followed by the colliders' contact forces, which must see the total force.
+// followed by the colliders' contact forces, which must see the total force,
+// and the constraint force, which must see both.
 // The forces at the end of the list that act locally (pdyn/local_force.hpp)
 // are left to the gather, which adds them chunk by chunk
 // (add_local_forces); the index of the first of them is returned. Not with
-// a collider (it must see them) or finite checks (each force is checked on
-// its own).
+// a collider or the constraint force (they must see them) or finite checks
+// (each force is checked on its own).
 std::size_t System::evaluate_forces() {
   ++evaluations_;
   std::size_t first_local = forces_.size();
-  if (colliders_.empty() && !finite_checks_) {
+  const bool constrained = constraint_force_on_ && constraint_rows() > 0;
+  if (colliders_.empty() && !constrained && !finite_checks_) {
     while (first_local > 0 && local_[first_local - 1] != nullptr &&
            local_[first_local - 1]->acts_locally()) {
       --first_local;
@@ -272,6 +322,11 @@ std::size_t System::evaluate_forces() {
     guarded(entry.label, "apply_contact_forces",
             [&] { entry.collider->apply_contact_forces(p, force_); });
     if (finite_checks_) check_finite(force_, entry.label);
+  }
+  // Last, Witkin's constraint force: it must see every applied force.
+  if (constrained) {
+    evaluate_constraints();
+    constraint_force_->add_force(p, inv_mass_, feedback_, force_);
   }
   return first_local;
 }

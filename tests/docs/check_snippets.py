@@ -90,8 +90,8 @@ BASE_SCENE = {
     ],
     "forces": [{"type": "gravity"}],
 }
-SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "checkpoint",
-                  "velocities"}
+SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "constraints",
+                  "checkpoint", "velocities"}
 
 CPP_PRELUDE = ["<pdyn/plugin.hpp>", "<pdyn/contact.hpp>", "<pdyn/targets.hpp>",
                "<pdyn/shape.hpp>", "<pdyn/pair.hpp>", "<pdyn/conformance.hpp>", "<cmath>"]
@@ -673,7 +673,7 @@ class Checker:
 TABLE_COLUMNS = ["key", "type", "default", "unit", "range", "meaning"]
 COMPARED_COLUMNS = ["type", "default", "unit", "range"]
 KIND_FOLDERS = {"forces": "force", "solvers": "solver", "colliders": "collider",
-                "writers": "writer"}
+                "writers": "writer", "constraints": "constraint"}
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|-?pi"
 
 

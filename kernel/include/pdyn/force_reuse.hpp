@@ -67,11 +67,13 @@ class ForceReuse {
     bool time = false;      ///< some force reads the time
   };
 
-  /// The needs of `sys`'s force objects (Force::dependence()) and colliders
-  /// (every collider's contact force reads velocities).
+  /// The needs of `sys`'s force objects (Force::dependence()), colliders
+  /// (every collider's contact force reads velocities) and constraint force
+  /// (its bias Jdot v reads velocities; a moving constraint, the time).
   static Needs needs(const System& sys) {
     Needs n;
     n.velocity = !sys.collider_objects().empty();
+    if (sys.constraint_force_enabled() && sys.constraint_rows() > 0) n.velocity = n.time = true;
     for (const auto& entry : sys.force_objects()) {
       const StateDependence d = entry.force->dependence();
       n.velocity = n.velocity || d.velocity;

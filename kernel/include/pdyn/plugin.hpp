@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "pdyn/collider.hpp"
+#include "pdyn/constraint.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/params.hpp"
@@ -39,10 +40,11 @@
 
 namespace pdyn {
 
-/// Writer since ABI 5 (pdyn/writer.hpp).
-enum class PluginKind { Force, Solver, Collider, Writer };
+/// Writer since ABI 5 (pdyn/writer.hpp), Constraint since ABI 7
+/// (pdyn/constraint.hpp).
+enum class PluginKind { Force, Solver, Collider, Writer, Constraint };
 
-/// "force", "solver", "collider" or "writer".
+/// "force", "solver", "collider", "writer" or "constraint".
 const char* kind_name(PluginKind kind);
 
 /// What a factory may look at besides its parameters: the scene's initial
@@ -79,6 +81,8 @@ using ColliderFactory =
 /// Creates a writer: opens (or, resuming, continues) its output. May throw
 /// pdyn::Error naming the file, or pdyn::ResumeError.
 using WriterFactory = std::function<std::unique_ptr<Writer>(const Params&, const WriterContext&)>;
+using ConstraintFactory =
+    std::function<std::unique_ptr<Constraint>(const Params&, const SceneContext&)>;
 
 /// Everything the host knows about a plugin before creating one.
 struct PluginDescriptor {
@@ -96,6 +100,9 @@ struct PluginDescriptor {
   WriterTraits writer_traits;   ///< kind Writer: fields it writes, whether it needs energy
   WriterFactory create_writer;  ///< set for kind Writer
   WriterReader read_back;       ///< kind Writer, optional: reads its output back (pdyn check)
+  // Since ABI 7. The host reads these only from plugins built for ABI 7 or
+  // later: a plugin built for ABI 6 has a descriptor that ends above.
+  ConstraintFactory create_constraint;  ///< set for kind Constraint
 };
 
 }  // namespace pdyn

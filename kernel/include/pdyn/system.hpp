@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "pdyn/collider.hpp"
+#include "pdyn/constraint.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/particles.hpp"
 #include "pdyn/types.hpp"
@@ -26,6 +27,17 @@
 namespace pdyn {
 
 class LocalForce;
+class ConstraintForce;
+
+/// The settings of Witkin's constraint force (since ABI 7; docs/constraints.md):
+///   J W J^T lambda = -b - J W Q - ks C - kd Cdot,
+/// solved by preconditioned conjugate gradients to a relative residual.
+struct ConstraintFeedback {
+  double ks = 0.0;          ///< 1/s^2: pulls a drifted C back to zero
+  double kd = 0.0;          ///< 1/s: damps Cdot
+  double tolerance = 1e-12;  ///< relative residual |r| / |rhs| at which CG stops
+  Index max_iterations = 0;  ///< CG's limit; 0 = 10 x rows + 100
+};
 
 class System {
  public:
@@ -130,6 +142,24 @@ class System {
   const std::vector<ForceEntry>& force_objects() const noexcept { return forces_; }
   const std::vector<ColliderEntry>& collider_objects() const noexcept { return colliders_; }
 
+  // ---- constraints (since ABI 7, pdyn/constraint.hpp) ----
+
+  struct ConstraintEntry {
+    std::shared_ptr<Constraint> constraint;
+    std::string label;
+  };
+  const std::vector<ConstraintEntry>& constraint_objects() const noexcept { return constraints_; }
+  /// Total number of constraint rows (scalar constraints).
+  Index constraint_rows() const noexcept;
+  /// Whether derivative evaluations add Witkin's constraint force (on
+  /// whenever the system holds a constraint, unless a solver that enforces
+  /// constraints itself turned it off).
+  bool constraint_force_enabled() const noexcept { return constraint_force_on_; }
+  const ConstraintFeedback& constraint_feedback() const noexcept { return feedback_; }
+  /// The largest |C_r| over every row at the current state (0 without
+  /// constraints), in each row's own unit: what a run reports as drift.
+  double constraint_error() const;
+
  private:
   // ---- assembly and the step's bookkeeping: the host's, not a plugin's ----
   // Called through pdyn::SystemAssembly (pdyn/host/assembly.hpp, which
@@ -178,6 +208,15 @@ class System {
   /// Runs every collider's collision response; the kernel's runner calls it
   /// after each accepted step of length `h`.
   void respond_to_collisions(double h);
+  /// Adds a constraint object; `label` names it in messages. Throws Error if
+  /// its pattern names a particle outside 0 .. N-1 or is malformed.
+  void add_constraint(std::shared_ptr<Constraint> constraint, std::string label);
+  /// Witkin's feedback terms and CG settings (checked by the host).
+  void set_constraint_feedback(const ConstraintFeedback& feedback);
+  /// Turns the constraint force on or off (a solver that projects onto the
+  /// constraints itself does not want it).
+  void enable_constraint_force(bool on) noexcept { constraint_force_on_ = on; }
+
   /// When on, every force evaluation checks each force object's output and
   /// throws an error naming the first object that produced a NaN or infinite
   /// force. Off by default (it costs a pass over f per force object); the
@@ -185,6 +224,7 @@ class System {
   void set_finite_checks(bool on) noexcept { finite_checks_ = on; }
 
   std::size_t evaluate_forces();
+  void evaluate_constraints() const;
   void add_local_forces(std::size_t first, Index begin, Index end);
   void update_inverse_mass();
 
@@ -206,6 +246,12 @@ class System {
   std::vector<double> radius_;                       // N or empty
   std::vector<std::int32_t> type_;                   // N or empty
   std::vector<std::array<std::int32_t, 3>> images_;  // N
+  // Since ABI 7, after every member a plugin compiled against ABI 6 may read
+  // inline, so those keep their offsets.
+  std::vector<ConstraintEntry> constraints_;
+  std::shared_ptr<ConstraintForce> constraint_force_;  // assembled rows and CG work space
+  ConstraintFeedback feedback_;
+  bool constraint_force_on_ = true;
 };
 
 }  // namespace pdyn

@@ -45,6 +45,13 @@ class SystemAssembly {
   void set_domain(const Domain& domain) const { sys_.set_domain(domain); }
   void set_radii(std::vector<double> radius) const { sys_.set_radii(std::move(radius)); }
   void set_types(std::vector<std::int32_t> type) const { sys_.set_types(std::move(type)); }
+  void add_constraint(std::shared_ptr<Constraint> constraint, std::string label) const {
+    sys_.add_constraint(std::move(constraint), std::move(label));
+  }
+  void set_constraint_feedback(const ConstraintFeedback& feedback) const {
+    sys_.set_constraint_feedback(feedback);
+  }
+  void enable_constraint_force(bool on) const noexcept { sys_.enable_constraint_force(on); }
 
   // ---- the step's bookkeeping (the Stepper, the runner, resume) ----
   void set_images(std::vector<std::array<std::int32_t, 3>> images) const {

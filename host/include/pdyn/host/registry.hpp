@@ -21,6 +21,9 @@ struct PluginRecord {
   /// Whether the library was compiled with optimisation; unknown for
   /// libraries built before PDYN_PLUGIN recorded it, and for built-ins.
   std::optional<bool> optimised;
+  /// For a plugin built for an older ABI: the descriptor the registry made
+  /// from its own (`descriptor` points to it).
+  std::shared_ptr<const PluginDescriptor> owned_descriptor;
 };
 
 /// A library on the search path that could not be used.
@@ -77,6 +80,8 @@ class PluginRegistry {
                                         const SceneContext& ctx) const;
   std::shared_ptr<Collider> create_collider(const PluginRecord& r, const Params& p,
                                             const SceneContext& ctx) const;
+  std::shared_ptr<Constraint> create_constraint(const PluginRecord& r, const Params& p,
+                                                const SceneContext& ctx) const;
 
  private:
   void fault(const std::filesystem::path& lib, std::string plugin, std::string message);

@@ -112,6 +112,8 @@ struct Scene {
   /// The traits each force object's plugin declares, by its label: the
   /// runner's energy check needs to know which forces only dissipate.
   std::map<std::string, ForceTraits> force_traits;
+  /// simulation.constraint_force: Witkin's feedback terms and CG settings.
+  ConstraintFeedback constraint_feedback;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`

@@ -16,6 +16,8 @@ std::vector<ParamSpec> simulation_specs();
 /// `simulation.box:` besides `periodic` (a list of three booleans, which no
 /// ParamType describes: the loader reads it itself).
 std::vector<ParamSpec> box_specs();
+/// `simulation.constraint_force:` (Witkin's constraint force, pdyn::ConstraintFeedback).
+std::vector<ParamSpec> constraint_force_specs();
 /// One `particles:` entry that is a single particle.
 std::vector<ParamSpec> particle_specs();
 /// `output:` (besides `checkpoint:`).

@@ -1,0 +1,197 @@
+#include "constraint_force.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "pdyn/error.hpp"
+
+namespace pdyn {
+
+void ConstraintForce::add(const Constraint& c, const std::string& label, Index n) {
+  const ConstraintPattern pat = c.pattern();
+  const Index rows = pat.rows();
+  const Index entries = pat.entries();
+  if (rows < 0 || pat.row_begin.front() != 0 || pat.row_begin.back() != entries ||
+      !std::is_sorted(pat.row_begin.begin(), pat.row_begin.end())) {
+    throw Error(fmt::format("{}: malformed constraint pattern (expected row_begin to rise from 0 "
+                            "to the number of entries, {})",
+                            label, entries));
+  }
+  for (Index r = 0; r < rows; ++r) {
+    for (Index e = pat.row_begin[r]; e < pat.row_begin[r + 1]; ++e) {
+      const Index k = pat.particle[e];
+      if (k < 0 || k >= n) {
+        throw Error(fmt::format("{}: constraint row {} names particle {} (expected 0 to {})", label,
+                                r, k, n - 1));
+      }
+      for (Index e2 = pat.row_begin[r]; e2 < e; ++e2) {
+        if (pat.particle[e2] == k) {
+          throw Error(fmt::format("{}: constraint row {} names particle {} twice (expected "
+                                  "distinct particles per row)",
+                                  label, r, k));
+        }
+      }
+    }
+  }
+  Block b;
+  b.first_row = this->rows();
+  b.first_entry = static_cast<Index>(slot_.size());
+  b.values.value = Eigen::VectorXd::Zero(rows);
+  b.values.rate = Eigen::VectorXd::Zero(rows);
+  b.values.bias = Eigen::VectorXd::Zero(rows);
+  b.values.jacobian = Matrix3X::Zero(3, entries);
+  blocks_.push_back(std::move(b));
+  for (Index r = 0; r < rows; ++r) row_begin_.push_back(row_begin_.back() + pat.row_begin[r + 1] - pat.row_begin[r]);
+  for (const Index k : pat.particle) {
+    if (static_cast<Index>(slot_of_.size()) <= k) slot_of_.resize(static_cast<std::size_t>(k) + 1, -1);
+    if (slot_of_[k] < 0) {
+      slot_of_[k] = static_cast<Index>(involved_.size());
+      involved_.push_back(k);
+    }
+    slot_.push_back(slot_of_[k]);
+    max_particle_ = std::max(max_particle_, k);
+  }
+  const Index m = this->rows() + rows;
+  value_.resize(m);
+  rate_.resize(m);
+  bias_.resize(m);
+  jac_.resize(3, static_cast<Index>(slot_.size()));
+}
+
+ConstraintValues& ConstraintForce::prepare(std::size_t k) {
+  ConstraintValues& v = blocks_[k].values;
+  v.rate.setZero();
+  v.bias.setZero();
+  return v;
+}
+
+std::string ConstraintForce::gather(std::size_t k) {
+  const Block& b = blocks_[k];
+  const ConstraintValues& v = b.values;
+  const Index rows = (k + 1 < blocks_.size() ? blocks_[k + 1].first_row : this->rows()) - b.first_row;
+  const Index entries =
+      (k + 1 < blocks_.size() ? blocks_[k + 1].first_entry : static_cast<Index>(slot_.size())) -
+      b.first_entry;
+  if (v.value.size() != rows || v.rate.size() != rows || v.bias.size() != rows ||
+      v.jacobian.cols() != entries || v.jacobian.rows() != 3) {
+    return fmt::format("evaluate resized its values (expected {} rows and {} Jacobian entries, as "
+                       "its pattern says)",
+                       rows, entries);
+  }
+  for (Index r = 0; r < rows; ++r) {
+    if (!std::isfinite(v.value(r)) || !std::isfinite(v.rate(r)) || !std::isfinite(v.bias(r))) {
+      return fmt::format("produced a non-finite value in row {}: C = {}, c_t = {}, b = {}", r,
+                         v.value(r), v.rate(r), v.bias(r));
+    }
+  }
+  if (!v.jacobian.allFinite()) {
+    Index e = 0;
+    while (v.jacobian.col(e).allFinite()) ++e;
+    return fmt::format("produced a non-finite Jacobian entry {}: [{}, {}, {}]", e, v.jacobian(0, e),
+                       v.jacobian(1, e), v.jacobian(2, e));
+  }
+  value_.segment(b.first_row, rows) = v.value;
+  rate_.segment(b.first_row, rows) = v.rate;
+  bias_.segment(b.first_row, rows) = v.bias;
+  jac_.middleCols(b.first_entry, entries) = v.jacobian;
+  return {};
+}
+
+double ConstraintForce::max_error() const {
+  return rows() == 0 ? 0.0 : value_.cwiseAbs().maxCoeff();
+}
+
+// out = J W J^T lambda, through u = W J^T lambda on the involved particles.
+void ConstraintForce::apply(const Eigen::VectorXd& lambda, Eigen::VectorXd& out) {
+  const Index m = rows();
+  u_.setZero();
+  for (Index r = 0; r < m; ++r) {
+    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) u_.col(slot_[e]) += jac_.col(e) * lambda(r);
+  }
+  for (Index s = 0; s < u_.cols(); ++s) u_.col(s) *= w_slot_(s);
+  for (Index r = 0; r < m; ++r) {
+    double y = 0.0;
+    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) y += jac_.col(e).dot(u_.col(slot_[e]));
+    out(r) = diag_(r) > 0.0 ? y : 0.0;
+  }
+}
+
+// Witkin's constraint force (SIGGRAPH '97 notes "Constrained Dynamics",
+// eq. for lambda): with the accelerations a = W (f + J^T lambda), requiring
+// Cddot = J a + b = -ks C - kd Cdot gives
+//   J W J^T lambda = -b - J W f - ks C - kd Cdot.
+// J W J^T is symmetric positive semi-definite, so conjugate gradients solve
+// it, Jacobi-preconditioned by its diagonal. A row whose particles are all
+// fixed (W = 0) has a zero diagonal and cannot act: its lambda stays 0.
+// Redundant rows make the matrix singular but the system consistent, which
+// CG still solves. Each solve starts from lambda = 0, so a run gives the same
+// bits whatever happened before it (a resume included).
+void ConstraintForce::add_force(const ParticleView& p, const Eigen::VectorXd& w,
+                                const ConstraintFeedback& fb, Eigen::Ref<Matrix3X> f) {
+  const Index m = rows();
+  if (m == 0) return;
+  const Index slots = static_cast<Index>(involved_.size());
+  w_slot_.resize(slots);
+  for (Index s = 0; s < slots; ++s) w_slot_(s) = w(involved_[s]);
+  diag_.resize(m);
+  rhs_.resize(m);
+  u_.resize(3, slots);
+  double scale2 = 0.0;  // the size of the terms that cancel in rhs, for the stopping test
+  for (Index r = 0; r < m; ++r) {
+    double d = 0.0, jwf = 0.0, jv = 0.0;
+    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
+      const Index s = slot_[e];
+      const auto j = jac_.col(e);
+      d += w_slot_(s) * j.squaredNorm();
+      jwf += w_slot_(s) * j.dot(f.col(involved_[s]));
+      jv += j.dot(p.v.col(involved_[s]));
+    }
+    const double cdot = jv + rate_(r);
+    diag_(r) = d;
+    rhs_(r) = d > 0.0 ? -bias_(r) - jwf - fb.ks * value_(r) - fb.kd * cdot : 0.0;
+    const double size = std::abs(bias_(r)) + std::abs(jwf) + std::abs(fb.ks * value_(r)) +
+                        std::abs(fb.kd * cdot);
+    if (d > 0.0) scale2 += size * size;
+  }
+  lambda_ = Eigen::VectorXd::Zero(m);
+  const double goal = fb.tolerance * std::sqrt(scale2);
+  if (rhs_.norm() > goal) {
+    r_ = rhs_;
+    z_.resize(m);
+    for (Index r = 0; r < m; ++r) z_(r) = diag_(r) > 0.0 ? r_(r) / diag_(r) : 0.0;
+    d_ = z_;
+    q_.resize(m);
+    double rz = r_.dot(z_);
+    const Index limit = fb.max_iterations > 0 ? fb.max_iterations : 10 * m + 100;
+    Index it = 0;
+    for (; it < limit; ++it) {
+      apply(d_, q_);
+      const double dq = d_.dot(q_);
+      if (!(dq > 0.0)) break;  // d in the null space: nothing more to gain
+      const double alpha = rz / dq;
+      lambda_ += alpha * d_;
+      r_ -= alpha * q_;
+      if (r_.norm() <= goal) break;
+      for (Index r = 0; r < m; ++r) z_(r) = diag_(r) > 0.0 ? r_(r) / diag_(r) : 0.0;
+      const double rz_next = r_.dot(z_);
+      d_ = z_ + (rz_next / rz) * d_;
+      rz = rz_next;
+    }
+    if (!(r_.norm() <= goal)) {
+      throw Error(fmt::format(
+          "constraints: the constraint force's conjugate gradients stopped after {} iterations "
+          "at a residual {:.3g} times the right-hand side's size (expected {:.3g}: are two "
+          "constraints in conflict, e.g. a particle pinned to two points?)",
+          it, r_.norm() / std::sqrt(scale2), fb.tolerance));
+    }
+  }
+  for (Index r = 0; r < m; ++r) {
+    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
+      f.col(involved_[slot_[e]]) += jac_.col(e) * lambda_(r);
+    }
+  }
+}
+
+}  // namespace pdyn
