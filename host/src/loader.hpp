@@ -147,6 +147,8 @@ class Loader final : public BuilderHost {
   void read_solver(const YAML::Node& root, std::vector<PendingPlugin>& solvers);
   void assemble_system(Scene& scene);
   void read_constraint_force(const YAML::Node& n, Scene& scene);
+  void add_constraint_to(System& sys, PendingPlugin& p, const SceneContext& ctx,
+                         const std::string& label);
   void create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
                       std::vector<PendingPlugin>& colliders,
                       std::vector<PendingPlugin>& constraints,

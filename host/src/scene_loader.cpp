@@ -741,10 +741,9 @@ Scene Loader::load(const std::string& text) {
   root_.reset(root);
   scene.canonical_text = canonical_text(root);
 
-  check_keys(
-      root, "",
-      {"simulation", "output", "checkpoint", "particles", "velocities", "forces", "colliders",
-       "constraints"});
+  check_keys(root, "",
+             {"simulation", "output", "checkpoint", "particles", "velocities", "forces",
+              "colliders", "constraints"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
   check_inside_box();
@@ -763,6 +762,20 @@ Scene Loader::load(const std::string& text) {
   create_plugins(scene, forces, colliders, constraints, solvers);
   if (!diags_.empty()) fail();
   return scene;
+}
+
+// A constraint added to a running system (Python's sim.add_constraint); its
+// pattern is checked against the system's particles.
+void Loader::add_constraint_to(System& sys, PendingPlugin& p, const SceneContext& ctx,
+                               const std::string& label) {
+  auto c = create(p, [&] { return registry_.create_constraint(*p.record, p.params, ctx); });
+  if (!c) fail();
+  try {
+    SystemAssembly(sys).add_constraint(std::move(c), label);
+  } catch (const Error& e) {
+    diags_.push_back({file_, fmt::format("{}: {}", p.path, e.what())});
+    fail();
+  }
 }
 
 std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& text) {
@@ -809,17 +822,9 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
       SystemAssembly(sys).add_collider(std::move(c), label);
       break;
     }
-    case PluginKind::Constraint: {
-      auto c = create(p, [&] { return registry_.create_constraint(*rec, p.params, ctx); });
-      if (!c) fail();
-      try {
-        SystemAssembly(sys).add_constraint(std::move(c), label);
-      } catch (const Error& e) {
-        diags_.push_back({file_, fmt::format("{}: {}", path, e.what())});
-        fail();
-      }
+    case PluginKind::Constraint:
+      add_constraint_to(sys, p, ctx, label);
       break;
-    }
     case PluginKind::Solver: {
       auto s = create(p, [&] { return registry_.create_solver(*rec, p.params, ctx); });
       if (!s) fail();

@@ -15,9 +15,10 @@ void ConstraintForce::add(const Constraint& c, const std::string& label, Index n
   const Index entries = pat.entries();
   if (rows < 0 || pat.row_begin.front() != 0 || pat.row_begin.back() != entries ||
       !std::is_sorted(pat.row_begin.begin(), pat.row_begin.end())) {
-    throw Error(fmt::format("{}: malformed constraint pattern (expected row_begin to rise from 0 "
-                            "to the number of entries, {})",
-                            label, entries));
+    throw Error(
+        fmt::format("{}: malformed constraint pattern (expected row_begin to rise from 0 "
+                    "to the number of entries, {})",
+                    label, entries));
   }
   for (Index r = 0; r < rows; ++r) {
     for (Index e = pat.row_begin[r]; e < pat.row_begin[r + 1]; ++e) {
@@ -28,9 +29,10 @@ void ConstraintForce::add(const Constraint& c, const std::string& label, Index n
       }
       for (Index e2 = pat.row_begin[r]; e2 < e; ++e2) {
         if (pat.particle[e2] == k) {
-          throw Error(fmt::format("{}: constraint row {} names particle {} twice (expected "
-                                  "distinct particles per row)",
-                                  label, r, k));
+          throw Error(
+              fmt::format("{}: constraint row {} names particle {} twice (expected "
+                          "distinct particles per row)",
+                          label, r, k));
         }
       }
     }
@@ -43,9 +45,11 @@ void ConstraintForce::add(const Constraint& c, const std::string& label, Index n
   b.values.bias = Eigen::VectorXd::Zero(rows);
   b.values.jacobian = Matrix3X::Zero(3, entries);
   blocks_.push_back(std::move(b));
-  for (Index r = 0; r < rows; ++r) row_begin_.push_back(row_begin_.back() + pat.row_begin[r + 1] - pat.row_begin[r]);
+  for (Index r = 0; r < rows; ++r)
+    row_begin_.push_back(row_begin_.back() + pat.row_begin[r + 1] - pat.row_begin[r]);
   for (const Index k : pat.particle) {
-    if (static_cast<Index>(slot_of_.size()) <= k) slot_of_.resize(static_cast<std::size_t>(k) + 1, -1);
+    if (static_cast<Index>(slot_of_.size()) <= k)
+      slot_of_.resize(static_cast<std::size_t>(k) + 1, -1);
     if (slot_of_[k] < 0) {
       slot_of_[k] = static_cast<Index>(involved_.size());
       involved_.push_back(k);
@@ -70,15 +74,17 @@ ConstraintValues& ConstraintForce::prepare(std::size_t k) {
 std::string ConstraintForce::gather(std::size_t k) {
   const Block& b = blocks_[k];
   const ConstraintValues& v = b.values;
-  const Index rows = (k + 1 < blocks_.size() ? blocks_[k + 1].first_row : this->rows()) - b.first_row;
+  const Index rows =
+      (k + 1 < blocks_.size() ? blocks_[k + 1].first_row : this->rows()) - b.first_row;
   const Index entries =
       (k + 1 < blocks_.size() ? blocks_[k + 1].first_entry : static_cast<Index>(slot_.size())) -
       b.first_entry;
   if (v.value.size() != rows || v.rate.size() != rows || v.bias.size() != rows ||
       v.jacobian.cols() != entries || v.jacobian.rows() != 3) {
-    return fmt::format("evaluate resized its values (expected {} rows and {} Jacobian entries, as "
-                       "its pattern says)",
-                       rows, entries);
+    return fmt::format(
+        "evaluate resized its values (expected {} rows and {} Jacobian entries, as "
+        "its pattern says)",
+        rows, entries);
   }
   for (Index r = 0; r < rows; ++r) {
     if (!std::isfinite(v.value(r)) || !std::isfinite(v.rate(r)) || !std::isfinite(v.bias(r))) {
@@ -108,12 +114,14 @@ void ConstraintForce::apply(const Eigen::VectorXd& lambda, Eigen::VectorXd& out)
   const Index m = rows();
   u_.setZero();
   for (Index r = 0; r < m; ++r) {
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) u_.col(slot_[e]) += jac_.col(e) * lambda(r);
+    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e)
+      u_.col(slot_[e]) += jac_.col(e) * lambda(r);
   }
   for (Index s = 0; s < u_.cols(); ++s) u_.col(s) *= w_slot_(s);
   for (Index r = 0; r < m; ++r) {
     double y = 0.0;
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) y += jac_.col(e).dot(u_.col(slot_[e]));
+    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e)
+      y += jac_.col(e).dot(u_.col(slot_[e]));
     out(r) = diag_(r) > 0.0 ? y : 0.0;
   }
 }
@@ -151,8 +159,8 @@ void ConstraintForce::add_force(const ParticleView& p, const Eigen::VectorXd& w,
     const double cdot = jv + rate_(r);
     diag_(r) = d;
     rhs_(r) = d > 0.0 ? -bias_(r) - jwf - fb.ks * value_(r) - fb.kd * cdot : 0.0;
-    const double size = std::abs(bias_(r)) + std::abs(jwf) + std::abs(fb.ks * value_(r)) +
-                        std::abs(fb.kd * cdot);
+    const double size =
+        std::abs(bias_(r)) + std::abs(jwf) + std::abs(fb.ks * value_(r)) + std::abs(fb.kd * cdot);
     if (d > 0.0) scale2 += size * size;
   }
   lambda_ = Eigen::VectorXd::Zero(m);

@@ -257,8 +257,9 @@ void System::add_constraint(std::shared_ptr<Constraint> constraint, std::string 
 void System::set_constraint_feedback(const ConstraintFeedback& feedback) {
   if (!(feedback.ks >= 0.0) || !(feedback.kd >= 0.0) || !std::isfinite(feedback.ks) ||
       !std::isfinite(feedback.kd) || !(feedback.tolerance > 0.0) || feedback.max_iterations < 0) {
-    throw Error("System::set_constraint_feedback: expected finite ks >= 0, kd >= 0, tolerance > 0 "
-                "and max_iterations >= 0");
+    throw Error(
+        "System::set_constraint_feedback: expected finite ks >= 0, kd >= 0, tolerance > 0 "
+        "and max_iterations >= 0");
   }
   feedback_ = feedback;
   touch();
@@ -278,9 +279,10 @@ double System::constraint_error() const {
 // value is reported with the object's label, as for a force.
 void System::evaluate_constraints() const {
   if (constraint_force_->max_particle() >= size()) {
-    throw Error(fmt::format("constraints: a constraint names particle {} but the system has {} "
-                            "particles",
-                            constraint_force_->max_particle(), size()));
+    throw Error(
+        fmt::format("constraints: a constraint names particle {} but the system has {} "
+                    "particles",
+                    constraint_force_->max_particle(), size()));
   }
   const ParticleView p = view();
   for (std::size_t k = 0; k < constraints_.size(); ++k) {

@@ -121,7 +121,7 @@ TEST(Schema, EveryPluginIsABranchWithItsParameters) {
     ++plugins;
   }
   std::size_t branches = 0;
-  for (const char* kind : {"force", "solver", "collider", "writer"}) {
+  for (const char* kind : {"force", "solver", "collider", "writer", "constraint"}) {
     branches += defs[kind]["allOf"].size();
   }
   EXPECT_EQ(branches, plugins);

@@ -60,8 +60,8 @@ TEST(GalleryBeadOnWire, PeriodIsTheExactLargeAmplitudeOneTo1e6) {
     max_de = std::max(max_de, std::abs(sys.kinetic_energy() + sys.potential_energy() - e0));
   });
   ASSERT_GE(crossings.size(), 3u);
-  const double period = (crossings.back() - crossings.front()) /
-                        static_cast<double>(crossings.size() - 1);
+  const double period =
+      (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
   std::cout << "bead on wire: theta0 = " << theta0 << " rad, T = " << period << " s, exact "
             << exact << " s, relative error " << std::abs(period - exact) / exact
             << "; max | |x| - L | = " << max_drift << " m, max |y| = " << max_off_plane
@@ -70,9 +70,9 @@ TEST(GalleryBeadOnWire, PeriodIsTheExactLargeAmplitudeOneTo1e6) {
   EXPECT_LE(std::abs(period - exact) / exact, 1e-6);
   // rk4's error at h = 1 ms, with no feedback (ks = kd = 0): the drift off
   // the wire and the energy error stay far below the period's bound.
-  EXPECT_LE(max_drift, 2e-8);  // measured 5.0e-9
+  EXPECT_LE(max_drift, 2e-8);       // measured 5.0e-9
   EXPECT_LE(max_off_plane, 1e-15);  // nothing pushes it out of the plane
-  EXPECT_LE(max_de, 2e-8);  // measured 6.3e-9
+  EXPECT_LE(max_de, 2e-8);          // measured 6.3e-9
 }
 
 }  // namespace bead_on_wire_test

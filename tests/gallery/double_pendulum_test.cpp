@@ -62,11 +62,11 @@ TEST(GalleryDoublePendulum, RodsFollowTheEquationsInTheAnglesForOneSecond) {
     for (int i = 0; i < sub; ++i) s = ref.step(s, scene.dt / sub);
     const Vec3 x1(ref.l1 * std::sin(s[0]), 0.0, -ref.l1 * std::cos(s[0]));
     const Vec3 x2 = x1 + Vec3(ref.l2 * std::sin(s[1]), 0.0, -ref.l2 * std::cos(s[1]));
-    worst = std::max({worst, (sys.positions().col(1) - x1).norm(),
-                      (sys.positions().col(2) - x2).norm()});
-    worst_rod = std::max({worst_rod, std::abs(sys.positions().col(1).norm() - ref.l1),
-                          std::abs((sys.positions().col(2) - sys.positions().col(1)).norm() -
-                                   ref.l2)});
+    worst = std::max(
+        {worst, (sys.positions().col(1) - x1).norm(), (sys.positions().col(2) - x2).norm()});
+    worst_rod =
+        std::max({worst_rod, std::abs(sys.positions().col(1).norm() - ref.l1),
+                  std::abs((sys.positions().col(2) - sys.positions().col(1)).norm() - ref.l2)});
   }
   std::cout << "double pendulum: over 1 s, max |x - x_ref| = " << worst
             << " m, max rod length error = " << worst_rod << " m\n";

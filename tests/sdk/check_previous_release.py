@@ -4,7 +4,8 @@ with this build's host (issue 28; the policy in docs/plugins.md, "Versions
 and the ABI").
 
 The previous release is the newest CHANGELOG.md entry that names the commit
-it ends at and has this build's ABI; its public headers (kernel/include) and
+it ends at and has an ABI this build loads (kOldestAbiVersion to
+PDYN_ABI_VERSION; an older ABI's descriptor is read in its own layout); its public headers (kernel/include) and
 four of its shipped plugins' sources (a pair force, a solver, a collider, a
 writer: every plugin interface and the templates plugins instantiate from
 the headers) are taken from git at that commit. Each plugin is compiled
@@ -45,11 +46,18 @@ def current_abi(source):
     return int(re.search(r"#define PDYN_ABI_VERSION (\d+)u?", text).group(1))
 
 
+def oldest_abi(source):
+    """The oldest ABI whose plugins this kernel loads (kOldestAbiVersion)."""
+    text = (source / "kernel" / "include" / "pdyn" / "version.hpp").read_text()
+    found = re.search(r"kOldestAbiVersion = (\d+)u?;", text)
+    return int(found.group(1)) if found else current_abi(source)
+
+
 def previous_release(source):
-    """(version, commit) of the newest released entry with the current ABI."""
-    abi = current_abi(source)
+    """(version, commit) of the newest released entry with an ABI this kernel loads."""
+    lo, hi = oldest_abi(source), current_abi(source)
     for version, entry_abi, commit in ENTRY.findall((source / "CHANGELOG.md").read_text()):
-        if int(entry_abi) == abi:
+        if lo <= int(entry_abi) <= hi:
             return version, commit
     return None
 
@@ -86,7 +94,8 @@ def main():
         return 0
     if not found:
         print(f"check_previous_release: CHANGELOG.md names no released commit with ABI "
-              f"{current_abi(a.source)} (expected '## X.Y.Z ... ABI N ... (ends at commit H)')")
+              f"{oldest_abi(a.source)} to {current_abi(a.source)} (expected '## X.Y.Z ... ABI N "
+              f"... (ends at commit H)')")
         return 1
     version, commit = found
 

@@ -33,8 +33,8 @@ class ConstraintForce;
 ///   J W J^T lambda = -b - J W Q - ks C - kd Cdot,
 /// solved by preconditioned conjugate gradients to a relative residual.
 struct ConstraintFeedback {
-  double ks = 0.0;          ///< 1/s^2: pulls a drifted C back to zero
-  double kd = 0.0;          ///< 1/s: damps Cdot
+  double ks = 0.0;           ///< 1/s^2: pulls a drifted C back to zero
+  double kd = 0.0;           ///< 1/s: damps Cdot
   double tolerance = 1e-12;  ///< relative residual |r| / |rhs| at which CG stops
   Index max_iterations = 0;  ///< CG's limit; 0 = 10 x rows + 100
 };

@@ -32,8 +32,12 @@ using pdyn::Vec3;
 
 class OnCircle final : public pdyn::Constraint {
  public:
-  OnCircle(std::vector<Index> ids, Vec3 center, Vec3 normal, std::vector<double> radii)
-      : ids_(std::move(ids)), center_(center), normal_(normal), radii_(std::move(radii)) {}
+  OnCircle(std::vector<Index> ids, std::vector<Vec3> centers, Vec3 normal,
+           std::vector<double> radii)
+      : ids_(std::move(ids)),
+        centers_(std::move(centers)),
+        normal_(normal),
+        radii_(std::move(radii)) {}
 
   pdyn::ConstraintPattern pattern() const override {
     pdyn::ConstraintPattern p;
@@ -47,7 +51,7 @@ class OnCircle final : public pdyn::Constraint {
   void evaluate(const pdyn::ParticleView& p, pdyn::ConstraintValues& out) const override {
     for (std::size_t k = 0; k < ids_.size(); ++k) {
       const Index plane = 2 * static_cast<Index>(k), circle = plane + 1;
-      const Vec3 d = p.x.col(ids_[k]) - center_;
+      const Vec3 d = p.x.col(ids_[k]) - centers_[k];
       const double h = normal_.dot(d);
       out.value[plane] = h;
       out.rate[plane] = 0.0;
@@ -71,7 +75,8 @@ class OnCircle final : public pdyn::Constraint {
 
  private:
   std::vector<Index> ids_;
-  Vec3 center_, normal_;       // m; unit
+  std::vector<Vec3> centers_;  // c_k, m
+  Vec3 normal_;                // unit
   std::vector<double> radii_;  // R_k, m
 };
 
@@ -88,14 +93,26 @@ void require_distinct_ids(const std::vector<Index>& ids) {
   }
 }
 
-// The particles must start on the wire's plane: there is no per-particle
-// parameter that could make the plane row's C zero, and a bead that starts
-// off the plane would be jerked onto it. A rounding error of the scene's
-// positions (1e-9 of the distance from the centre) is let through.
-void require_in_plane(const std::vector<Index>& ids, const pdyn::SceneContext& ctx, const Vec3& c,
-                      const Vec3& n) {
+// Each bead's circle centre. Given `center`, the beads share its circle and
+// must start in its plane: a bead that starts off the plane would be jerked
+// onto it. A rounding error of the scene's positions (1e-9 of the distance
+// from the centre) is let through. Without `center`, the circles are
+// coaxial about the axis through the origin along n, each in the plane of
+// its bead's start (c_k = (n . x_k) n), so that C1 = 0 where it starts.
+std::vector<Vec3> centers(const pdyn::Params& p, const std::vector<Index>& ids,
+                          const pdyn::SceneContext& ctx, const Vec3& n) {
+  std::vector<Vec3> c(ids.size());
   for (std::size_t e = 0; e < ids.size(); ++e) {
-    const Vec3 d = ctx.particles.x.col(ids[e]) - c;
+    const Vec3 x = ctx.particles.x.col(ids[e]);
+    c[e] = p.has("center") ? p.vec3("center") : Vec3(n.dot(x) * n);
+  }
+  return c;
+}
+
+void require_in_plane(const std::vector<Index>& ids, const pdyn::SceneContext& ctx,
+                      const std::vector<Vec3>& c, const Vec3& n) {
+  for (std::size_t e = 0; e < ids.size(); ++e) {
+    const Vec3 d = ctx.particles.x.col(ids[e]) - c[e];
     const double h = n.dot(d);
     if (!(std::abs(h) <= 1e-9 * d.norm())) {
       throw pdyn::ParamError("ids",
@@ -113,14 +130,15 @@ void require_in_plane(const std::vector<Index>& ids, const pdyn::SceneContext& c
 // (after require_in_plane: at the centre) would give a circle of radius 0,
 // on which the radial direction, and so J2, is undefined: refused.
 std::vector<double> radii(const pdyn::Params& p, const pdyn::SceneContext& ctx,
-                          const std::vector<Index>& ids, const Vec3& c, const Vec3& n) {
+                          const std::vector<Index>& ids, const std::vector<Vec3>& c,
+                          const Vec3& n) {
   std::vector<double> r(ids.size());
   for (std::size_t e = 0; e < ids.size(); ++e) {
     if (p.has("radius")) {
       r[e] = p.real("radius");
       continue;
     }
-    const Vec3 d = ctx.particles.x.col(ids[e]) - c;
+    const Vec3 d = ctx.particles.x.col(ids[e]) - c[e];
     r[e] = (d - n.dot(d) * n).norm();
     if (r[e] == 0.0) {
       throw pdyn::ParamError("ids",
@@ -138,8 +156,8 @@ std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::Scen
   const auto& ids = p.indices("ids");
   if (ids.empty()) throw pdyn::ParamError("ids", "is empty (expected at least one particle)");
   require_distinct_ids(ids);
-  const Vec3 c = p.vec3("center");
   const Vec3 n = p.vec3("normal").normalized();  // not zero: the loader checks
+  const auto c = centers(p, ids, ctx, n);
   require_in_plane(ids, ctx, c, n);
   auto r = radii(p, ctx, ids, c, n);
   return std::make_unique<OnCircle>(ids, c, n, std::move(r));
@@ -155,10 +173,11 @@ pdyn::PluginDescriptor describe() {
       "P = I - n n^T";
   d.params = {
       pdyn::param::required("ids", pdyn::ParamType::IndexList, "", "the beads on the wire"),
-      pdyn::param::vec3("center", Vec3::Zero(), "m", "the circle's centre c"),
+      pdyn::param::optional("center", pdyn::ParamType::Vector, "m",
+                            "the circle's centre c; default: each bead's circle is about the "
+                            "axis through the origin along n, in the plane of its start"),
       pdyn::param::vec3("normal", Vec3(0, 0, 1), "",
-                        "the normal n of the circle's plane "
-                        "(normalised)")
+                        "the normal n of the circle's plane (normalised)")
           .not_zero(),
       pdyn::param::optional("radius", pdyn::ParamType::Real, "m",
                             "radius R; default: each particle's initial distance from the "

@@ -129,21 +129,23 @@ constraints:
 
 TEST(DistanceConstraint, BadParametersAreRefusedWithTheirPlace) {
   EXPECT_EQ(Problems("{ type: distance, pairs: [[0, 1], [2, 2]] }"),
-            "test.yaml:7:37: constraints[0].pairs[1]: joins particle 2 to itself (expected two "
+            "test.yaml:7:39: constraints[0].pairs[1]: joins particle 2 to itself (expected two "
             "different particles)");
   EXPECT_EQ(Problems("{ type: distance, pairs: [[0, 1], [1, 2], [1, 0]] }"),
-            "test.yaml:7:45: constraints[0].pairs[2]: joins particles 1 and 0 a second time "
+            "test.yaml:7:47: constraints[0].pairs[2]: joins particles 1 and 0 a second time "
             "(expected each rod once)");
   EXPECT_EQ(Problems("{ type: distance, pairs: [[0, 1], [1, 2]], length: [1, 2, 3] }"),
-            "test.yaml:7:55: constraints[0].length: has 3 values for 2 pairs (expected 1 value "
+            "test.yaml:7:56: constraints[0].length: has 3 values for 2 pairs (expected 1 value "
             "for all, or 2)");
   EXPECT_EQ(Problems("{ type: distance, pairs: [[0, 1], [1, 2]], length: [1, -0.5] }"),
-            "test.yaml:7:59: constraints[0].length[1]: -0.5 is out of range (expected at least "
-            "0)");
+            "test.yaml:7:60: constraints[0].length[1]: -0.5 is out of range (expected a number >= "
+            "0 in m)");
   EXPECT_EQ(Problems("{ type: distance, pairs: [] }"),
-            "test.yaml:7:27: constraints[0].pairs: is empty (expected at least one pair)");
-  EXPECT_EQ(Problems("{ type: distance, pairs: [[0, 3]] }"),
-            "(to be seen: the loader's message for an index past the end)");
+            "test.yaml:7:30: constraints[0].pairs: is empty (expected at least one pair)");
+  EXPECT_EQ(
+      Problems("{ type: distance, pairs: [[0, 3]] }"),
+      "test.yaml:7:35: constraints[0].pairs[0][1]: particle index 3 is out of range (expected "
+      "0..2: the scene has 3 particles)");
 }
 
 }  // namespace distance_test

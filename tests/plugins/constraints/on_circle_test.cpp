@@ -119,17 +119,49 @@ constraints:
   EXPECT_NEAR(test::EvaluateAt(test::ConstraintOf(scene), *scene.system).value[0], 1e-12, 1e-15);
   EXPECT_EQ(Problems("  - { position: [1, 1, 0.75], mass: 1 }\n",
                      "{ type: on_circle, ids: [0, 1], center: [0, 0, 0.5] }"),
-            "(to be seen)");
+            "test.yaml:6:33: constraints[0].ids[1]: particle 1 is not in the circle's plane: it "
+            "is 0.25 m from it (expected it on the wire: n.(x - center) = 0, n the unit normal)");
+}
+
+// Without `center`, each bead's circle is about the axis through the
+// origin along n, at the height of its start: beads at different heights
+// and radii start with C = 0 and keep their own planes.
+TEST(OnCircleConstraint, WithoutACentreEachBeadHasItsOwnCoaxialCircle) {
+  Scene scene = test::load_text(R"(simulation: { dt: 0.01, steps: 1 }
+particles:
+  - { position: [2, 0, 0.7], mass: 1 }
+  - { position: [0, -3, -1.5], mass: 1 }
+constraints:
+  - { type: on_circle, ids: [0, 1] }
+)");
+  System& sys = *scene.system;
+  const ConstraintValues at_start = test::EvaluateAt(test::ConstraintOf(scene), sys);
+  EXPECT_EQ(at_start.value, Eigen::Vector4d::Zero());
+  sys.positions().col(0) = Vec3(0, 2.5, 0.9);  // 0.2 m above its plane, 0.5 m further out
+  sys.positions().col(1) = Vec3(3, 0, -1.5);   // moved along its own circle
+  const ConstraintValues moved = test::EvaluateAt(test::ConstraintOf(scene), sys);
+  EXPECT_NEAR(moved.value[0], 0.2, 1e-15);
+  EXPECT_NEAR(moved.value[1], 0.5, 1e-15);
+  EXPECT_EQ(moved.value[2], 0.0);
+  EXPECT_EQ(moved.value[3], 0.0);
 }
 
 TEST(OnCircleConstraint, BadParametersAreRefusedWithTheirPlace) {
   EXPECT_EQ(Problems("  - { position: [0, 0, 0.5], mass: 1 }\n",
                      "{ type: on_circle, ids: [0, 1], center: [0, 0, 0.5] }"),
-            "(to be seen)");
-  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [0, 0], center: [0, 0, 0.5] }"), "(to be seen)");
-  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [], center: [0, 0, 0.5] }"), "(to be seen)");
-  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [0], normal: [0, 0, 0] }"), "(to be seen)");
-  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [0], radius: 0 }"), "(to be seen)");
+            "test.yaml:6:33: constraints[0].ids[1]: particle 1 is at the circle's centre "
+            "(expected it away from center: the radius is its initial distance from the centre)");
+  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [0, 0], center: [0, 0, 0.5] }"),
+            "test.yaml:5:33: constraints[0].ids[1]: particle 0 is threaded on the wire twice "
+            "(expected each id once)");
+  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [], center: [0, 0, 0.5] }"),
+            "test.yaml:5:29: constraints[0].ids: is empty (expected at least one particle)");
+  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [0], normal: [0, 0, 0] }"),
+            "test.yaml:5:42: constraints[0].normal: is the zero vector (expected a vector [x, y, "
+            "z], not zero)");
+  EXPECT_EQ(Problems("", "{ type: on_circle, ids: [0], radius: 0 }"),
+            "test.yaml:5:42: constraints[0].radius: 0 is out of range (expected a number > 0 in "
+            "m)");
 }
 
 }  // namespace on_circle_test

@@ -75,12 +75,16 @@ std::string Problems(const std::string& entry) {
 
 TEST(OnPlaneConstraint, BadParametersAreRefusedWithTheirPlace) {
   EXPECT_EQ(Problems("{ type: on_plane, ids: [1, 0, 1], normal: [0, 0, 1] }"),
-            "test.yaml:6:32: constraints[0].ids[2]: particle 1 is listed twice (expected each "
+            "test.yaml:6:35: constraints[0].ids[2]: particle 1 is listed twice (expected each "
             "id once)");
   EXPECT_EQ(Problems("{ type: on_plane, ids: [], normal: [0, 0, 1] }"),
-            "test.yaml:6:26: constraints[0].ids: is empty (expected at least one particle)");
-  EXPECT_EQ(Problems("{ type: on_plane, ids: [0], normal: [0, 0, 0] }"), "(to be seen)");
-  EXPECT_EQ(Problems("{ type: on_plane, ids: [0] }"), "(to be seen)");
+            "test.yaml:6:28: constraints[0].ids: is empty (expected at least one particle)");
+  EXPECT_EQ(Problems("{ type: on_plane, ids: [0], normal: [0, 0, 0] }"),
+            "test.yaml:6:41: constraints[0].normal: is the zero vector (expected a vector [x, y, "
+            "z], not zero)");
+  EXPECT_EQ(Problems("{ type: on_plane, ids: [0] }"),
+            "test.yaml:6:5: constraints[0]: missing required key 'normal' (expected a vector [x, "
+            "y, z], not zero: the plane's normal (normalised))");
 }
 
 }  // namespace on_plane_test

@@ -95,14 +95,16 @@ std::string Problems(const std::string& entry) {
 
 TEST(PinConstraint, BadParametersAreRefusedWithTheirPlace) {
   EXPECT_EQ(Problems("{ type: pin, ids: [0, 1, 0] }"),
-            "test.yaml:6:27: constraints[0].ids[2]: particle 0 is pinned twice (expected each id "
+            "test.yaml:6:30: constraints[0].ids[2]: particle 0 is pinned twice (expected each id "
             "once)");
   EXPECT_EQ(Problems("{ type: pin, ids: [0, 1], points: [[0, 0, 0], [1, 1, 1], [2, 2, 2]] }"),
-            "test.yaml:6:35: constraints[0].points: has 3 points for 2 ids (expected 1 point for "
+            "test.yaml:6:39: constraints[0].points: has 3 points for 2 ids (expected 1 point for "
             "all, or 2)");
   EXPECT_EQ(Problems("{ type: pin, ids: [] }"),
-            "test.yaml:6:21: constraints[0].ids: is empty (expected at least one particle)");
-  EXPECT_EQ(Problems("{ type: pin, ids: [2] }"), "(to be seen)");
+            "test.yaml:6:23: constraints[0].ids: is empty (expected at least one particle)");
+  EXPECT_EQ(Problems("{ type: pin, ids: [2] }"),
+            "test.yaml:6:24: constraints[0].ids[0]: particle index 2 is out of range (expected "
+            "0..1: the scene has 2 particles)");
 }
 
 }  // namespace pin_test
