@@ -17,7 +17,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
-[[ -d "$build" ]] || cmake --preset default
+# The benchmarks on (the test command's build leaves them out).
+if [[ "$build" == build ]]; then
+  cmake --preset default -DPDYN_BUILD_BENCH=ON >/dev/null
+else
+  cmake -S . -B "$build" -DPDYN_BUILD_BENCH=ON >/dev/null
+fi
 cmake --build "$build" --target pdyn_bench_cloth pdyn_plugins -j"$(nproc)"
 mkdir -p out/bench
 bin="$build/bin/pdyn_bench_cloth"

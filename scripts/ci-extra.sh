@@ -9,6 +9,11 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 source scripts/ccache.sh
+# The benchmarks compile (the test command leaves them out): the build for use
+# with them on, then as the test command left it.
+cmake --preset default -DPDYN_BUILD_BENCH=ON "${launcher[@]}"
+cmake --build --preset default
+cmake --preset default -DPDYN_BUILD_BENCH=OFF "${launcher[@]}"
 cmake --preset asan -DPDYN_BROWSER_TEST=OFF "${launcher[@]}"  # the browser test runs on the build for use
 cmake --build --preset asan
 ctest --preset asan
