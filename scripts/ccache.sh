@@ -11,4 +11,10 @@ if command -v ccache >/dev/null 2>&1; then
   export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
   export CCACHE_SLOPPINESS="${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}"
   export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-20G}"
+  # Depend mode: a hit needs every header's bytes unchanged, never only the
+  # same preprocessed text. A precompiled header records each header's
+  # checksum, so a .gch reused after a comment-only edit (a preprocessor-mode
+  # hit) made GCC's `#pragma once` miss and include the header twice. The
+  # namespace leaves behind the entries made before this rule.
+  export CCACHE_DEPEND=1 CCACHE_NAMESPACE=pdyn-depend
 fi
