@@ -302,23 +302,40 @@ std::pair<Json, Json> output_schemas() {
 
 // A builder's nested mapping: a force plugin's parameters less the list
 // the builder generates (or families of them), or fixed keys.
+// The parameters of `plugin` less `generated`, and a constraint's
+// `compliance`.
+Json builder_plugin_keys(const PluginRegistry& registry, PluginKind kind, const std::string& plugin,
+                         const std::string& generated) {
+  const PluginRecord* rec = registry.find(kind, plugin);
+  if (rec == nullptr) return Json{{"type", Json::array({"object", "null"})}};
+  std::vector<ParamSpec> specs;
+  for (const auto& s : rec->descriptor->params) {
+    if (s.name != generated) specs.push_back(s);
+  }
+  if (kind == PluginKind::Constraint) {
+    specs.push_back(param::real("compliance", 0.0, "unit/N",
+                                "the row's unit per newton (m/N for a rod); 0 = rigid")
+                        .at_least(0.0));
+  }
+  Json j = object(specs, true);
+  j["type"] = Json::array({"object", "null"});
+  return j;
+}
+
 Json builder_nested(const PluginRegistry& registry, const BuilderNested& n) {
   Json j;
   if (n.plugin.empty()) {
     j = object(n.specs, false);
-  } else if (const PluginRecord* rec = registry.find(PluginKind::Force, n.plugin)) {
-    std::vector<ParamSpec> specs;
-    for (const auto& s : rec->descriptor->params) {
-      if (s.name != n.generated) specs.push_back(s);
-    }
-    j = object(specs, true);
   } else {
-    j = Json{{"type", "object"}};
+    j = builder_plugin_keys(registry, n.kind, n.plugin, n.generated);
   }
   j["type"] = Json::array({"object", "null"});
   if (!n.families.empty()) {
     Json families = Json::object();
     for (const auto& f : n.families) families[f] = j;
+    for (const auto& [family, plugin, generated] : n.other_families) {
+      families[family] = builder_plugin_keys(registry, n.kind, plugin, generated);
+    }
     j = {{"type", Json::array({"object", "null"})},
          {"properties", families},
          {"additionalProperties", false}};

@@ -81,9 +81,56 @@ void read_bending(BuilderHost& host, const YAML::Node& g, const std::string& pat
 
 }  // namespace
 
+// `springs:` and `rods:` name the same families of pairs: each family a
+// mapping of the `spring` plugin's parameters, or of the `distance`
+// constraint's and its `compliance` (rods: inextensible links for XPBD or
+// RATTLE instead of stiff springs).
+void grid_links(BuilderHost& host, const YAML::Node& g, const std::string& path, const char* key,
+                std::int64_t nx, std::int64_t ny, Index base) {
+  const YAML::Node links = g[key];
+  if (!links.IsDefined() || links.IsNull()) return;
+  const bool rods = std::string(key) == "rods";
+  const std::string sp = path + "." + key;
+  if (!host.check_map(links, sp,
+                      rods ? "rods: { structural: { compliance: m/N }, shear: {...}, bend: {...}, "
+                             "bending: { compliance: rad/(N m) } }"
+                           : "springs: { structural: { ks, kd }, shear: {...}, bend: {...} }")) {
+    return;
+  }
+  std::vector<std::string> families = {"structural", "shear", "bend"};
+  if (rods) families.push_back("bending");          // the hinges held by `bending` constraints
+  (void)host.read_params(links, sp, {}, families);  // unknown families
+  for (const std::string& family : families) {
+    const YAML::Node s = links[family];
+    if (!s.IsDefined() || s.IsNull()) continue;
+    const std::string fp = sp + "." + family;
+    if (!host.check_map(s, fp, rods ? "{ compliance: ... }" : "{ ks: N/m, kd: N s/m }")) continue;
+    if (family == "bending") {
+      std::vector<IndexQuad> quads = hinge_quads(nx, ny, base);
+      const bool create = !quads.empty();
+      Params generated;
+      generated.set("quads", std::move(quads));
+      host.add_constraint("bending", s, fp, generated, create);
+      continue;
+    }
+    // 't'ructural, 'h'ear, 'e'nd: no string compare per particle. The keys
+    // are checked even when the grid is too small for this family, so that
+    // a typo is reported whatever the grid's size.
+    std::vector<IndexPair> pairs = family_pairs(family[1], nx, ny, base);
+    const bool create = !pairs.empty();
+    Params generated;
+    generated.set("pairs", std::move(pairs));
+    if (rods) {
+      host.add_constraint("distance", s, fp, generated, create);
+    } else {
+      host.add_force("spring", s, fp, generated, Params{}, create);
+    }
+  }
+}
+
 void read_grid(BuilderHost& host, const YAML::Node& g, const std::string& path) {
   if (!host.check_map(g, path, "grid: { origin, u, v, nx, ny, mass, ... }")) return;
-  auto p = host.read_params(g, path, grid_specs(), {"springs", "bending"});
+  auto p = host.read_params(g, path, grid_specs(), {"springs", "rods", "bending"});
   if (!p) return;
   const std::int64_t nx = p->integer("nx"), ny = p->integer("ny");
   if (nx > kMaxParticles || ny > kMaxParticles ||
@@ -131,28 +178,8 @@ void read_grid(BuilderHost& host, const YAML::Node& g, const std::string& path) 
   if (p->has("name"))
     host.add_group(p->string("name"), std::move(members), g["name"], path + ".name");
   read_bending(host, g, path, nx, ny, base);
-  const YAML::Node springs = g["springs"];
-  if (!springs.IsDefined() || springs.IsNull()) return;
-  const std::string sp = path + ".springs";
-  if (!host.check_map(springs, sp,
-                      "springs: { structural: { ks, kd }, shear: {...}, bend: {...} }")) {
-    return;
-  }
-  (void)host.read_params(springs, sp, {}, {"structural", "shear", "bend"});  // unknown families
-  for (const char* family : {"structural", "shear", "bend"}) {
-    const YAML::Node s = springs[family];
-    if (!s.IsDefined() || s.IsNull()) continue;
-    const std::string fp = sp + "." + family;
-    if (!host.check_map(s, fp, "{ ks: N/m, kd: N s/m }")) continue;
-    // 't'ructural, 'h'ear, 'e'nd: no string compare per particle. The keys
-    // are checked even when the grid is too small for this family, so that
-    // a typo is reported whatever the grid's size.
-    std::vector<IndexPair> pairs = family_pairs(family[1], nx, ny, base);
-    const bool create = !pairs.empty();
-    Params generated;
-    generated.set("pairs", std::move(pairs));
-    host.add_force("spring", s, fp, generated, Params{}, create);
-  }
+  grid_links(host, g, path, "springs", nx, ny, base);
+  grid_links(host, g, path, "rods", nx, ny, base);
 }
 
 }  // namespace pdyn

@@ -58,6 +58,7 @@ struct PendingPlugin {
   Params params;
   YAML::Node node;
   std::string path;
+  double compliance = 0.0;  // a constraint's `compliance` key (0 = rigid)
 };
 
 class Loader final : public BuilderHost {
@@ -141,6 +142,8 @@ class Loader final : public BuilderHost {
                  const std::string& path) override;
   void add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
                  const Params& generated, const Params& defaults, bool create) override;
+  void add_constraint(const std::string& plugin, const YAML::Node& node, const std::string& path,
+                      const Params& generated, bool create) override;
 
   // ---- the steps of load() ----
   YAML::Node parse(const std::string& text);
@@ -182,6 +185,11 @@ class Loader final : public BuilderHost {
   const PluginRecord* find_plugin(const YAML::Node& item, const std::string& path, PluginKind kind);
   void read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
                         std::vector<PendingPlugin>& out);
+  /// A constraint item's `compliance` (the host's key, not a plugin
+  /// parameter): >= 0, 0 when absent.
+  void replace_solver(Scene& scene, PendingPlugin& p, const SceneContext& ctx,
+                      const std::string& label);
+  std::optional<double> read_compliance(const YAML::Node& item, const std::string& path);
   std::optional<Params> read_plugin_params(const YAML::Node& item, const std::string& path,
                                            const PluginRecord& rec,
                                            const std::vector<std::string>& generated);
@@ -218,7 +226,8 @@ class Loader final : public BuilderHost {
   std::vector<ParticleEntry> entries_;
   std::optional<Domain> box_;  // simulation.box, when given and valid
   std::map<std::string, std::vector<Index>> groups_;
-  std::vector<PendingPlugin> builder_forces_;  // springs made by builders
+  std::vector<PendingPlugin> builder_forces_;       // springs made by builders
+  std::vector<PendingPlugin> builder_constraints_;  // rods made by builders
   bool particles_ok_ = true;
   std::vector<NamedPath> read_files_;  // side files: no output may overwrite them
   // What a file read for simulation.box gave, kept for a particle entry of

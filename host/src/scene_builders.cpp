@@ -122,7 +122,7 @@ std::vector<ParamSpec> chain_specs() {
 
 void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path) {
   if (!host.check_map(c, path, "chain: { from, to, n, mass, ... }")) return;
-  auto p = host.read_params(c, path, chain_specs(), {"springs", "bend"});
+  auto p = host.read_params(c, path, chain_specs(), {"springs", "rods", "bend"});
   if (!p) return;
   const std::int64_t n = p->integer("n");
   const Vec3 from = p->vec3("from"), to = p->vec3("to");
@@ -143,11 +143,17 @@ void read_chain(BuilderHost& host, const YAML::Node& c, const std::string& path)
   pin(host, *p, c, path, base, n, "chain");
   group(host, *p, c, path, base, n);
 
+  // Rods (distance constraints) instead of springs when `rods` is given;
+  // both only if both are.
+  std::vector<IndexPair> links;
+  for (std::int64_t i = 0; i + 1 < n; ++i) links.push_back({base + i, base + i + 1});
+  const Family rods = family(host, c, "rods", path, "rods: { compliance: m/N }");
+  if (rods == Family::Given) {
+    host.add_constraint("distance", c["rods"], path + ".rods", with_pairs(links), true);
+  }
   const Family springs = family(host, c, "springs", path, "springs: { ks: N/m, kd: N s/m }");
-  if (springs != Family::Bad) {
-    std::vector<IndexPair> pairs;
-    for (std::int64_t i = 0; i + 1 < n; ++i) pairs.push_back({base + i, base + i + 1});
-    host.add_force("spring", c["springs"], path + ".springs", with_pairs(std::move(pairs)),
+  if (springs == Family::Given || (springs == Family::Absent && rods == Family::Absent)) {
+    host.add_force("spring", c["springs"], path + ".springs", with_pairs(std::move(links)),
                    spring_defaults(), true);
   }
   if (family(host, c, "bend", path, "bend: { k: N m/rad, kd: N m s/rad }") == Family::Given) {
@@ -548,6 +554,14 @@ std::vector<BuilderSpec> more_builder_specs() {
        "a rope of n particles from `from` to `to`",
        chain_specs(),
        {springs,
+        {"rods",
+         "rods (distance constraints) between neighbours instead of springs: `distance` plugin "
+         "parameters and `compliance`",
+         "distance",
+         "pairs",
+         {},
+         {},
+         PluginKind::Constraint},
         {"bend",
          "angle springs of the `angle` plugin on consecutive triples",
          "angle",

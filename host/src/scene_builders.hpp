@@ -81,6 +81,10 @@ class BuilderHost {
   /// keys are only checked (a family that yields no pairs).
   virtual void add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
                          const Params& generated, const Params& defaults, bool create) = 0;
+  /// The same for a constraint plugin (a builder's rods): the keys of
+  /// `node` are the plugin's parameters and the host's `compliance`.
+  virtual void add_constraint(const std::string& plugin, const YAML::Node& node,
+                              const std::string& path, const Params& generated, bool create) = 0;
 };
 
 /// The builder keys that read_builder() accepts as a particles entry.

@@ -19,12 +19,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
 
 #include "loader.hpp"
+#include "pdyn/constraint_solver.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/side_files.hpp"
@@ -240,6 +242,27 @@ void Loader::add_force(const std::string& plugin, const YAML::Node& node, const 
   builder_forces_.push_back({rec, std::move(*params), keys, path});
 }
 
+void Loader::add_constraint(const std::string& plugin, const YAML::Node& node,
+                            const std::string& path, const Params& generated, bool create) {
+  registry_.require_healthy(plugin);
+  const PluginRecord* rec = registry_.find(PluginKind::Constraint, plugin);
+  if (!rec) {
+    error(node, path,
+          fmt::format("{}: needs the '{}' constraint plugin, which was not found (expected it on "
+                      "the plugin path)",
+                      path, plugin));
+    return;
+  }
+  std::vector<std::string> names;
+  for (const auto& kv : generated.values()) names.push_back(kv.first);
+  const YAML::Node keys = node.IsDefined() && node.IsMap() ? node : YAML::Node(YAML::NodeType::Map);
+  auto params = read_plugin_params(keys, path, *rec, names);
+  const auto compliance = read_compliance(keys, path);
+  if (!params || !compliance || !create) return;
+  for (const auto& [key, value] : generated.values()) params->set(key, value);
+  builder_constraints_.push_back({rec, std::move(*params), keys, path, *compliance});
+}
+
 const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::string& path,
                                         PluginKind kind) {
   const YAML::Node t = item["type"];
@@ -288,8 +311,32 @@ std::optional<Params> Loader::read_plugin_params(const YAML::Node& item, const s
   }
   const Index n = particles_ok_ ? static_cast<Index>(x_.size()) : -1;
   const bool is_builder = !generated.empty();
-  return read_params(item, path, specs,
-                     is_builder ? std::vector<std::string>{} : std::vector<std::string>{"type"}, n);
+  std::vector<std::string> host_keys;
+  if (!is_builder) host_keys.push_back("type");
+  if (rec.descriptor->kind == PluginKind::Constraint) host_keys.push_back("compliance");
+  return read_params(item, path, specs, host_keys, n);
+}
+
+// Compliance belongs to every constraint, a third party's too, so the host
+// reads it rather than each plugin: alpha in XPBD's C + alpha lambda = 0
+// (Macklin, Muller & Chentanez 2016, eq. 4), in the row's unit per newton.
+std::optional<double> Loader::read_compliance(const YAML::Node& item, const std::string& path) {
+  const YAML::Node c = item["compliance"];
+  if (!c.IsDefined() || c.IsNull()) return 0.0;
+  static const ParamSpec spec = param::real("compliance", 0.0, "unit/N",
+                                            "the row's unit per newton (m/N for a rod); 0 = rigid")
+                                    .at_least(0.0);
+  const auto v = read_value(c, path + ".compliance", spec, -1);
+  if (!v) return std::nullopt;
+  const double alpha = std::get<double>(*v);
+  if (!(alpha >= 0.0) || !std::isfinite(alpha)) {
+    error(c, path + ".compliance",
+          fmt::format("{}.compliance: {} is not a compliance (expected a finite number >= 0, "
+                      "in the row's unit per newton; 0 = rigid)",
+                      path, c.Scalar()));
+    return std::nullopt;
+  }
+  return alpha;
 }
 
 void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKind kind,
@@ -307,7 +354,9 @@ void Loader::read_plugin_list(const YAML::Node& n, const char* section, PluginKi
     const PluginRecord* rec = find_plugin(item, path, kind);
     if (!rec) continue;
     auto params = read_plugin_params(item, path, *rec, {});
-    if (params) out.push_back({rec, std::move(*params), item, path});
+    const auto compliance =
+        kind == PluginKind::Constraint ? read_compliance(item, path) : std::optional<double>(0.0);
+    if (params && compliance) out.push_back({rec, std::move(*params), item, path, *compliance});
   }
 }
 
@@ -567,6 +616,26 @@ YAML::Node Loader::parse(const std::string& text) {
 
 namespace {
 
+// Compliance (XPBD's alpha) is honoured only by a solver that says so
+// (pdyn/constraint_solver.hpp); the others treat every constraint as rigid,
+// which would silently drop it.
+bool enforces_constraints(const Solver& solver) {
+  const auto* cs = dynamic_cast<const ConstraintSolver*>(&solver);
+  return cs != nullptr && cs->enforces_constraints();
+}
+
+bool honours_compliance(const Solver& solver) {
+  const auto* cs = dynamic_cast<const ConstraintSolver*>(&solver);
+  return cs != nullptr && cs->enforces_constraints() && cs->honours_compliance();
+}
+
+std::string compliance_conflict(const std::string& solver) {
+  return fmt::format(
+      "is a compliant constraint, which solver '{}' treats as rigid (expected compliance 0, "
+      "or a solver that honours it, e.g. solver: {{ type: xpbd }})",
+      solver);
+}
+
 // What a checkpoint must match: the scene after overrides, less the run
 // length, which a resumed run may extend, and the thread count.
 std::string canonical_text(const YAML::Node& root) {
@@ -704,11 +773,15 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
     keep(p, PluginKind::Collider);
   }
   assembly.set_constraint_feedback(scene.constraint_feedback);
+  // The builders' rods first, as their springs come before the forces.
+  constraints.insert(constraints.begin(), std::make_move_iterator(builder_constraints_.begin()),
+                     std::make_move_iterator(builder_constraints_.end()));
+  builder_constraints_.clear();
   for (auto& p : constraints) {
     auto c = create(p, [&] { return registry_.create_constraint(*p.record, p.params, ctx); });
     if (!c) continue;
     try {
-      assembly.add_constraint(std::move(c), label(p));
+      assembly.add_constraint(std::move(c), label(p), p.compliance);
     } catch (const Error& e) {  // a pattern naming a particle the scene does not have
       error(p.node, p.path, fmt::format("{}: {}", p.path, e.what()));
       continue;
@@ -722,6 +795,16 @@ void Loader::create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
     scene.solver_label = label(p);
     scene.solver_params = p.params;
     scene.libraries[label(p)] = p.record->library;
+  }
+  if (scene.solver) assembly.enable_constraint_force(!enforces_constraints(*scene.solver));
+  if (scene.solver && !honours_compliance(*scene.solver)) {
+    for (const auto& p : constraints) {
+      if (p.compliance > 0.0) {
+        error(p.node["compliance"], p.path + ".compliance",
+              fmt::format("{}.compliance: {} {}", p.path, p.compliance,
+                          compliance_conflict(scene.solver_name)));
+      }
+    }
   }
   for (const auto& [p, force] : created) {
     const std::string why = scene.solver ? fixed_step_conflict(*force, p->record->descriptor->name,
@@ -771,11 +854,44 @@ void Loader::add_constraint_to(System& sys, PendingPlugin& p, const SceneContext
   auto c = create(p, [&] { return registry_.create_constraint(*p.record, p.params, ctx); });
   if (!c) fail();
   try {
-    SystemAssembly(sys).add_constraint(std::move(c), label);
+    SystemAssembly(sys).add_constraint(std::move(c), label, p.compliance);
   } catch (const Error& e) {
     diags_.push_back({file_, fmt::format("{}: {}", p.path, e.what())});
     fail();
   }
+}
+
+// A solver replacing the scene's (Python's sim.set_solver), checked against
+// the forces and constraints it will step.
+void Loader::replace_solver(Scene& scene, PendingPlugin& p, const SceneContext& ctx,
+                            const std::string& label) {
+  System& sys = *scene.system;
+  const std::string& name = p.record->descriptor->name;
+  auto s = create(p, [&] { return registry_.create_solver(*p.record, p.params, ctx); });
+  if (!s) fail();
+  for (const auto& entry : sys.force_objects()) {
+    const std::string why = fixed_step_conflict(*entry.force, entry.label, *s, name);
+    if (!why.empty()) {
+      diags_.push_back({file_, fmt::format("{}: {}", p.path, why)});
+      fail();
+    }
+  }
+  if (!honours_compliance(*s)) {
+    const auto& rows = sys.evaluate_constraint_rows();
+    if (rows.rows() > 0 && rows.compliance.maxCoeff() > 0.0) {
+      diags_.push_back(
+          {file_, fmt::format("{}: a constraint has a compliance, which '{}' cannot honour "
+                              "(expected a solver that does, e.g. xpbd)",
+                              p.path, name)});
+      fail();
+    }
+  }
+  SystemAssembly(sys).enable_constraint_force(!enforces_constraints(*s));
+  scene.solver = std::move(s);
+  scene.solver_name = name;
+  scene.solver_label = label;
+  scene.solver_params = p.params;
+  scene.libraries[label] = p.record->library;
 }
 
 std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& text) {
@@ -796,8 +912,10 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
   // Index parameters are checked against the system's particles now.
   x_.assign(static_cast<std::size_t>(sys.size()), Vec3::Zero());
   auto params = read_plugin_params(item, path, *rec, {});
-  if (!params) fail();
-  PendingPlugin p{rec, std::move(*params), item, path};
+  const auto compliance =
+      kind == PluginKind::Constraint ? read_compliance(item, path) : std::optional<double>(0.0);
+  if (!params || !compliance) fail();
+  PendingPlugin p{rec, std::move(*params), item, path, *compliance};
   const SceneContext ctx{sys.view(), &scene.groups};
   const std::string name = rec->descriptor->name;
   const std::string label = fmt::format("{} ({})", name, file_);
@@ -823,25 +941,16 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
       break;
     }
     case PluginKind::Constraint:
+      if (p.compliance > 0.0 && scene.solver && !honours_compliance(*scene.solver)) {
+        diags_.push_back({file_, fmt::format("{}.compliance: {} {}", path, p.compliance,
+                                             compliance_conflict(scene.solver_name))});
+        fail();
+      }
       add_constraint_to(sys, p, ctx, label);
       break;
-    case PluginKind::Solver: {
-      auto s = create(p, [&] { return registry_.create_solver(*rec, p.params, ctx); });
-      if (!s) fail();
-      for (const auto& entry : sys.force_objects()) {
-        const std::string why = fixed_step_conflict(*entry.force, entry.label, *s, name);
-        if (!why.empty()) {
-          diags_.push_back({file_, fmt::format("{}: {}", path, why)});
-          fail();
-        }
-      }
-      scene.solver = std::move(s);
-      scene.solver_name = name;
-      scene.solver_label = label;
-      scene.solver_params = p.params;
-      scene.libraries[label] = rec->library;
+    case PluginKind::Solver:
+      replace_solver(scene, p, ctx, label);
       return label;
-    }
     case PluginKind::Writer:  // writers belong to a scene's output list, not to its system
       diags_.push_back({file_, fmt::format("{}: '{}' is a writer (expected a force, collider, "
                                            "constraint or solver)",

@@ -142,6 +142,15 @@ std::vector<BuilderSpec> builder_specs() {
          "pairs",
          {"structural", "shear", "bend"},
          {}},
+        {"rods",
+         "rods (distance constraints) in Provot's families, and `bending` constraints on every "
+         "interior edge: constraint plugin parameters and `compliance`",
+         "distance",
+         "pairs",
+         {"structural", "shear", "bend"},
+         {},
+         PluginKind::Constraint,
+         {{{"bending", "bending", "quads"}}}},
         {"bending",
          "bending stiffness on every interior edge of the triangulated sheet: `dihedral` plugin "
          "parameters",

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <utility>
 
+#include "pdyn/constraint_solver.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/kernel/plugin_call.hpp"
@@ -109,6 +110,11 @@ void begin_step(System& sys, double h) {
 // would otherwise pay in its first step.
 Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
     : sys_(sys), solver_(solver), label_(&solver_label) {
+  // A solver that projects onto the constraints itself (RATTLE, XPBD) must
+  // not see Witkin's constraint force in its force evaluations as well.
+  const auto* projecting = dynamic_cast<const ConstraintSolver*>(&solver);
+  SystemAssembly(sys).enable_constraint_force(projecting == nullptr ||
+                                              !projecting->enforces_constraints());
   previous_.setZero(sys.dimension());
   next_.setZero(sys.dimension());
 }

@@ -9,7 +9,8 @@
 
 namespace pdyn {
 
-void ConstraintForce::add(const Constraint& c, const std::string& label, Index n) {
+void ConstraintForce::add(const Constraint& c, const std::string& label, Index n,
+                          double compliance) {
   const ConstraintPattern pat = c.pattern();
   const Index rows = pat.rows();
   const Index entries = pat.entries();
@@ -46,7 +47,8 @@ void ConstraintForce::add(const Constraint& c, const std::string& label, Index n
   b.values.jacobian = Matrix3X::Zero(3, entries);
   blocks_.push_back(std::move(b));
   for (Index r = 0; r < rows; ++r)
-    row_begin_.push_back(row_begin_.back() + pat.row_begin[r + 1] - pat.row_begin[r]);
+    rows_.row_begin.push_back(rows_.row_begin.back() + pat.row_begin[r + 1] - pat.row_begin[r]);
+  rows_.particle.insert(rows_.particle.end(), pat.particle.begin(), pat.particle.end());
   for (const Index k : pat.particle) {
     if (static_cast<Index>(slot_of_.size()) <= k)
       slot_of_.resize(static_cast<std::size_t>(k) + 1, -1);
@@ -58,10 +60,16 @@ void ConstraintForce::add(const Constraint& c, const std::string& label, Index n
     max_particle_ = std::max(max_particle_, k);
   }
   const Index m = this->rows() + rows;
-  value_.resize(m);
-  rate_.resize(m);
-  bias_.resize(m);
-  jac_.resize(3, static_cast<Index>(slot_.size()));
+  rows_.value.conservativeResize(m);
+  rows_.rate.conservativeResize(m);
+  rows_.bias.conservativeResize(m);
+  rows_.compliance.conservativeResize(m);
+  rows_.value.tail(rows).setZero();
+  rows_.rate.tail(rows).setZero();
+  rows_.bias.tail(rows).setZero();
+  rows_.compliance.tail(rows).setConstant(compliance);
+  rows_.jacobian.conservativeResize(3, static_cast<Index>(slot_.size()));
+  rows_.jacobian.rightCols(entries).setZero();
 }
 
 ConstraintValues& ConstraintForce::prepare(std::size_t k) {
@@ -98,15 +106,15 @@ std::string ConstraintForce::gather(std::size_t k) {
     return fmt::format("produced a non-finite Jacobian entry {}: [{}, {}, {}]", e, v.jacobian(0, e),
                        v.jacobian(1, e), v.jacobian(2, e));
   }
-  value_.segment(b.first_row, rows) = v.value;
-  rate_.segment(b.first_row, rows) = v.rate;
-  bias_.segment(b.first_row, rows) = v.bias;
-  jac_.middleCols(b.first_entry, entries) = v.jacobian;
+  rows_.value.segment(b.first_row, rows) = v.value;
+  rows_.rate.segment(b.first_row, rows) = v.rate;
+  rows_.bias.segment(b.first_row, rows) = v.bias;
+  rows_.jacobian.middleCols(b.first_entry, entries) = v.jacobian;
   return {};
 }
 
 double ConstraintForce::max_error() const {
-  return rows() == 0 ? 0.0 : value_.cwiseAbs().maxCoeff();
+  return rows() == 0 ? 0.0 : rows_.value.cwiseAbs().maxCoeff();
 }
 
 // out = J W J^T lambda, through u = W J^T lambda on the involved particles.
@@ -114,14 +122,14 @@ void ConstraintForce::apply(const Eigen::VectorXd& lambda, Eigen::VectorXd& out)
   const Index m = rows();
   u_.setZero();
   for (Index r = 0; r < m; ++r) {
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e)
-      u_.col(slot_[e]) += jac_.col(e) * lambda(r);
+    for (Index e = rows_.row_begin[r]; e < rows_.row_begin[r + 1]; ++e)
+      u_.col(slot_[e]) += rows_.jacobian.col(e) * lambda(r);
   }
   for (Index s = 0; s < u_.cols(); ++s) u_.col(s) *= w_slot_(s);
   for (Index r = 0; r < m; ++r) {
     double y = 0.0;
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e)
-      y += jac_.col(e).dot(u_.col(slot_[e]));
+    for (Index e = rows_.row_begin[r]; e < rows_.row_begin[r + 1]; ++e)
+      y += rows_.jacobian.col(e).dot(u_.col(slot_[e]));
     out(r) = diag_(r) > 0.0 ? y : 0.0;
   }
 }
@@ -149,18 +157,18 @@ void ConstraintForce::add_force(const ParticleView& p, const Eigen::VectorXd& w,
   double scale2 = 0.0;  // the size of the terms that cancel in rhs, for the stopping test
   for (Index r = 0; r < m; ++r) {
     double d = 0.0, jwf = 0.0, jv = 0.0;
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
+    for (Index e = rows_.row_begin[r]; e < rows_.row_begin[r + 1]; ++e) {
       const Index s = slot_[e];
-      const auto j = jac_.col(e);
+      const auto j = rows_.jacobian.col(e);
       d += w_slot_(s) * j.squaredNorm();
       jwf += w_slot_(s) * j.dot(f.col(involved_[s]));
       jv += j.dot(p.v.col(involved_[s]));
     }
-    const double cdot = jv + rate_(r);
+    const double cdot = jv + rows_.rate(r);
     diag_(r) = d;
-    rhs_(r) = d > 0.0 ? -bias_(r) - jwf - fb.ks * value_(r) - fb.kd * cdot : 0.0;
-    const double size =
-        std::abs(bias_(r)) + std::abs(jwf) + std::abs(fb.ks * value_(r)) + std::abs(fb.kd * cdot);
+    rhs_(r) = d > 0.0 ? -rows_.bias(r) - jwf - fb.ks * rows_.value(r) - fb.kd * cdot : 0.0;
+    const double size = std::abs(rows_.bias(r)) + std::abs(jwf) + std::abs(fb.ks * rows_.value(r)) +
+                        std::abs(fb.kd * cdot);
     if (d > 0.0) scale2 += size * size;
   }
   lambda_ = Eigen::VectorXd::Zero(m);
@@ -196,8 +204,8 @@ void ConstraintForce::add_force(const ParticleView& p, const Eigen::VectorXd& w,
     }
   }
   for (Index r = 0; r < m; ++r) {
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
-      f.col(involved_[slot_[e]]) += jac_.col(e) * lambda_(r);
+    for (Index e = rows_.row_begin[r]; e < rows_.row_begin[r + 1]; ++e) {
+      f.col(involved_[slot_[e]]) += rows_.jacobian.col(e) * lambda_(r);
     }
   }
 }

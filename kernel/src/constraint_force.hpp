@@ -15,10 +15,13 @@ namespace pdyn {
 
 class ConstraintForce {
  public:
-  /// Adds one object's rows; throws Error naming `label` if its pattern is
-  /// malformed or names a particle outside 0 .. n-1.
-  void add(const Constraint& c, const std::string& label, Index n);
-  Index rows() const noexcept { return static_cast<Index>(value_.size()); }
+  /// Adds one object's rows, each with `compliance` (>= 0); throws Error
+  /// naming `label` if its pattern is malformed or names a particle outside
+  /// 0 .. n-1.
+  void add(const Constraint& c, const std::string& label, Index n, double compliance);
+  Index rows() const noexcept { return rows_.rows(); }
+  /// The gathered rows as of the last gather().
+  const ConstraintRows& gathered() const noexcept { return rows_; }
   /// The largest particle index any row names (-1 without rows).
   Index max_particle() const noexcept { return max_particle_; }
 
@@ -48,13 +51,11 @@ class ConstraintForce {
     ConstraintValues values;
   };
   std::vector<Block> blocks_;
-  std::vector<Index> row_begin_{0};  // gathered pattern (rows + 1)
-  std::vector<Index> slot_;          // per entry: the involved particle's slot
-  std::vector<Index> involved_;      // per slot: the particle
-  std::vector<Index> slot_of_;       // per particle seen so far: its slot, or -1
+  ConstraintRows rows_;          // gathered pattern and values
+  std::vector<Index> slot_;      // per entry: the involved particle's slot
+  std::vector<Index> involved_;  // per slot: the particle
+  std::vector<Index> slot_of_;   // per particle seen so far: its slot, or -1
   Index max_particle_ = -1;
-  Eigen::VectorXd value_, rate_, bias_;
-  Matrix3X jac_;  // 3 x entries
   // CG work space, kept to avoid allocating per evaluation.
   Eigen::VectorXd w_slot_, diag_, rhs_, lambda_, r_, z_, d_, q_;
   Matrix3X u_;  // 3 x involved: W J^T lambda

@@ -247,9 +247,17 @@ void check_finite(const Matrix3X& f, const std::string& label) {
 }  // namespace
 
 void System::add_constraint(std::shared_ptr<Constraint> constraint, std::string label) {
+  add_constraint(std::move(constraint), std::move(label), 0.0);
+}
+
+void System::add_constraint(std::shared_ptr<Constraint> constraint, std::string label,
+                            double compliance) {
   if (!constraint) throw Error(fmt::format("{}: no constraint object", label));
+  if (!(compliance >= 0.0) || !std::isfinite(compliance)) {
+    throw Error(fmt::format("{}: compliance {} (expected a finite value >= 0)", label, compliance));
+  }
   if (!constraint_force_) constraint_force_ = std::make_shared<ConstraintForce>();
-  constraint_force_->add(*constraint, label, size());
+  constraint_force_->add(*constraint, label, size(), compliance);
   constraints_.push_back({std::move(constraint), std::move(label)});
   touch();
 }
@@ -273,6 +281,13 @@ double System::constraint_error() const {
   if (!constraint_force_ || constraint_force_->rows() == 0) return 0.0;
   evaluate_constraints();
   return constraint_force_->max_error();
+}
+
+const ConstraintRows& System::evaluate_constraint_rows() const {
+  static const ConstraintRows none;
+  if (!constraint_force_) return none;
+  if (constraint_force_->rows() > 0) evaluate_constraints();
+  return constraint_force_->gathered();
 }
 
 // Each object writes its rows; a throw, a resized output or a non-finite

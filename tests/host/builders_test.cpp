@@ -296,7 +296,7 @@ TEST(Builders, RefuseBadKeysWithLocatedMessages) {
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, spring: { ks: 1 } }\n",
        "test.yaml:3:61: unknown key 'spring' in particles[0].chain (did you mean 'springs'? "
        "expected one of: from, to, n, mass, velocity, name, pin, particle_radius, particle_type, "
-       "springs, bend)"},
+       "springs, rods, bend)"},
       {"  - chain: { from: [0, 0, 0], to: [1, 0, 0], n: 3, mass: 1, pin: [3] }\n",
        "test.yaml:3:67: particles[0].chain.pin[0]: 3 is outside the chain of 3 particles "
        "(expected -3..2)"},

@@ -86,7 +86,7 @@ TEST(ParticleProperties, BadValuesAreReportedAtTheirValue) {
        "type: 1 }\n",
        "test.yaml:3:83: unknown key 'type' in particles[0].grid (did you mean 'particle_type'? "
        "expected one of: origin, u, v, nx, ny, mass, velocity, name, pin, particle_radius, "
-       "particle_type, springs, bending)"},
+       "particle_type, springs, rods, bending)"},
   };
   for (const auto& c : cases)
     EXPECT_EQ(test::load_problems(kPropertiesHead + c.particle), c.message) << c.particle;

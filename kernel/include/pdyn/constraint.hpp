@@ -68,6 +68,24 @@ struct ConstraintValues {
   Matrix3X jacobian;      ///< 3 x entries: dC_r/dx_k for entry (r, k), unit/m
 };
 
+/// Every constraint row of a system gathered in the order of its constraint
+/// objects (since 0.9.0): what a solver that enforces the constraints itself
+/// reads (System::evaluate_constraint_rows; RATTLE in plugins/solvers/verlet,
+/// plugins/solvers/xpbd). Entry e of row r, for e in
+/// [row_begin[r], row_begin[r + 1]), is dC_r/dx of particle[e].
+struct ConstraintRows {
+  std::vector<Index> row_begin{0};  ///< rows + 1 offsets
+  std::vector<Index> particle;      ///< per entry: the particle (0 .. N-1)
+  Eigen::VectorXd value;            ///< C_r (the row's unit)
+  Eigen::VectorXd rate;             ///< c_t, unit/s
+  Eigen::VectorXd bias;             ///< b_r, unit/s^2
+  Eigen::VectorXd compliance;       ///< alpha_r: the row's unit per N (0 = rigid); the scene's
+                                    ///< `compliance` of the row's constraint (XPBD)
+  Matrix3X jacobian;                ///< 3 x entries, unit/m
+
+  Index rows() const noexcept { return static_cast<Index>(value.size()); }
+};
+
 class Constraint : public PluginObject {
  public:
   /// The rows and the particles each involves. Called once, when the object

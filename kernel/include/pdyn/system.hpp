@@ -159,6 +159,12 @@ class System {
   /// The largest |C_r| over every row at the current state (0 without
   /// constraints), in each row's own unit: what a run reports as drift.
   double constraint_error() const;
+  /// Since 0.9.0: evaluates every constraint object at the current state and
+  /// time and returns their rows gathered (pdyn/constraint.hpp), for a solver
+  /// that enforces them itself (pdyn/constraint_solver.hpp). The reference
+  /// stays valid, and its values unchanged, until the next evaluation.
+  /// Throws PluginRuntimeError naming the object whose output is wrong.
+  const ConstraintRows& evaluate_constraint_rows() const;
 
  private:
   // ---- assembly and the step's bookkeeping: the host's, not a plugin's ----
@@ -211,6 +217,9 @@ class System {
   /// Adds a constraint object; `label` names it in messages. Throws Error if
   /// its pattern names a particle outside 0 .. N-1 or is malformed.
   void add_constraint(std::shared_ptr<Constraint> constraint, std::string label);
+  /// The same with the rows' compliance (>= 0, the row's unit per N), which
+  /// a solver that honours it reads from ConstraintRows (since 0.9.0).
+  void add_constraint(std::shared_ptr<Constraint> constraint, std::string label, double compliance);
   /// Witkin's feedback terms and CG settings (checked by the host).
   void set_constraint_feedback(const ConstraintFeedback& feedback);
   /// Turns the constraint force on or off (a solver that projects onto the

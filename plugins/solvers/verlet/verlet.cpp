@@ -36,20 +36,37 @@
 //   reused even after a wrap into a periodic box, when the positions and
 //   force objects are those the last step ended with and the time matches
 //   to within rounding.
+// * With constraints in the system (pdyn/constraint.hpp), the step is RATTLE
+//   (rattle.hpp; Andersen 1983): the positions are projected onto C = 0
+//   after the drift and the velocities onto Cdot = 0 after the kick, to
+//   `rattle_tolerance`, and the kernel adds no constraint force
+//   (pdyn/constraint_solver.hpp). `constraints: force` keeps Witkin's
+//   constraint force instead, as every other solver has it.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+#include <pdyn/constraint_solver.hpp>
+#include <pdyn/error.hpp>
 #include <pdyn/force_reuse.hpp>
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 
+#include "rattle.hpp"
+
 namespace {
 
 using pdyn::Index;
 
-class Verlet final : public pdyn::Solver, public pdyn::ForceReuseHolder {
+class Verlet final : public pdyn::Solver,
+                     public pdyn::ForceReuseHolder,
+                     public pdyn::ConstraintSolver {
  public:
-  explicit Verlet(bool promise) : promise_(promise) {}
+  Verlet(bool promise, bool rattle, double tolerance, Index max_iterations)
+      : promise_(promise), rattle_on_(rattle), rattle_(tolerance, max_iterations) {}
+
+  bool enforces_constraints() const noexcept override { return rattle_on_; }
 
   // A checkpoint carries the kept a1 (pdyn/force_reuse.hpp).
   const pdyn::Matrix3X* kept_accelerations(const pdyn::System& sys) const override {
@@ -78,6 +95,8 @@ class Verlet final : public pdyn::Solver, public pdyn::ForceReuseHolder {
     auto v = sys.velocities();
     const Index n = sys.size();
     const pdyn::Matrix3X& a0 = reusable != nullptr ? *reusable : sys.compute_accelerations();
+    const bool rattle = rattle_on_ && sys.constraint_rows() > 0;
+    if (rattle) rattle_.begin(sys);  // J(x0), before the drift moves x
     // Column ranges split over the host's threads; columns are independent,
     // so the result does not depend on the thread count. In chunks of columns
     // that stay in cache between the statements of a pass.
@@ -97,6 +116,7 @@ class Verlet final : public pdyn::Solver, public pdyn::ForceReuseHolder {
       });
     }
     sys.set_time(t0 + h);
+    if (rattle) rattle_.project_positions(sys, h, needs.velocity ? &half_ : nullptr);
 
     const pdyn::Matrix3X& a1 = sys.compute_accelerations();
     if (!needs.velocity) {
@@ -107,6 +127,10 @@ class Verlet final : public pdyn::Solver, public pdyn::ForceReuseHolder {
       pdyn::parallel_chunks(n, kChunk, [&](Index b, Index e) {
         v.middleCols(b, e - b) = half_.middleCols(b, e - b) + (0.5 * h) * a1.middleCols(b, e - b);
       });
+    }
+    if (rattle) {
+      rattle_.project_velocities(sys);
+      rattle_.end(sys);
     }
     if (promise_) {
       // With a collider a0 is always evaluated (still_valid): nothing to keep.
@@ -171,6 +195,8 @@ class Verlet final : public pdyn::Solver, public pdyn::ForceReuseHolder {
   };
 
   bool promise_;
+  bool rattle_on_;
+  pdyn_verlet::Rattle rattle_;
   Promised promised_;
   pdyn::Matrix3X half_;     // v_half for velocity-dependent forces, sized on first use
   pdyn::ForceReuse reuse_;  // the last step's a1, while it may stand in for a0
@@ -185,12 +211,31 @@ pdyn::PluginDescriptor describe() {
       "velocity Verlet: v' = v0 + h/2 a0, x1 = x0 + h v', v1 = v' + h/2 a1; order 2, symplectic";
   d.solver_traits.order = 2;
   d.solver_traits.symplectic = true;
-  d.params = {pdyn::param::boolean(
-      "reuse_forces", false,
-      "promise that the forces depend on positions and time only, for forces that do not say "
-      "(Force::dependence): reuse the last step's a1 as a0 even then")};
+  d.params = {
+      pdyn::param::boolean(
+          "reuse_forces", false,
+          "promise that the forces depend on positions and time only, for forces that do not say "
+          "(Force::dependence): reuse the last step's a1 as a0 even then"),
+      pdyn::param::string("constraints", "rattle",
+                          "how constraints are kept: rattle (positions and velocities projected "
+                          "each step) or force (Witkin's constraint force, as other solvers)"),
+      pdyn::param::real("rattle_tolerance", 1e-12, "",
+                        "RATTLE stops when every |C| is at most this, in each row's unit "
+                        "(m for rods)")
+          .greater_than(0.0),
+      pdyn::param::integer("rattle_max_iterations", 100,
+                           "RATTLE's position iterations before the step fails")
+          .at_least(1)};
   d.create_solver = [](const pdyn::Params& p, const pdyn::SceneContext&) {
-    return std::make_unique<Verlet>(p.boolean("reuse_forces"));
+    const std::string& how = p.string("constraints");
+    if (how != "rattle" && how != "force") {
+      throw pdyn::ParamError("constraints",
+                             fmt::format("'{}' is not a way to keep constraints (expected rattle "
+                                         "or force)",
+                                         how));
+    }
+    return std::make_unique<Verlet>(p.boolean("reuse_forces"), how == "rattle",
+                                    p.real("rattle_tolerance"), p.integer("rattle_max_iterations"));
   };
   return d;
 }

@@ -45,8 +45,9 @@ class SystemAssembly {
   void set_domain(const Domain& domain) const { sys_.set_domain(domain); }
   void set_radii(std::vector<double> radius) const { sys_.set_radii(std::move(radius)); }
   void set_types(std::vector<std::int32_t> type) const { sys_.set_types(std::move(type)); }
-  void add_constraint(std::shared_ptr<Constraint> constraint, std::string label) const {
-    sys_.add_constraint(std::move(constraint), std::move(label));
+  void add_constraint(std::shared_ptr<Constraint> constraint, std::string label,
+                      double compliance = 0.0) const {
+    sys_.add_constraint(std::move(constraint), std::move(label), compliance);
   }
   void set_constraint_feedback(const ConstraintFeedback& feedback) const {
     sys_.set_constraint_feedback(feedback);

@@ -4,10 +4,12 @@
 // cannot drift from what the loader accepts.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
 #include "pdyn/params.hpp"
+#include "pdyn/plugin.hpp"
 
 namespace pdyn {
 
@@ -42,6 +44,11 @@ struct BuilderNested {
   std::string generated;              ///< the plugin's key the builder fills ("pairs")
   std::vector<std::string> families;  ///< non-empty: { family: { plugin params }, ... }
   std::vector<ParamSpec> specs;       ///< the keys, when `plugin` is empty
+  /// Constraint: `plugin` is a constraint plugin, whose entries also take
+  /// the host's `compliance` (a builder's rods).
+  PluginKind kind = PluginKind::Force;
+  /// Families whose plugin differs from `plugin`: { family, plugin, generated }.
+  std::vector<std::array<std::string, 3>> other_families = {};
 };
 
 /// A particle builder: a `particles:` entry `{ KEY: { ... } }`.
