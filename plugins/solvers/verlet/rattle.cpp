@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <pdyn/error.hpp>
 
 namespace pdyn_verlet {
@@ -106,6 +107,8 @@ void Rattle::project_positions(pdyn::System& sys, double h, pdyn::Matrix3X* half
   auto v = sys.velocities();
   const double v_factor = (half != nullptr ? 2.0 : 1.0) / h;
   const Index m = sys.constraint_rows();
+  double previous = std::numeric_limits<double>::infinity();
+  bool newton = false;
   for (Index it = 0;; ++it) {
     const pdyn::ConstraintRows& rows = sys.evaluate_constraint_rows();
     const double error = largest_active(rows.value);
@@ -123,7 +126,14 @@ void Rattle::project_positions(pdyn::System& sys, double h, pdyn::Matrix3X* half
     }
     rhs_.resize(m);
     for (Index r = 0; r < m; ++r) rhs_(r) = active_[r] != 0 ? rows.value(r) : 0.0;
-    mu_ = ldlt_.solve(rhs_);
+    newton = newton || error > 0.25 * previous;
+    previous = error;
+    if (newton) {
+      factorise_newton(sys, rows);
+      mu_ = lu_.solve(rhs_);
+    } else {
+      mu_ = ldlt_.solve(rhs_);
+    }
     if (!mu_.allFinite()) {
       throw pdyn::Error(
           "verlet (RATTLE): the position stage produced a non-finite multiplier (expected "
@@ -142,6 +152,32 @@ void Rattle::project_positions(pdyn::System& sys, double h, pdyn::Matrix3X* half
         if (half != nullptr) half->col(k) += d / h;
       }
     }
+  }
+}
+
+void Rattle::factorise_newton(const pdyn::System& sys, const pdyn::ConstraintRows& rows) {
+  // Same pattern as J W J^T: the pairs of entries on one particle, row r's
+  // gradient now against row s's at the step's start.
+  if (newton_.rows() == 0) newton_ = a_;
+  double* values = newton_.valuePtr();
+  std::fill(values, values + newton_.nonZeros(), 0.0);
+  for (std::size_t k = 0; k < pair_slot_.size(); ++k) {
+    const Index e = pair_first_[k];
+    values[pair_slot_[k]] +=
+        inverse_mass(sys, particle_[e]) * rows.jacobian.col(e).dot(jacobian_.col(pair_second_[k]));
+  }
+  for (Index r = 0; r < rows.rows(); ++r) {
+    if (active_[r] == 0) values[diagonal_slot_[r]] = 1.0;
+  }
+  if (!lu_analysed_) {
+    lu_.analyzePattern(newton_);
+    lu_analysed_ = true;
+  }
+  lu_.factorize(newton_);
+  if (lu_.info() != Eigen::Success) {
+    throw pdyn::Error(
+        "verlet (RATTLE): J(x) W J0^T could not be factorised (expected independent "
+        "constraints: are two constraints redundant or in conflict?)");
   }
 }
 

@@ -16,13 +16,17 @@
 //   (J0 W J0^T) dmu = C(x),  x <- x - W J0^T dmu,
 // with J0 W J0^T factorised once per step (sparse LDL^T; its symbolic
 // analysis once per run). Its convergence factor is about |J(x) - J0| / |J0|
-// = O(h |v| / L), so a few iterations reach 1e-12. The velocity stage is
-// linear: one solve with J1 W J1^T.
+// = O(h |v| / L) times the condition of J0 W J0^T, so a few iterations reach
+// 1e-12 on a chain; where that condition is large (a cloth hanging in
+// straight lines of rods) and an iteration gains less than a factor 4, the
+// iteration switches to Newton's steps, (J(x) W J0^T) dmu = C(x), by sparse
+// LU. The velocity stage is linear: one solve with J1 W J1^T.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
 #include <cstdint>
 #include <pdyn/constraint.hpp>
 #include <pdyn/system.hpp>
@@ -67,6 +71,8 @@ class Rattle {
   // Copies J and c_t of the rows just evaluated, assembles J W J^T over
   // them and factorises it.
   void factorise(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
+  // Newton's matrix J(x) W J0^T at the rows just evaluated, factorised.
+  void factorise_newton(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
   // Rows whose particles are all fixed can act on nothing: they are left
   // out of the solves (identity rows) and out of the convergence test.
   double largest_active(const Eigen::VectorXd& c) const;
@@ -88,6 +94,11 @@ class Rattle {
   Eigen::SparseMatrix<double> a_;     // J W J^T
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analysed_ = false;
+  // Newton's steps, when the simplified ones converge slowly (an
+  // ill-conditioned J W J^T: a cloth's straight lines of rods).
+  Eigen::SparseMatrix<double> newton_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
+  bool lu_analysed_ = false;
   Eigen::VectorXd rhs_, mu_;
 };
 
