@@ -1,10 +1,11 @@
-// `pdyn new force|solver|collider|pair|bonded|writer NAME [DIR]`: writes a ready out-of-tree
-// plugin project (CMakeLists.txt, NAME.cpp, README.md, scene.yaml) that
-// builds against the installed SDK and passes `pdyn check` as generated.
+// `pdyn new force|solver|collider|pair|bonded|writer|constraint NAME [DIR]`: writes a ready
+// out-of-tree plugin project (CMakeLists.txt, NAME.cpp, test_NAME.cpp, README.md, scene.yaml)
+// that builds against the installed SDK and passes `pdyn check` as generated.
 //   exit 0: written; 2: bad name, kind or folder; 1: a file could not be written.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -118,14 +119,21 @@ bool folder_is_free(const fs::path& target, std::ostream& err) {
 }
 
 // The project's files for `kind`: (path relative to the project, template).
+// A kind's own file replaces the common one of the same path (a constraint's
+// test_NAME.cpp adds a physics test to the conformance run every kind has).
 std::vector<std::pair<std::string, std::string_view>> project_files(const NewArgs& a) {
   std::vector<std::pair<std::string, std::string_view>> files;  // (relative path, template)
   for (const auto& t : template_files()) {
     const auto slash = t.path.find('/');
     const std::string_view group = t.path.substr(0, slash);
-    if (group == "common" || group == a.kind) {
-      files.emplace_back(replace_all(std::string(t.path.substr(slash + 1)), "@NAME@", a.name),
-                         t.text);
+    if (group != "common" && group != a.kind) continue;
+    std::string path = replace_all(std::string(t.path.substr(slash + 1)), "@NAME@", a.name);
+    const auto same =
+        std::find_if(files.begin(), files.end(), [&](const auto& f) { return f.first == path; });
+    if (same == files.end()) {
+      files.emplace_back(std::move(path), t.text);
+    } else if (group != "common") {
+      same->second = t.text;
     }
   }
   return files;
@@ -134,12 +142,14 @@ std::vector<std::pair<std::string, std::string_view>> project_files(const NewArg
 // Where the plugin author's guide is: installed beside this program
 // (PREFIX/bin/pdyn -> PREFIX/share/doc/pdyn), else in the sources. A pair
 // force's author reads pairs.md (the law, PairForce), a bonded force's
-// bonded.md (BondedForce, Harmonic), the others plugins.md.
+// bonded.md (BondedForce, Harmonic), a constraint's constraints.md (C, J,
+// c_t and the bias b), the others plugins.md.
 std::string guide_for(const std::string& kind) {
   std::error_code ec;
-  const std::string page = kind == "pair"     ? "pairs.md"
-                           : kind == "bonded" ? "bonded.md"
-                                              : "plugins.md";
+  const std::string page = kind == "pair"         ? "pairs.md"
+                           : kind == "bonded"     ? "bonded.md"
+                           : kind == "constraint" ? "constraints.md"
+                                                  : "plugins.md";
   std::string guide = "docs/" + page + " in the pdyn sources";
   {
     const fs::path program = fs::read_symlink("/proc/self/exe", ec);
@@ -211,9 +221,11 @@ SdkCommand add_new_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "new", "write a new plugin project (CMake, source, README, scene, conformance test)");
   sub->add_option("kind", a->kind,
-                  "force, solver, collider, pair (a pair force), bonded (a bonded force) or writer")
+                  "force, solver, collider, pair (a pair force), bonded (a bonded force), writer "
+                  "or constraint")
       ->required()
-      ->check(CLI::IsMember({"force", "solver", "collider", "pair", "bonded", "writer"}));
+      ->check(
+          CLI::IsMember({"force", "solver", "collider", "pair", "bonded", "writer", "constraint"}));
   sub->add_option("name", a->name, "the plugin's name, [a-z0-9_]+")->required();
   sub->add_option("dir", a->dir, "folder to create (default: ./NAME); must be new or empty");
   add_plugin_path_option(sub, a->plugin_path,

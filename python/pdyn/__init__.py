@@ -1,6 +1,6 @@
 """pdyn from Python: load a scene, step it, read and write its state as
-NumPy arrays, add forces (written in C++ plugins or in Python), sweep
-parameters over a process pool or a dask cluster.
+NumPy arrays, add forces (written in C++ plugins or in Python) and
+constraints, sweep parameters over a process pool or a dask cluster.
 
     import pdyn
     sim = pdyn.load("configs/hanging_cloth.yaml", set={"simulation.duration": 0.06})
@@ -66,7 +66,7 @@ def _yaml(value):
 
 
 def _item(type_name, params):
-    """One `forces:`/`colliders:` item: a line per key, so that a message
+    """One `forces:`/`colliders:`/`constraints:` item: a line per key, so that a message
     names the key."""
     if not isinstance(type_name, str):
         raise TypeError(f"{type_name!r}: expected a plugin name (str)")
@@ -222,7 +222,7 @@ class Simulation:
                 break
         return taken
 
-    # ---- forces, colliders, solver ----
+    # ---- forces, colliders, constraints, solver ----
     def add_force(self, force, /, **params):
         """Adds a force: a plugin by name with its parameters as keywords,
         checked as in a scene (add_force("spring", ks=100, kd=0.1,
@@ -239,18 +239,41 @@ class Simulation:
         return self._core._add_plugin(_pdyn._Kind.collider, _item(collider, params),
                                       "add_collider")
 
+    def add_constraint(self, constraint, /, **params):
+        """Adds a hard constraint: a constraint plugin by name with its
+        parameters as keywords, checked as in a scene's `constraints:` list
+        (add_constraint("distance", pairs=[[0, 1]]): a rod whose length is
+        the current distance). Geometry a scene may leave out is taken from
+        the current positions. Held by Witkin's constraint force from the
+        next step on (docs/constraints.md). Returns the label that names it
+        (sim.constraints); a constraint cannot be removed."""
+        return self._core._add_plugin(_pdyn._Kind.constraint, _item(constraint, params),
+                                      "add_constraint")
+
     def set_solver(self, solver, /, **params):
         """Replaces the solver (set_solver("verlet")); the step times restart now."""
         return self._core._add_plugin(_pdyn._Kind.solver, _item(solver, params), "set_solver")
 
     def remove(self, label):
-        """Removes the force or collider with that label."""
+        """Removes the force or collider with that label (a constraint cannot be
+        removed: KeyError, saying so)."""
         self._core.remove(label)
 
     @property
     def forces(self):
         """labels of the force and collider objects, in evaluation order"""
         return self._core._labels()
+
+    @property
+    def constraints(self):
+        """labels of the constraint objects, in the order they were added"""
+        return self._core._constraint_labels()
+
+    def constraint_error(self):
+        """The largest |C| over every constraint row at the current state, in
+        each row's unit (m for a rod): the drift a run reports; 0 without
+        constraints."""
+        return self._core.constraint_error()
 
     def evaluate_forces(self):
         """Evaluates the forces at the current state (then read sim.f)."""

@@ -211,6 +211,16 @@ class PySimulation {
         return;
       }
     }
+    // The kernel cannot take a constraint out of a system (its rows size the
+    // constraint force's matrices): say so rather than "no such label".
+    for (const auto& c : sys().constraint_objects()) {
+      if (c.label == label) {
+        throw py::key_error(
+            fmt::format("'{}' is a constraint, which cannot be removed (expected the label of a "
+                        "force or collider: {})",
+                        label, fmt::join(labels(), ", ")));
+      }
+    }
     throw py::key_error(fmt::format("no force or collider is labelled '{}' (expected one of: {})",
                                     label, fmt::join(labels(), ", ")));
   }
@@ -219,6 +229,18 @@ class PySimulation {
     for (const auto& f : sim_.system().force_objects()) out.push_back(f.label);
     for (const auto& c : sim_.system().collider_objects()) out.push_back(c.label);
     return out;
+  }
+  std::vector<std::string> constraint_labels() const {
+    std::vector<std::string> out;
+    for (const auto& c : sim_.system().constraint_objects()) out.push_back(c.label);
+    return out;
+  }
+  // The largest |C| over every row at the current state (System::
+  // constraint_error); evaluating the constraints calls plugin code, so
+  // without the GIL, as a force evaluation.
+  double constraint_error() {
+    py::gil_scoped_release release;
+    return sys().constraint_error();
   }
 
   py::dict energies(double extra_dof) const {
@@ -320,7 +342,8 @@ void bind_simulation(py::module_& m) {
   py::enum_<PluginKind>(m, "_Kind")
       .value("force", PluginKind::Force)
       .value("solver", PluginKind::Solver)
-      .value("collider", PluginKind::Collider);
+      .value("collider", PluginKind::Collider)
+      .value("constraint", PluginKind::Constraint);
   py::class_<PySimulation>(m, "_Simulation")
       .def_property_readonly(
           "x", [](py::object self) { return self.cast<PySimulation&>().positions(self); })
@@ -351,6 +374,8 @@ void bind_simulation(py::module_& m) {
             }
           })
       .def("_labels", &PySimulation::labels)
+      .def("_constraint_labels", &PySimulation::constraint_labels)
+      .def("constraint_error", &PySimulation::constraint_error)
       .def("step", &PySimulation::step, py::arg("n") = 1)
       .def("_run_until", &PySimulation::run_until)
       .def("_run_to_end", &PySimulation::run_to_end)

@@ -39,7 +39,7 @@ TEST(New, TheGuideListsExactlyTheFilesItWrites) {
             std::string::npos)
       << "the guide's count of files does not match its list: " << paragraph;
   const fs::path root = test::temp_dir("new-files");
-  for (const std::string kind : {"force", "solver", "collider", "writer", "pair"}) {
+  for (const std::string kind : {"force", "solver", "collider", "writer", "pair", "constraint"}) {
     SCOPED_TRACE(kind);
     const fs::path dir = root / kind;
     const auto r = test::pdyn({"new", kind, "demo_" + kind, dir.string()});
@@ -53,15 +53,19 @@ TEST(New, TheGuideListsExactlyTheFilesItWrites) {
       written.insert(name);
     }
     EXPECT_EQ(written, listed);
-    // The README points at the guide for its kind: pairs.md for a pair law.
+    // The README points at the guide for its kind: pairs.md for a pair law,
+    // constraints.md for a constraint.
     const std::string readme = read(dir / "README.md");
-    EXPECT_NE(readme.find(kind == "pair" ? "pairs.md" : "plugins.md"), std::string::npos) << readme;
+    const std::string guide_page = kind == "pair"         ? "pairs.md"
+                                   : kind == "constraint" ? "constraints.md"
+                                                          : "plugins.md";
+    EXPECT_NE(readme.find(guide_page), std::string::npos) << readme;
   }
 }
 
 TEST(New, WritesAProjectForEachKind) {
   const fs::path root = test::temp_dir("new-kinds");
-  for (const std::string kind : {"force", "solver", "collider", "writer"}) {
+  for (const std::string kind : {"force", "solver", "collider", "writer", "constraint"}) {
     const std::string name = "my_" + kind;
     const fs::path dir = root / name;
     const auto r = test::pdyn({"new", kind, name, dir.string()});
@@ -86,7 +90,22 @@ TEST(New, WritesAProjectForEachKind) {
       EXPECT_EQ(read(e.path()).find('@'), std::string::npos) << e.path();
     }
   }
-  EXPECT_EQ(entries(root), 4u) << "no temporary folder left behind";
+  EXPECT_EQ(entries(root), 5u) << "no temporary folder left behind";
+}
+
+// A kind's own template replaces the common one of the same path: a
+// constraint project's test_NAME.cpp is the constraint's (the conformance
+// kit and a physics test), written once; a force's is the common one.
+TEST(New, AKindsOwnTestFileReplacesTheCommonOne) {
+  const fs::path root = test::temp_dir("new-override");
+  ASSERT_EQ(test::pdyn({"new", "constraint", "bowl2", (root / "c").string()}).status, 0);
+  ASSERT_EQ(test::pdyn({"new", "force", "tether2", (root / "f").string()}).status, 0);
+  const std::string constraint_test = read(root / "c" / "test_bowl2.cpp");
+  EXPECT_NE(constraint_test.find("TEST(bowl2, PassesTheConformanceKit)"), std::string::npos);
+  EXPECT_NE(constraint_test.find("TEST(bowl2, ConstraintForceKeepsACircularOrbit)"),
+            std::string::npos);
+  EXPECT_EQ(read(root / "f" / "test_tether2.cpp").find("Orbit"), std::string::npos);
+  EXPECT_EQ(entries(root / "c"), 5u);
 }
 
 TEST(New, DefaultFolderIsTheNameAndAnEmptyFolderIsFine) {

@@ -1,5 +1,6 @@
 # `pdyn new` from the outside: the installed pdyn (prefix made by
-# install_sdk.cmake) writes a force, a solver, a collider, a pair, a bonded and a writer project; each is
+# install_sdk.cmake) writes a force, a solver, a collider, a pair, a bonded, a writer and a
+# constraint project; each is
 # configured and built against the prefix, runs its scene with the installed
 # pdyn, passes its own CTest tests (the conformance kit and the scene) and
 # `pdyn check`. Refusals are checked first: they are fast.
@@ -25,7 +26,7 @@ foreach(leftover bad gravity thing)
   endif()
 endforeach()
 
-foreach(kind force solver collider pair bonded writer)
+foreach(kind force solver collider pair bonded writer constraint)
   set(name "my_${kind}")
   set(project "${WORK}/${name}")
   # The default folder is ./NAME.
@@ -40,13 +41,16 @@ foreach(kind force solver collider pair bonded writer)
     endif()
   endforeach()
   # The README points to the guide installed with pdyn, a file that exists:
-  # pairs.md for a pair law, bonded.md for a bonded term, plugins.md for the other kinds.
+  # pairs.md for a pair law, bonded.md for a bonded term, constraints.md for a
+  # constraint, plugins.md for the other kinds.
   file(READ "${project}/README.md" readme)
   set(guide plugins)
   if(kind STREQUAL "pair")
     set(guide pairs)
   elseif(kind STREQUAL "bonded")
     set(guide bonded)
+  elseif(kind STREQUAL "constraint")
+    set(guide constraints)
   endif()
   # (Two ifs: ${CMAKE_MATCH_1} is expanded before the condition is evaluated.)
   if(NOT readme MATCHES "guide is\n([^\n]*/share/doc/pdyn/${guide}\\.md)\\.")
@@ -96,6 +100,7 @@ foreach(kind force solver collider pair bonded writer)
   endif()
   run("ctest in ${project}" ${CMAKE_CTEST_COMMAND} --test-dir "${project}/build"
       --output-on-failure)
+  set(last_ctest_output "${last_output}")
   # The scaffold's own GoogleTest program ran among them.
   if(NOT last_output MATCHES "${name}.PassesTheConformanceKit")
     message(FATAL_ERROR "ctest in ${project} did not run test_${name}:\n${last_output}")
@@ -118,10 +123,24 @@ foreach(kind force solver collider pair bonded writer)
       endif()
     endforeach()
   endif()
+  if(kind STREQUAL "constraint")  # the constraint checks ran on C, J, c_t and b, none skipped
+    foreach(check constraint.pattern constraint.satisfied_at_creation constraint.jacobian
+                  constraint.rate constraint.bias constraint.deterministic constraint.read_only
+                  constraint.finite_on_degenerate params.bad_rejected)
+      if(NOT last_output MATCHES "${check} +pass")
+        message(FATAL_ERROR "pdyn check ${name}: ${check} did not pass:\n${last_output}")
+      endif()
+    endforeach()
+    # The scaffold's physics test (the constraint force keeps a circular orbit) ran too.
+    if(NOT last_ctest_output MATCHES "${name}.ConstraintForceKeepsACircularOrbit")
+      message(FATAL_ERROR "ctest in ${project} did not run the orbit test:\n${last_ctest_output}")
+    endif()
+  endif()
   # Configured with no build type, as a newcomer does: still optimised.
   if(last_output MATCHES "without optimisation")
     message(FATAL_ERROR "${project}, configured with no build type, was built without "
                         "optimisation:\n${last_output}")
   endif()
 endforeach()
-message(STATUS "pdyn new force, solver, collider, pair and writer: built against ${PREFIX}, ran, passed pdyn check")
+message(STATUS "pdyn new force, solver, collider, pair, bonded, writer and constraint: built against "
+               "${PREFIX}, ran, passed pdyn check")
