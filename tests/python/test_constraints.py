@@ -80,16 +80,16 @@ def test_bad_parameters_are_refused_as_in_a_scene(fall):
     cases = [
         (("distanse",), {},
          "add_constraint #1: constraint.type: unknown constraint type 'distanse' (did you mean "
-         "'distance'? expected one of: distance, on_circle, on_plane, on_sphere, pin)"),
+         "'distance'? expected one of: bending, distance, on_circle, on_plane, on_sphere, pin)"),
         (("gravity",), {},
          "add_constraint #2: constraint.type: 'gravity' is a force plugin, not a constraint "
-         "(expected one of: distance, on_circle, on_plane, on_sphere, pin)"),
+         "(expected one of: bending, distance, on_circle, on_plane, on_sphere, pin)"),
         (("distance",), {"pairs": [[0, 5]]},
          "add_constraint #3: constraint.pairs[0][1]: particle index 5 is out of range "
          "(expected 0..1: the scene has 2 particles)"),
         (("distance",), {"pairs": [[0, 1]], "lenght": 1.0},
          "add_constraint #4: unknown key 'lenght' in constraint (did you mean 'length'? "
-         "expected one of: pairs, length, type)"),
+         "expected one of: pairs, length, type, compliance)"),
         # A factory's refusal (ParamError), located as the loader's own.
         (("on_sphere",), {"ids": [1], "center": [1, 0, 1]},
          "add_constraint #5: constraint.ids[0]: particle 1 is at the sphere's centre (expected "
