@@ -187,6 +187,9 @@ class Loader final : public BuilderHost {
                         std::vector<PendingPlugin>& out);
   /// A constraint item's `compliance` (the host's key, not a plugin
   /// parameter): >= 0, 0 when absent.
+  std::optional<PendingPlugin> builder_plugin(PluginKind kind, const std::string& plugin,
+                                              const YAML::Node& node, const std::string& path,
+                                              const Params& generated);
   void replace_solver(Scene& scene, PendingPlugin& p, const SceneContext& ctx,
                       const std::string& label);
   std::optional<double> read_compliance(const YAML::Node& item, const std::string& path);

@@ -218,49 +218,47 @@ void Loader::add_group(const std::string& name, std::vector<Index> members, cons
   }
 }
 
-void Loader::add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
-                       const Params& generated, const Params& defaults, bool create) {
+// A builder's force or constraint objects (springs, rods): the plugin, and
+// the keys of `node` checked against its parameters less the `generated`
+// lists. Nothing if the plugin is missing or a key is wrong (reported).
+std::optional<PendingPlugin> Loader::builder_plugin(PluginKind kind, const std::string& plugin,
+                                                    const YAML::Node& node, const std::string& path,
+                                                    const Params& generated) {
   registry_.require_healthy(plugin);
-  const PluginRecord* rec = registry_.find(PluginKind::Force, plugin);
+  const PluginRecord* rec = registry_.find(kind, plugin);
   if (!rec) {
     error(node, path,
-          fmt::format("{}: needs the '{}' force plugin, which was not found (expected it on the "
+          fmt::format("{}: needs the '{}' {} plugin, which was not found (expected it on the "
                       "plugin path)",
-                      path, plugin));
-    return;
+                      path, plugin, kind_name(kind)));
+    return std::nullopt;
   }
   std::vector<std::string> names;
   for (const auto& kv : generated.values()) names.push_back(kv.first);
   // A family left out entirely has no keys to check.
   const YAML::Node keys = node.IsDefined() && node.IsMap() ? node : YAML::Node(YAML::NodeType::Map);
   auto params = read_plugin_params(keys, path, *rec, names);
-  if (!params || !create) return;
-  for (const auto& [key, value] : defaults.values()) {
-    if (!keys[key].IsDefined() || keys[key].IsNull()) params->set(key, value);
-  }
+  const auto compliance =
+      kind == PluginKind::Constraint ? read_compliance(keys, path) : std::optional<double>(0.0);
+  if (!params || !compliance) return std::nullopt;
   for (const auto& [key, value] : generated.values()) params->set(key, value);
-  builder_forces_.push_back({rec, std::move(*params), keys, path});
+  return PendingPlugin{rec, std::move(*params), keys, path, *compliance};
+}
+
+void Loader::add_force(const std::string& plugin, const YAML::Node& node, const std::string& path,
+                       const Params& generated, const Params& defaults, bool create) {
+  auto p = builder_plugin(PluginKind::Force, plugin, node, path, generated);
+  if (!p || !create) return;
+  for (const auto& [key, value] : defaults.values()) {
+    if (!p->node[key].IsDefined() || p->node[key].IsNull()) p->params.set(key, value);
+  }
+  builder_forces_.push_back(std::move(*p));
 }
 
 void Loader::add_constraint(const std::string& plugin, const YAML::Node& node,
                             const std::string& path, const Params& generated, bool create) {
-  registry_.require_healthy(plugin);
-  const PluginRecord* rec = registry_.find(PluginKind::Constraint, plugin);
-  if (!rec) {
-    error(node, path,
-          fmt::format("{}: needs the '{}' constraint plugin, which was not found (expected it on "
-                      "the plugin path)",
-                      path, plugin));
-    return;
-  }
-  std::vector<std::string> names;
-  for (const auto& kv : generated.values()) names.push_back(kv.first);
-  const YAML::Node keys = node.IsDefined() && node.IsMap() ? node : YAML::Node(YAML::NodeType::Map);
-  auto params = read_plugin_params(keys, path, *rec, names);
-  const auto compliance = read_compliance(keys, path);
-  if (!params || !compliance || !create) return;
-  for (const auto& [key, value] : generated.values()) params->set(key, value);
-  builder_constraints_.push_back({rec, std::move(*params), keys, path, *compliance});
+  auto p = builder_plugin(PluginKind::Constraint, plugin, node, path, generated);
+  if (p && create) builder_constraints_.push_back(std::move(*p));
 }
 
 const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::string& path,

@@ -32,8 +32,10 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "pdyn/bonded.hpp"
+#include "pdyn/params.hpp"
 
 namespace pdyn {
 
@@ -65,6 +67,18 @@ struct Dihedral {
     q.defined = all_finite(q.gradient[0]) && all_finite(q.gradient[1]) &&
                 all_finite(q.gradient[2]) && all_finite(q.gradient[3]);
     return q;
+  }
+
+  /// The parameters every plugin on hinges takes: `quads` and `rest`.
+  static std::vector<ParamSpec> params() {
+    return {param::required("quads", ParamType::IndexQuads, "",
+                            "particle quadruples [[i, j, k, l], ...]: triangles (i, j, k) and "
+                            "(j, k, l) hinged on the edge j-k"),
+            param::optional("rest", ParamType::RealList, "rad",
+                            "rest angles in [-pi, pi] (pi: flat): one for all quadruples or one "
+                            "per quadruple; default: the initial angles")
+                .at_least(-std::numbers::pi)
+                .at_most(std::numbers::pi)};
   }
 
   /// phi - phi0 folded into (-pi, pi] (rad): the angle's period is 2 pi.

@@ -23,7 +23,6 @@
 #include <Eigen/Core>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <pdyn/dihedral.hpp>
 #include <pdyn/plugin.hpp>
 #include <unsupported/Eigen/AutoDiff>
@@ -109,16 +108,7 @@ pdyn::PluginDescriptor describe() {
   d.description =
       "hinges held at their dihedral angles: C = phi - phi0 for each quadruple [i, j, k, l] about "
       "the edge j-k (position-based cloth's bending)";
-  d.params = {
-      pdyn::param::required("quads", pdyn::ParamType::IndexQuads, "",
-                            "particle quadruples [[i, j, k, l], ...]: triangles (i, j, k) and "
-                            "(j, k, l) hinged on the edge j-k"),
-      pdyn::param::optional("rest", pdyn::ParamType::RealList, "rad",
-                            "rest angles in [-pi, pi] (pi: flat): one for all quadruples or one "
-                            "per quadruple; default: the initial angles")
-          .at_least(-std::numbers::pi)
-          .at_most(std::numbers::pi),
-  };
+  d.params = pdyn::Dihedral::params();
   d.create_constraint = create;
   return d;
 }

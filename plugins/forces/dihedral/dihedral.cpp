@@ -18,7 +18,6 @@
 //
 // The loop, the per-type coefficients, the threads and the Jacobians are
 // pdyn/bonded.hpp's (Harmonic<Dihedral>).
-#include <numbers>
 #include <pdyn/bonded.hpp>
 #include <pdyn/dihedral.hpp>
 #include <pdyn/plugin.hpp>
@@ -39,16 +38,7 @@ pdyn::PluginDescriptor describe() {
   d.description =
       "damped bending spring on the dihedral angle phi of each quadruple [i, j, k, l] about the "
       "edge j-k: U = k/2 (phi - phi0)^2, f = -[k (phi - phi0) + kd dphi/dt] grad phi";
-  d.params = {
-      pdyn::param::required("quads", pdyn::ParamType::IndexQuads, "",
-                            "particle quadruples [[i, j, k, l], ...]: triangles (i, j, k) and "
-                            "(j, k, l) hinged on the edge j-k"),
-      pdyn::param::optional("rest", pdyn::ParamType::RealList, "rad",
-                            "rest angles in [-pi, pi] (pi: flat): one for all quadruples or one "
-                            "per quadruple; default: the initial angles")
-          .at_least(-std::numbers::pi)
-          .at_most(std::numbers::pi),
-  };
+  d.params = pdyn::Dihedral::params();
   // After the terms: types, k, kd (pdyn/bonded.hpp); then rest.
   auto shared = pdyn::harmonic_params("bending stiffness", "N m/rad", "N m s/rad");
   d.params.insert(d.params.begin() + 1, shared.begin(), shared.end());
