@@ -5,10 +5,14 @@
 // moves toward the cursor (read back through /api/state); a nailed particle
 // stays put while the simulation runs; a created particle is attached to
 // the cloth by a new link; pause + step advances exactly one step; Ctrl-C
-// stops the server with status 0. Screenshots go to --artifacts.
+// stops the server with status 0. With --constraint-scene (the double
+// pendulum), a second server: the page draws its two rods as constraint
+// segments and lists the constraint, and a bob dragged with the mouse moves
+// while its rods keep their lengths. Screenshots go to --artifacts.
 //
 //   node tests/viewer/browser_test.mjs --pdyn build/bin/pdyn --chromium /usr/bin/chromium \
-//        --scene configs/hanging_cloth.yaml --artifacts build/artifacts/viewer
+//        --scene configs/hanging_cloth.yaml --artifacts build/artifacts/viewer \
+//        [--constraint-scene configs/double_pendulum.yaml]
 import { spawn } from 'node:child_process';
 import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
 import { createRequire } from 'node:module';
@@ -23,7 +27,7 @@ const { chromium } = require('playwright-core');
 const args = Object.fromEntries(process.argv.slice(2).reduce((acc, a, i, all) =>
   a.startsWith('--') ? [...acc, [a.slice(2), all[i + 1]]] : acc, []));
 for (const key of ['pdyn', 'scene', 'artifacts']) {
-  if (!args[key]) { console.error(`usage: browser_test.mjs --pdyn BIN --scene YAML --artifacts DIR [--chromium BIN]`); process.exit(2); }
+  if (!args[key]) { console.error(`usage: browser_test.mjs --pdyn BIN --scene YAML --artifacts DIR [--chromium BIN] [--constraint-scene YAML]`); process.exit(2); }
 }
 mkdirSync(args.artifacts, { recursive: true });
 
@@ -46,20 +50,31 @@ async function until(what, predicate, timeout = 20000) {
 const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
 
 // ---- the server ----
-const server = spawn(args.pdyn, ['serve', args.scene, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
-const serverExit = new Promise((r) => server.on('exit', (code, signal) => r({ code, signal })));
-const url = await new Promise((resolveUrl, reject) => {
-  let out = '';
-  const timer = setTimeout(() => reject(new Error(`no address from pdyn serve: ${out}`)), 60000);
-  server.stdout.on('data', (d) => {
-    out += d;
-    const m = out.match(/^pdyn serve: (http:\/\/\S+) /m);
-    if (m) { clearTimeout(timer); resolveUrl(m[1]); }
+async function serve(scene) {
+  const child = spawn(args.pdyn, ['serve', scene, '--port', '0'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  const exit = new Promise((r) => child.on('exit', (code, signal) => r({ code, signal })));
+  const address = await new Promise((resolveUrl, reject) => {
+    let out = '';
+    const timer = setTimeout(() => reject(new Error(`no address from pdyn serve: ${out}`)), 60000);
+    child.stdout.on('data', (d) => {
+      out += d;
+      const m = out.match(/^pdyn serve: (http:\/\/\S+) /m);
+      if (m) { clearTimeout(timer); resolveUrl(m[1]); }
+    });
+    child.on('exit', (code) => reject(new Error(`pdyn serve exited with ${code} before listening: ${out}`)));
   });
-  server.on('exit', (code) => reject(new Error(`pdyn serve exited with ${code} before listening: ${out}`)));
-});
-console.log(`server at ${url}`);
-const state = async () => (await fetch(new URL('api/state', url))).json();
+  console.log(`server at ${address} (${scene})`);
+  return { child, exit, url: address };
+}
+// Ctrl-C, and the exit status it gave (null: it had to be killed).
+async function stop({ child, exit }) {
+  child.kill('SIGINT');
+  const status = await Promise.race([exit, sleep(10000).then(() => null)]);
+  if (!status) child.kill('SIGKILL');
+  return status;
+}
+const { child: server, exit: serverExit, url } = await serve(args.scene);
+let state = async () => (await fetch(new URL('api/state', url))).json();
 
 // ---- the browser ----
 const profile = mkdtempSync(join(tmpdir(), 'pdyn-chromium-'));
@@ -76,6 +91,47 @@ page.on('pageerror', (e) => pageErrors.push(`page error: ${e.message}`));
 page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(`console error: ${m.text()}`); });
 const shot = (name) => page.screenshot({ path: join(args.artifacts, name) });
 const hooks = (expr) => page.evaluate(expr);
+
+// The double pendulum (pivot 0, bobs 1 and 2, rods 0-1 of 1 m and 1-2 of
+// 0.7 m) on a server of its own: both rods drawn as constraint segments,
+// the constraint listed, and bob 2 dragged with the mouse for 1 s moves
+// while the rods keep their lengths (Witkin's constraint force resists the
+// mouse spring along them).
+async function constraints() {
+  const second = await serve(args['constraint-scene']);
+  try {
+    state = async () => (await fetch(new URL('api/state', second.url))).json();
+    await page.goto(second.url);
+    await until('the pendulum\'s first frame', () => hooks('window.pdyn.frames > 0 && window.pdyn.status && window.pdyn.scene.constraints'));
+    const segments = await hooks('window.pdyn.constraintSegments');
+    check(segments === 2, `the page draws the pendulum's ${segments} rods as constraint segments`);
+    const listed = await page.locator('#constraints li').allTextContents();
+    check(listed.length === 1 && listed[0].startsWith('distance: 2 rows'), `the panel lists ${JSON.stringify(listed)}`);
+    await page.click('#play');
+    await until('playing', () => hooks('window.pdyn.status.playing'));
+    const from = await hooks('window.pdyn.screenOf(2)');
+    const before = (await state()).particles[2].x;
+    await page.check('input[name=mode][value=drag]');
+    await page.mouse.move(from.x, from.y);
+    await page.mouse.down();
+    await page.mouse.move(from.x, from.y - 120, { steps: 10 });
+    await sleep(1000);
+    await shot('5-constraints-drag.png');
+    const s = await state();
+    await page.mouse.up();
+    const [p0, p1, p2] = s.particles.map((q) => q.x);
+    const rods = [dist(p0, p1), dist(p1, p2)];
+    check(dist(before, p2) > 0.05, `the dragged bob moved ${dist(before, p2).toFixed(3)} m`);
+    check(Math.abs(rods[0] - 1) < 1e-5 && Math.abs(rods[1] - 0.7) < 1e-5,
+          `the rods kept their lengths while dragged: ${rods.map((r) => r.toFixed(7)).join(' m, ')} m (1 m, 0.7 m)`);
+    const error = await hooks('window.pdyn.status.constraint_error');
+    check(typeof error === 'number' && error < 1e-5, `the status reports the constraint error ${error} m`);
+  } finally {
+    await page.goto('about:blank');  // a page left open would log its failed reconnects
+    const exit = await stop(second);
+    check(exit && exit.code === 0, `Ctrl-C stopped the pendulum's server with status ${exit ? exit.code ?? exit.signal : 'none (killed)'}`);
+  }
+}
 
 let summary = '';
 try {
@@ -179,6 +235,8 @@ try {
   await sleep(500);
   check((await state()).step === k0 + 1, `step advanced the paused simulation by exactly one (${k0} -> ${k0 + 1})`);
 
+  if (args['constraint-scene']) await constraints();
+
   check(pageErrors.length === 0, `no page or console errors${pageErrors.length ? ': ' + pageErrors.join('; ') : ''}`);
 } catch (e) {
   check(false, e.stack || String(e));
@@ -186,9 +244,7 @@ try {
 } finally {
   await context.close().catch(() => {});
   rmSync(profile, { recursive: true, force: true });
-  server.kill('SIGINT');
-  const exit = await Promise.race([serverExit, sleep(10000).then(() => null)]);
-  if (!exit) server.kill('SIGKILL');
+  const exit = await stop({ child: server, exit: serverExit });
   check(exit && exit.code === 0, `Ctrl-C stopped the server with status ${exit ? exit.code ?? exit.signal : 'none (killed)'}`);
 }
 if (summary) console.log(summary);

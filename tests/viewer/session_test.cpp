@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <nlohmann/json.hpp>
 
 #include "support/test_support.hpp"
@@ -294,6 +295,116 @@ forces:
   const json status = json::parse(s->status_json());
   ASSERT_TRUE(status["message"].is_string());
   EXPECT_NE(status["message"].get<std::string>().find("became non-finite"), std::string::npos);
+}
+
+std::unique_ptr<Session> session_for_config(const std::string& name) {
+  SessionOptions o;
+  o.scene = test::source_path("configs/" + name);
+  o.plugin_path = {PDYN_PLUGIN_DIR};
+  return std::make_unique<Session>(std::move(o));
+}
+
+// The scene message lists each constraint object with its rows' particles,
+// in the kernel's order: the double pendulum's two rods (pivot-bob 1, bob
+// 1-bob 2) and the bead's two rows on its one particle (in the wire's plane,
+// on the circle). Its status carries max |C|; a scene without constraints
+// has none and a null error.
+TEST(ViewerSession, SceneMessageListsTheConstraintRows) {
+  auto pendulum = session_for_config("double_pendulum.yaml");
+  json scene = json::parse(pendulum->scene_json());
+  ASSERT_EQ(scene["constraints"].size(), 1u);
+  const json& rods = scene["constraints"][0];
+  EXPECT_EQ(rods["type"], "distance");
+  EXPECT_EQ(rods["label"].get<std::string>().rfind("distance (", 0), 0u) << rods["label"];
+  EXPECT_EQ(rods["rows"], json::array({json::array({0, 1}), json::array({1, 2})}));
+  EXPECT_EQ(scene["links"], json::array());  // rods are not springs
+  // Written at the initial state the constraints were made from: C = 0.
+  EXPECT_LT(json::parse(pendulum->status_json())["constraint_error"].get<double>(), 1e-15);
+
+  auto bead = session_for_config("bead_on_wire.yaml");
+  scene = json::parse(bead->scene_json());
+  ASSERT_EQ(scene["constraints"].size(), 1u);
+  EXPECT_EQ(scene["constraints"][0]["type"], "on_circle");
+  EXPECT_EQ(scene["constraints"][0]["rows"], json::array({json::array({0}), json::array({0})}));
+
+  auto free = session_for("no-constraints", kLone);
+  EXPECT_EQ(json::parse(free->scene_json())["constraints"], json::array());
+  EXPECT_TRUE(json::parse(free->status_json())["constraint_error"].is_null());
+}
+
+// Dragging a constrained particle, as the page does: the mouse spring is one
+// more applied force, and Witkin's constraint force resists it along the
+// constrained directions. The bead (configs/bead_on_wire.yaml: 0.1 kg on a
+// vertical circle of radius 1 m about the origin, in the plane y = 0,
+// starting at theta = 120 degrees from the bottom) is grabbed where it is
+// and the cursor moved to T = (-0.5, 0.4, 2), off the wire and 0.4 m out of
+// its plane, beyond the top. On the circle, p = (sin t, 0, -cos t), the
+// bead's energy with the spring (stiffness ks) is
+//   U(t) = m g z + ks |p - T|^2 / 2 = A cos t + B sin t + const,
+//   A = ks Tz - m g,  B = -ks Tx,
+// least at t* = atan2(B, A) + pi: over the top, about 195 degrees. The bead
+// must slide along the wire there and stay on it every step.
+TEST(ViewerSession, DraggingABeadOnAWireMovesItAlongTheWireAndKeepsItOnIt) {
+  auto s = session_for_config("bead_on_wire.yaml");
+  ASSERT_EQ(s->solver_name(), "rk4");
+  const Vec3 start = x(*s, 0);
+  const double theta0 = std::atan2(start.x(), -start.z());
+  ASSERT_NEAR(theta0, 2 * M_PI / 3, 1e-12);
+  s->apply(
+      cmd(json{{"op", "drag"}, {"id", 0}, {"point", {start.x(), start.y(), start.z()}}}.dump()), 1);
+  const Vec3 target(-0.5, 0.4, 2.0);
+  s->apply(cmd(R"({"op":"move","point":[-0.5,0.4,2.0]})"), 1);
+
+  const double m = 0.1, g = 9.81;
+  const double ks = s->default_mouse_spring(0).first;
+  const double expected = std::atan2(-ks * target.x(), ks * target.z() - m * g) + M_PI;
+  ASSERT_NEAR(expected * 180 / M_PI, 194.8, 0.1);  // the set-up is what the comment says
+
+  // The angle unwrapped across the top (atan2 jumps from pi to -pi there).
+  double theta = theta0, max_error = 0.0, max_off_wire = 0.0;
+  const double d0 = (start - target).norm();
+  for (int k = 0; k < 3000; ++k) {  // 3 s; the spring's damping time 2 m / kd is 0.1 s
+    steps(*s, 1);
+    const Vec3 p = x(*s, 0);
+    const double a = std::atan2(p.x(), -p.z());
+    theta += std::remainder(a - theta, 2 * M_PI);
+    max_error = std::max(max_error, s->system().constraint_error());
+    max_off_wire = std::max({max_off_wire, std::abs(p.y()), std::abs(p.norm() - 1.0)});
+    if (k == 99) {
+      // (a) After 0.1 s it is already on its way up toward the cursor,
+      // not falling back to the bottom as it would alone.
+      EXPECT_GT(theta, theta0 + 0.2) << "theta " << theta * 180 / M_PI << " degrees";
+    }
+  }
+  // (a) Along the wire to where the spring's pull balances gravity's.
+  EXPECT_GT(theta, theta0 + M_PI / 3) << "moved " << (theta - theta0) * 180 / M_PI << " degrees";
+  EXPECT_NEAR(theta, expected, 1e-3);
+  // From 2.07 m to 1.13 m of the cursor: the wire comes no nearer than
+  // sqrt((|(Tx, Tz)| - 1)^2 + Ty^2) = 1.1346 m.
+  EXPECT_LT((x(*s, 0) - target).norm(), d0 - 0.9);
+  // (b) And on it every step, against a spring pulling it 0.4 m out of the
+  // wire's plane: the kernel's max |C| and the geometry alike.
+  EXPECT_LT(max_error, 1e-6);
+  EXPECT_LT(max_off_wire, 1e-6);
+  const json status = json::parse(s->status_json());
+  EXPECT_EQ(status["constraint_error"].get<double>(), s->system().constraint_error());
+  std::cout << "bead dragged from " << theta0 * 180 / M_PI << " to " << theta * 180 / M_PI
+            << " degrees (rest at " << expected * 180 / M_PI << "); max |C| " << max_error
+            << " m, max off the wire " << max_off_wire << " m\n";
+
+  // Released, it swings under gravity alone, still on the wire.
+  s->apply(cmd(R"({"op":"release"})"), 1);
+  const double before = theta;
+  for (int k = 0; k < 500; ++k) {
+    steps(*s, 1);
+    const Vec3 p = x(*s, 0);
+    theta += std::remainder(std::atan2(p.x(), -p.z()) - theta, 2 * M_PI);
+    max_error = std::max(max_error, s->system().constraint_error());
+  }
+  // Down the far side, toward the bottom at 360 degrees: from 15 degrees
+  // past the top and at rest, more than 10 degrees in 0.5 s.
+  EXPECT_GT(theta, before + 0.2);
+  EXPECT_LT(max_error, 1e-6);
 }
 
 TEST(ViewerSession, StateJsonListsEveryParticle) {

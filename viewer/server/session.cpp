@@ -90,10 +90,12 @@ void Session::load(bool from_disk) {
         try {
           scene_ = load_scene_text(text_, options_.scene.string(), *registry, options_.overrides);
           obstacles_ = drawables(scene_);
+          constraints_ = constraint_rows(scene_);
         } catch (...) {
           scene_ = Scene{};  // nothing loads: an empty system, no solver, until a reload works
           scene_.system = std::make_unique<System>();
           obstacles_ = {};
+          constraints_ = {};
         }
         registry_ = std::move(registry);
         ++topology_;
@@ -105,9 +107,11 @@ void Session::load(bool from_disk) {
   // The colliders' shapes, asked once per load: a collider whose hook
   // fails refuses the load like a bad scene, and the running one is kept.
   Drawables obstacles = drawables(fresh);
+  std::vector<ConstraintRows> constraints = constraint_rows(fresh);
   drags_.clear();
   scene_ = std::move(fresh);
   obstacles_ = std::move(obstacles);
+  constraints_ = std::move(constraints);
   if (registry) registry_ = std::move(registry);
   text_ = std::move(text);
   library_times_.clear();
@@ -124,6 +128,43 @@ void Session::load(bool from_disk) {
   rate_.clear();
   ++topology_;
   ++version_;
+}
+
+// Each constraint object's rows, for the page to draw. A pattern is fixed for
+// the object's lifetime, so it is asked once per load, as the colliders'
+// shapes are; one that throws, or that no longer names particles the
+// system has (the kernel checked the first answer), refuses the load.
+std::vector<Session::ConstraintRows> Session::constraint_rows(const Scene& scene) {
+  std::vector<ConstraintRows> out;
+  if (!scene.system) return out;
+  const Index n = scene.system->size();
+  for (const auto& entry : scene.system->constraint_objects()) {
+    ConstraintRows c;
+    c.label = entry.label;
+    for (const auto& use : scene.uses) {
+      if (use.kind == PluginKind::Constraint && use.label == entry.label) c.type = use.type;
+    }
+    try {
+      c.pattern = entry.constraint->pattern();
+    } catch (const std::exception& e) {
+      throw PluginRuntimeError(entry.label, fmt::format("pattern() threw: {}", e.what()));
+    } catch (...) {
+      throw PluginRuntimeError(entry.label, "pattern() threw a non-standard exception");
+    }
+    const ConstraintPattern& p = c.pattern;
+    bool ok = !p.row_begin.empty() && p.row_begin.front() == 0 && p.row_begin.back() == p.entries();
+    for (std::size_t r = 1; ok && r < p.row_begin.size(); ++r)
+      ok = p.row_begin[r - 1] <= p.row_begin[r];
+    for (const Index k : p.particle) ok = ok && k >= 0 && k < n;
+    if (!ok) {
+      throw PluginRuntimeError(
+          entry.label, fmt::format("pattern() gave the viewer a malformed pattern, or one naming a "
+                                   "particle outside 0..{} (expected the one it gave the kernel)",
+                                   n - 1));
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
 }
 
 // ---------------------------------------------------------------------------
@@ -494,6 +535,23 @@ std::string Session::scene_json() const {
   json links = json::array();
   for (const auto& l : scene_links(scene_)) links.push_back(json::array({l[0], l[1]}));
   j["links"] = std::move(links);
+  // Each constraint object with its rows' particles: the page draws a row
+  // over two particles as a rod, over one (a pin, a bead) as a ring on it.
+  json constraints = json::array();
+  for (const auto& c : constraints_) {
+    const ConstraintPattern& p = c.pattern;
+    json rows = json::array();
+    for (Index r = 0; r < p.rows(); ++r) {
+      json row = json::array();
+      for (Index e = p.row_begin[static_cast<std::size_t>(r)];
+           e < p.row_begin[static_cast<std::size_t>(r) + 1]; ++e) {
+        row.push_back(p.particle[static_cast<std::size_t>(e)]);
+      }
+      rows.push_back(std::move(row));
+    }
+    constraints.push_back(json{{"type", c.type}, {"label", c.label}, {"rows", std::move(rows)}});
+  }
+  j["constraints"] = std::move(constraints);
   j["planes"] = json::array();
   for (const auto& p : d.planes)
     j["planes"].push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
@@ -557,6 +615,16 @@ std::string Session::status_json() const {
          {"rtf", rtf},
          {"count", scene_.system->size()}};
   j["message"] = message_.empty() ? json(nullptr) : json(message_);
+  // max |C| over every constraint row (each row's unit: m for the shipped
+  // ones), null without constraints. A constraint that throws here has
+  // stopped the stepping too, and `message` says why; the status still goes.
+  j["constraint_error"] = nullptr;
+  if (scene_.system->constraint_rows() > 0) {
+    try {
+      j["constraint_error"] = scene_.system->constraint_error();
+    } catch (const std::exception&) {
+    }
+  }
   return j.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 

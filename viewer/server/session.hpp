@@ -97,6 +97,14 @@ class Session {
     std::shared_ptr<Force> force;
     Index particle = 0;
   };
+  // One constraint object as the page draws it: the `constraints` of the
+  // scene message.
+  struct ConstraintRows {
+    std::string type;   // the plugin's name, the scene's `type:`
+    std::string label;  // "distance (scene.yaml:30:5)", as in messages
+    ConstraintPattern pattern;
+  };
+  static std::vector<ConstraintRows> constraint_rows(const Scene& scene);
 
   void load(bool from_disk);
   void step_locked();
@@ -111,7 +119,8 @@ class Session {
   std::unique_ptr<PluginRegistry> registry_;
   Scene scene_;
   Drawables obstacles_;  // the colliders' shapes, from the last load (links: scene_links)
-  std::string text_;     // the scene file as last loaded: what reset starts from
+  std::vector<ConstraintRows> constraints_;  // the constraints' rows, from the last load
+  std::string text_;  // the scene file as last loaded: what reset starts from
   std::map<std::filesystem::path, std::filesystem::file_time_type> library_times_;
   std::map<int, Drag> drags_;
   bool playing_ = false;

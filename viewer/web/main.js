@@ -8,7 +8,8 @@
 //     second), step, screenOf(id) -> {x, y} page pixels,
 //     worldOf(x, y, id) -> [x, y, z], the point the page would send for a
 //     cursor at page (x, y) on the drag plane through particle id,
-//     lastError }
+//     constraintSegments, constraintRings (what the page draws of the
+//     scene's constraints), lastError }
 import { decodeFrame } from './protocol.js';
 import { EnergyPlot } from './plot.js';
 import { View } from './view.js';
@@ -20,6 +21,8 @@ const hooks = window.pdyn = {
   connected: false, scene: null, status: null, frames: 0, fps: 0, step: 0, lastError: null,
   screenOf: (id) => view.screenOf(id),
   worldOf: (x, y, id) => view.worldAt(x, y, view.position(id)).toArray(),
+  get constraintSegments() { return view.constraintSegments; },
+  get constraintRings() { return view.constraintRings; },
 };
 
 let socket = null;
@@ -70,6 +73,7 @@ function onMessage(msg) {
       solver.replaceChildren(...msg.solvers.map((n) => new Option(n, n)));
     }
     view.setScene(msg, keep, false);
+    listConstraints(msg.constraints ?? []);
     if (first && msg.flat) { $('camera').value = msg.flat; }
     if (first) fitted = false;
   } else if (msg.type === 'status') {
@@ -100,6 +104,20 @@ function onFrame(frame) {
   plot.add(frame.time, frame.kinetic, frame.potential);
 }
 
+/** The panel's list of constraint objects: type, rows, what is drawn. */
+function listConstraints(constraints) {
+  const list = $('constraints');
+  list.replaceChildren(...constraints.map((c) => {
+    const item = document.createElement('li');
+    const over = new Set(c.rows.map((r) => r.length));
+    const drawn = over.size === 1 && over.has(1) ? 'rings' : over.has(1) ? 'rods and rings' : 'rods';
+    item.textContent = `${c.type || 'constraint'}: ${c.rows.length} row${c.rows.length === 1 ? '' : 's'} (${drawn})`;
+    item.title = c.label;
+    return item;
+  }));
+  $('constraints-box').hidden = constraints.length === 0;
+}
+
 function updateStatus() {
   const s = hooks.status;
   if (!s) return;
@@ -108,6 +126,7 @@ function updateStatus() {
     `real-time factor ${s.rtf.toPrecision(3)}\n` +
     `${hooks.fps} frames/s   ${s.count} particles\n` +
     `${s.solver}, dt ${s.dt} s, ${s.playing ? 'playing' : 'paused'}` +
+    (s.constraint_error != null ? `\nconstraint error ${s.constraint_error.toExponential(2)} (max |C|)` : '') +
     (view.bySpeed ? `\nspeed colours: 0 .. ${view.topSpeed?.toPrecision(3)} m/s` : '');
 }
 
@@ -128,6 +147,7 @@ $('dt').onchange = () => {
   else showError(`dt ${$('dt').value} (expected a number of seconds > 0)`);
 };
 $('springs').onchange = () => view.showLinks($('springs').checked);
+$('constraints-shown').onchange = () => view.showConstraintRows($('constraints-shown').checked);
 $('by-speed').onchange = () => { view.bySpeed = $('by-speed').checked; view.recolour(); };
 $('camera').onchange = () => view.setMode($('camera').value);
 window.addEventListener('keydown', (e) => {

@@ -1,6 +1,8 @@
 // The 3-D (and 2-D) picture of the running scene with three.js: particles
 // as points (and those with a radius as spheres of it, one InstancedMesh),
-// links as line segments sharing the points' position buffer, colliders as
+// links as line segments sharing the points' position buffer, hard
+// constraints the same way in a colour of their own (rods as segments, a
+// row over one particle as a ring on it), colliders as
 // translucent shapes, the simulation box as a wire box, an orbit camera or
 // an orthographic one looking along an axis. Scenes are z-up, as in pdyn
 // render's `3d` view.
@@ -11,6 +13,21 @@ const FREE = new THREE.Color(0.12, 0.30, 0.65);
 const FIXED = new THREE.Color(0.80, 0.10, 0.10);
 const PICKED = new THREE.Color(0.95, 0.55, 0.05);
 const PICK_PIXELS = 12; // how near the cursor a particle must be to be picked
+const CONSTRAINT = 0xb0288c; // rods and rings: magenta, apart from springs (grey) and the mouse spring (orange)
+
+/** A ring, white on transparent: the sprite of a particle held by a
+ * constraint row over it alone (a pin, a bead on a wire). */
+function ringTexture() {
+  const canvas = document.createElement('canvas');
+  canvas.width = canvas.height = 64;
+  const g = canvas.getContext('2d');
+  g.strokeStyle = '#fff';
+  g.lineWidth = 9;
+  g.beginPath();
+  g.arc(32, 32, 25, 0, 2 * Math.PI);
+  g.stroke();
+  return new THREE.CanvasTexture(canvas);
+}
 
 // Where a 2-D camera sits relative to its target, and which way is up.
 const AXES = {
@@ -52,6 +69,11 @@ export class View {
     this.fixed = [];
     this.highlight = -1;
     this.showSprings = true;
+    this.showConstraints = true;
+    this.rods = null;   // constraint rows over two or more particles: LineSegments
+    this.rings = null;  // constraint rows over one particle: indexed Points with a ring sprite
+    this.constraintSegments = 0;
+    this.constraintRings = 0;
     this.bySpeed = false;
     this.speeds = new Float32Array(0);
     this.obstacles = new THREE.Group();
@@ -94,7 +116,7 @@ export class View {
   setScene(msg, positions, fit) {
     this.count = msg.count;
     this.fixed = msg.fixed;
-    for (const o of [this.points, this.lines]) if (o) { this.scene.remove(o); o.geometry.dispose(); }
+    for (const o of [this.points, this.lines, this.rods, this.rings]) if (o) { this.scene.remove(o); o.geometry.dispose(); }
     const position = new THREE.BufferAttribute(new Float32Array(3 * msg.count), 3);
     position.setUsage(THREE.DynamicDrawUsage);
     if (positions && positions.length === 3 * msg.count) position.array.set(positions);
@@ -113,6 +135,7 @@ export class View {
     this.lines.frustumCulled = false;
     this.lines.visible = this.showSprings;
     this.scene.add(this.lines, this.points);
+    this.buildConstraints(msg.constraints ?? [], position);
     if (this.spheres) {
       this.scene.remove(this.spheres);
       this.spheres.geometry.dispose();
@@ -134,6 +157,48 @@ export class View {
     if (fit) this.fit();
     this.buildObstacles();
     this.recolour();
+  }
+
+  /** The constraints' rows over the shared position buffer, so that a frame
+   * moves them with no work of their own, however many rows there are: one
+   * LineSegments for every row over two particles (a row over more, the
+   * chain through them), one indexed Points of ring sprites for the
+   * particles a row holds alone (a pin's three rows, a bead's two: one ring). */
+  buildConstraints(constraints, position) {
+    const segments = [], held = new Set();
+    for (const c of constraints) {
+      for (const row of c.rows) {
+        if (row.length === 1) held.add(row[0]);
+        for (let k = 1; k < row.length; ++k) segments.push(row[k - 1], row[k]);
+      }
+    }
+    this.constraintSegments = segments.length / 2;
+    this.constraintRings = held.size;
+    this.rods = this.rings = null;
+    if (segments.length) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', position);
+      g.setIndex(segments);
+      this.rods = new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: CONSTRAINT }));
+      this.rods.frustumCulled = false;
+      this.rods.visible = this.showConstraints;
+      this.scene.add(this.rods);
+    }
+    if (held.size) {
+      const g = new THREE.BufferGeometry();
+      g.setAttribute('position', position);
+      g.setIndex([...held]);
+      this.ringSprite ??= ringTexture();
+      // Drawn over everything: a ring inside a particle's sphere would hide.
+      const material = new THREE.PointsMaterial({ color: CONSTRAINT, size: this.count > 2000 ? 9 : 18,
+                                                  sizeAttenuation: false, map: this.ringSprite,
+                                                  transparent: true, alphaTest: 0.2, depthTest: false });
+      this.rings = new THREE.Points(g, material);
+      this.rings.frustumCulled = false;
+      this.rings.renderOrder = 1;
+      this.rings.visible = this.showConstraints;
+      this.scene.add(this.rings);
+    }
   }
 
   /** Each sphere at its particle's position, scaled by its radius (0: not drawn). */
@@ -337,6 +402,12 @@ export class View {
   showLinks(on) {
     this.showSprings = on;
     if (this.lines) this.lines.visible = on;
+    this.dirty = true;
+  }
+
+  showConstraintRows(on) {
+    this.showConstraints = on;
+    for (const o of [this.rods, this.rings]) if (o) o.visible = on;
     this.dirty = true;
   }
 
