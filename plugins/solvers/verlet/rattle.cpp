@@ -134,24 +134,13 @@ void Rattle::project_positions(pdyn::System& sys, double h, pdyn::Matrix3X* half
     } else {
       mu_ = ldlt_.solve(rhs_);
     }
-    if (!mu_.allFinite()) {
-      throw pdyn::Error(
-          "verlet (RATTLE): the position stage produced a non-finite multiplier (expected "
-          "independent constraints: are two constraints redundant or in conflict?)");
-    }
+    require_finite_multipliers("position");
     // x <- x - W J0^T mu: along the rows' gradients at the step's start.
-    for (Index r = 0; r < m; ++r) {
-      if (active_[r] == 0) continue;
-      for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
-        const Index k = particle_[e];
-        const double w = inverse_mass(sys, k);
-        if (w == 0.0) continue;
-        const pdyn::Vec3 d = -w * mu_(r) * jacobian_.col(e);
-        x.col(k) += d;
-        v.col(k) += v_factor * d;
-        if (half != nullptr) half->col(k) += d / h;
-      }
-    }
+    for_each_correction(sys, [&](Index k, const pdyn::Vec3& d) {
+      x.col(k) += d;
+      v.col(k) += v_factor * d;
+      if (half != nullptr) half->col(k) += d / h;
+    });
   }
 }
 
@@ -193,18 +182,16 @@ void Rattle::project_velocities(pdyn::System& sys) {
     rhs_(r) = active_[r] != 0 ? cdot : 0.0;
   }
   mu_ = ldlt_.solve(rhs_);
-  if (!mu_.allFinite()) {
-    throw pdyn::Error(
-        "verlet (RATTLE): the velocity stage produced a non-finite multiplier (expected "
-        "independent constraints: are two constraints redundant or in conflict?)");
-  }
-  for (Index r = 0; r < m; ++r) {
-    if (active_[r] == 0) continue;
-    for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
-      const Index k = particle_[e];
-      v.col(k) -= inverse_mass(sys, k) * mu_(r) * jacobian_.col(e);
-    }
-  }
+  require_finite_multipliers("velocity");
+  for_each_correction(sys, [&](Index k, const pdyn::Vec3& d) { v.col(k) += d; });
+}
+
+void Rattle::require_finite_multipliers(const char* stage) const {
+  if (mu_.allFinite()) return;
+  throw pdyn::Error(fmt::format(
+      "verlet (RATTLE): the {} stage produced a non-finite multiplier (expected independent "
+      "constraints: are two constraints redundant or in conflict?)",
+      stage));
 }
 
 }  // namespace pdyn_verlet

@@ -73,6 +73,22 @@ class Rattle {
   void factorise(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
   // Newton's matrix J(x) W J0^T at the rows just evaluated, factorised.
   void factorise_newton(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
+  // Throws if the last solve gave a non-finite multiplier.
+  void require_finite_multipliers(const char* stage) const;
+  // Calls add(k, -W_k J0_e^T mu_r) for each entry e of each active row r
+  // on a free particle k: the correction the multipliers mu_ make.
+  template <class Add>
+  void for_each_correction(const pdyn::System& sys, Add&& add) const {
+    for (Index r = 0; r < static_cast<Index>(active_.size()); ++r) {
+      if (active_[r] == 0) continue;
+      for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
+        const Index k = particle_[e];
+        if (sys.fixed()[static_cast<std::size_t>(k)] != 0) continue;
+        const double w = 1.0 / sys.masses()(k);
+        add(k, pdyn::Vec3(-(w * mu_(r)) * jacobian_.col(e)));
+      }
+    }
+  }
   // Rows whose particles are all fixed can act on nothing: they are left
   // out of the solves (identity rows) and out of the convergence test.
   double largest_active(const Eigen::VectorXd& c) const;
