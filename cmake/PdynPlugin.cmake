@@ -43,9 +43,12 @@ function(pdyn_add_plugin name)
   target_compile_features(${name} PRIVATE cxx_std_20)
   # No fused multiply-add contraction: pdyn/pair.hpp's one-thread and
   # threaded loops must round identically (bit-identical for any thread
-  # count), whatever -march the plugin is built for.
+  # count), whatever -march the plugin is built for. No trapping math: no
+  # value changes (pdyn never reads the floating-point exception flags), but
+  # a select on a law's value may then be vectorized (pdyn/pair.hpp,
+  # evaluate_beyond_cutoff).
   if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
-    target_compile_options(${name} PRIVATE -ffp-contract=off)
+    target_compile_options(${name} PRIVATE -ffp-contract=off -fno-trapping-math)
   endif()
   # A missing symbol (e.g. an Eigen template defined in a header the plugin
   # forgot to include) is a link error, not a load failure at run time.

@@ -77,6 +77,9 @@ struct Coefficients {
 struct LennardJones {
   Coefficients c;
   bool shift;
+  // Finite and cheap at every r2 > 0: the force loop evaluates every listed
+  // pair and selects those within the cutoff (pdyn/pair.hpp).
+  static constexpr bool evaluate_beyond_cutoff = true;
 
   pdyn::PairTerm operator()(double r2, std::int32_t, std::int32_t) const { return c.at(r2); }
   double force_over_r_slope(double r2, std::int32_t, std::int32_t) const { return c.slope(r2); }
@@ -95,10 +98,15 @@ struct LennardJonesTypes {
   [[gnu::always_inline]] inline std::size_t slot(std::int32_t t) const {
     return std::min(static_cast<std::uint32_t>(t), n);
   }
+  // A select, not a branch, on the pair's own cutoff: the force loop calls
+  // the law on every listed pair (evaluate_beyond_cutoff), where about a
+  // third lie beyond it in no predictable order.
+  static constexpr bool evaluate_beyond_cutoff = true;
   pdyn::PairTerm operator()(double r2, std::int32_t ti, std::int32_t tj) const {
     const Coefficients& c = table[slot(ti) * (n + 1) + slot(tj)];
-    if (!(r2 < c.cutoff2)) return {};
-    return c.at(r2);
+    const pdyn::PairTerm t = c.at(r2);
+    const bool within = r2 < c.cutoff2;
+    return {within ? t.energy : 0.0, within ? t.force_over_r : 0.0};
   }
   double force_over_r_slope(double r2, std::int32_t ti, std::int32_t tj) const {
     const Coefficients& c = table[slot(ti) * (n + 1) + slot(tj)];

@@ -188,6 +188,50 @@ TEST(LennardJones, ForcesAreBitIdenticalForOneToFourThreads) {
   ExpectBitIdenticalForOneToFourThreads(11, Params{}, false);
 }
 
+// The same Lennard-Jones arithmetic with and without
+// evaluate_beyond_cutoff (pdyn/pair.hpp): the selecting loop and the
+// branching loop give the same bits on a jittered periodic lattice (21,952
+// particles; the shell at sqrt(5) spacings straddles the cutoff, the next
+// lies between cutoff and reach), for 1 and 2 threads; and a law whose value
+// beyond the cutoff is NaN changes nothing.
+template <bool Select, bool NanBeyond>
+struct TestLaw {
+  static constexpr bool evaluate_beyond_cutoff = Select;
+  PairTerm operator()(double r2, std::int32_t, std::int32_t) const {
+    if (NanBeyond && !(r2 < 6.25)) return {std::nan(""), std::nan("")};
+    const double r2inv = 1.0 / r2, r6inv = r2inv * r2inv * r2inv;
+    return {4.0 * r6inv * (r6inv - 1.0), r6inv * (48.0 * r6inv - 24.0) * r2inv};
+  }
+};
+
+template <class Law>
+Matrix3X pair_forces(const System& sys) {
+  PairForce<Law> force(Law{}, 2.5, 0.3);
+  Matrix3X f = Matrix3X::Constant(3, sys.size(), 0.125);
+  force.add_forces(sys.view(), f);
+  return f;
+}
+
+TEST(LennardJones, TheSelectingPairLoopGivesTheBranchingLoopsBits) {
+  System sys;
+  set(sys, lattice(28, 1.1, 3));
+  Domain d;
+  d.max = Vec3::Constant(28 * 1.1);
+  d.periodic = {true, true, true};
+  SystemAssembly(sys).set_domain(d);
+  for (const int threads : {1, 2}) {
+    set_threads(threads);
+    const Matrix3X branching = pair_forces<TestLaw<false, false>>(sys);
+    ASSERT_TRUE(branching.allFinite());
+    EXPECT_NE(branching, Matrix3X::Constant(3, sys.size(), 0.125));
+    const Matrix3X selecting = pair_forces<TestLaw<true, false>>(sys);
+    const Matrix3X nan_beyond = pair_forces<TestLaw<true, true>>(sys);
+    EXPECT_TRUE(selecting.cwiseEqual(branching).all()) << threads << " threads";
+    EXPECT_TRUE(nan_beyond.cwiseEqual(branching).all()) << threads << " threads";
+  }
+  set_threads(available_threads());
+}
+
 // 256 atoms of an fcc Lennard-Jones liquid (reduced density 0.8442, the
 // LAMMPS melt benchmark's), periodic, shifted cutoff 2.5 sigma, velocity
 // Verlet over 5 time units. The total energy is bounded (no drift) and its
