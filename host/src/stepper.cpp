@@ -25,59 +25,66 @@ namespace pdyn {
 
 namespace {
 
-// Copies m doubles and tells whether all are finite, in one loop: the copy
-// is the last good state, read only if a later step fails, so it is written
-// with streaming stores where the CPU has them (it should not displace the
-// working set from the caches, nor be read from memory first, as a plain
-// store reads each cache line before writing it), and x * 0 is 0 for a
-// finite x and NaN for an infinity or a NaN, so the products' sum is 0 or
-// NaN. Eigen's allFinite() took longer than the copy (8% of a velocity
-// Verlet step of the 1000 x 1000 cloth against 6%: its early exit keeps the
-// loop scalar).
-bool copy_finite(const double* from, double* to, Index m) {
+// Whether m doubles are all finite: x * 0 is 0 for a finite x and NaN for an
+// infinity or a NaN, so the products' sum is 0 or NaN. Eigen's allFinite()
+// took longer than a copy (its early exit keeps the loop scalar).
+bool all_finite(const double* from, Index m) {
 #ifdef __SSE2__
-  Index k = 0;
-  double scalar = 0.0;
-  if (m > 0 && (reinterpret_cast<std::uintptr_t>(to) & 15) != 0) {
-    to[0] = from[0];
-    scalar += from[0] * 0.0;
-    k = 1;
-  }
   const __m128d zero = _mm_setzero_pd();
-  __m128d sum = zero;
-  for (; k + 1 < m; k += 2) {
-    const __m128d x = _mm_loadu_pd(from + k);
-    sum = _mm_add_pd(sum, _mm_mul_pd(x, zero));
-    _mm_stream_pd(to + k, x);
+  __m128d sum0 = zero, sum1 = zero;
+  Index k = 0;
+  for (; k + 3 < m; k += 4) {
+    sum0 = _mm_add_pd(sum0, _mm_mul_pd(_mm_loadu_pd(from + k), zero));
+    sum1 = _mm_add_pd(sum1, _mm_mul_pd(_mm_loadu_pd(from + k + 2), zero));
   }
-  for (; k < m; ++k) {
-    to[k] = from[k];
-    scalar += from[k] * 0.0;
-  }
+  double scalar = 0.0;
+  for (; k < m; ++k) scalar += from[k] * 0.0;
+  const __m128d sum = _mm_add_pd(sum0, sum1);
   return _mm_movemask_pd(_mm_cmpunord_pd(sum, sum)) == 0 && scalar == 0.0;
 #else
-  std::memcpy(to, from, static_cast<std::size_t>(m) * sizeof(double));
   double sum = 0.0;
   for (Index k = 0; k < m; ++k) sum += from[k] * 0.0;
   return sum == 0.0;
 #endif
 }
 
-// Copies `from` into `to` and tells whether every value is finite, in one
-// pass over memory, split over the threads. This is the only pass the
-// Stepper makes over a good step's state; a separate check and copy cost
-// two (issue 17, item 1).
-bool copy_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::VectorXd& to) {
-  to.resize(from.size());  // allocates on the first step only
+// Copies m doubles into the last good state, which is read only if a later
+// step fails: with streaming stores where the CPU has them, so that it
+// neither displaces the working set from the caches nor is read from memory
+// first (a plain store reads each cache line before writing it).
+void stream_copy(const double* from, double* to, Index m) {
+#ifdef __SSE2__
+  Index k = 0;
+  if (m > 0 && (reinterpret_cast<std::uintptr_t>(to) & 15) != 0) {
+    to[0] = from[0];
+    k = 1;
+  }
+  for (; k + 1 < m; k += 2) _mm_stream_pd(to + k, _mm_loadu_pd(from + k));
+  for (; k < m; ++k) to[k] = from[k];
+  _mm_sfence();  // the streaming stores are weakly ordered: done before the barrier
+#else
+  std::memcpy(to, from, static_cast<std::size_t>(m) * sizeof(double));
+#endif
+}
+
+// Keeps a step's end state as the last good one if every value is finite,
+// in two passes split over the threads: a check, then the copy over the
+// previous last good state. One pass into a second buffer (then swapped)
+// saves a read of the state per step, about 1% of a step of the 1000 x 1000
+// cloth, but holds a second copy of the state, 48 bytes per particle
+// (issue 32, item 4); a single buffer cannot be written before the check
+// has passed, since a failed step must find the state it started from.
+bool keep_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::VectorXd& to) {
   std::atomic<bool> finite{true};
   parallel_state_chunks(from.size(), from.size(), [&](Index b, Index e) {
-    const bool ok = copy_finite(from.data() + b, to.data() + b, e - b);
-#ifdef __SSE2__
-    _mm_sfence();  // the streaming stores are weakly ordered: done before the barrier
-#endif
-    if (!ok) finite.store(false, std::memory_order_relaxed);
+    if (!all_finite(from.data() + b, e - b)) finite.store(false, std::memory_order_relaxed);
   });
-  return finite.load(std::memory_order_relaxed);
+  if (!finite.load(std::memory_order_relaxed)) return false;
+  to.resize(from.size());  // allocates on the first step only
+  parallel_state_chunks(from.size(), from.size(), [&](Index b, Index e) {
+    stream_copy(from.data() + b, to.data() + b, e - b);
+  });
+  return true;
 }
 
 // Index of the first particle whose position or velocity is not finite, or -1.
@@ -105,8 +112,8 @@ void begin_step(System& sys, double h) {
 
 }  // namespace
 
-// The two state buffers are allocated and their pages touched here, before
-// the first step: at 10^6 particles that is 96 MB of page faults a timed loop
+// The state buffer is allocated and its pages touched here, before the
+// first step: at 10^6 particles that is 48 MB of page faults a timed loop
 // would otherwise pay in its first step.
 Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
     : sys_(sys), solver_(solver), label_(&solver_label) {
@@ -116,7 +123,6 @@ Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
   SystemAssembly(sys).enable_constraint_force(projecting == nullptr ||
                                               !projecting->enforces_constraints());
   previous_.setZero(sys.dimension());
-  next_.setZero(sys.dimension());
 }
 
 // The solver's time after step() is overwritten with `t_end` itself: a run's
@@ -150,7 +156,7 @@ std::optional<double> Stepper::step(double dt) {
 template <class Take>
 std::optional<double> Stepper::guarded(const Take& take) {
   // The last good state is normally the one the previous step left, which
-  // copy_if_finite kept; it is copied here only if someone wrote the state
+  // keep_if_finite kept; it is copied here only if someone wrote the state
   // since (state_version), or on the first step.
   if (sys_.state_version() != version_ || previous_.size() != sys_.dimension()) {
     previous_ = std::as_const(sys_).state();  // allocates on the first step only
@@ -193,7 +199,7 @@ std::optional<double> Stepper::guarded(const Take& take) {
     fault_.non_standard = true;
     return fail();
   }
-  if (!copy_if_finite(std::as_const(sys_).state(), next_)) {
+  if (!keep_if_finite(std::as_const(sys_).state(), previous_)) {
     const Index bad = first_non_finite(sys_);
     fault_.kind = StepFault::Kind::NonFiniteState;
     fault_.particle = bad;
@@ -205,7 +211,6 @@ std::optional<double> Stepper::guarded(const Take& take) {
     }
     return fail();
   }
-  previous_.swap(next_);  // the next step's last good state, if nobody writes before it
   // Only after a good step: a failed one leaves the images alone. A wrap
   // that moved a particle leaves previous_ behind the state (and its image
   // counts) even when it did not change state_version() (every force

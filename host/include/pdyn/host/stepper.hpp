@@ -104,8 +104,7 @@ class Stepper {
   System& sys_;
   Solver& solver_;
   const std::string* label_;
-  Eigen::VectorXd previous_;  // the state the current step started from
-  Eigen::VectorXd next_;      // where a step's end state is copied while it is checked
+  Eigen::VectorXd previous_;  // the last good state: where the current step started
   std::uint64_t version_ = ~std::uint64_t{0};  // System::state_version() when previous_ was kept
   double t_previous_ = 0.0;
   StepFault fault_;
