@@ -15,7 +15,7 @@ Environment: ROUNDS (default 5) rounds of the LAMMPS comparison; CLOTH_ROUNDS
 simulated seconds at 316 x 316, whose rk4 run takes about 18 minutes for
 1 s; RK4_DT_316 (default 1.00151e-05, found by pdyn_bench_stiff_cloth's
 bisection) rk4's largest stable step there; PARTS (default "cloth threads
-lammps load stiff") which measurements to run. LAMMPS rows need `lmp` (Debian:
+lammps load stiff memory") which measurements to run. LAMMPS rows need `lmp` (Debian:
 apt-get install lammps); without it they are marked "not run".
 
 Each missed target comes with the profile that explains it: a missed cloth
@@ -229,10 +229,26 @@ def load():
                  f"{first['seconds']:.3f} s", verdict(first["seconds"], 0.5)))
 
 
+def memory():
+    """Issue 32, item 4: peak resident memory of the 1000 x 1000 cloth, `pdyn`
+    (the loaded scene run by run_scene, 1 and 2 threads) against the fused
+    reference, each in its own process (getrusage's ru_maxrss)."""
+    def peak(variant, threads):
+        out = run([f"{BUILD}/bin/pdyn_bench_cloth", "--memory", variant, "1000", str(threads)])
+        return json.loads(out.splitlines()[-1])["bytes_per_particle"]
+    fused = peak("fused", 1)
+    for threads in (1, 2):
+        mine = peak("pdyn", threads)
+        rows.append((f"4. peak memory / fused reference, 1000 x 1000, {threads} thread"
+                     f"{'s' if threads > 1 else ''}", "<= 1.5",
+                     f"{mine / fused:.3f} ({mine:.0f} vs {fused:.0f} B per particle)",
+                     verdict(mine / fused, 1.5)))
+
+
 def main():
     start = uptime()
     parts = {"cloth": cloth_pairs, "threads": threads, "lammps": lammps, "load": load,
-             "stiff": stiff}
+             "stiff": stiff, "memory": memory}
     for name in os.environ.get("PARTS", " ".join(parts)).split():
         parts[name]()
     print(f"\nIssue 17's targets (load average {start} before, {uptime()} after). Medians "
