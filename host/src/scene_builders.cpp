@@ -257,13 +257,39 @@ void pin_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path
   }
 }
 
-// Without `springs`, structural and shear springs with the defaults: a
-// lattice that holds its shape. With it, exactly the families it lists.
+// Rods (`distance` constraints, each with its `compliance`) of exactly the
+// families `rods` lists: a lattice that XPBD or RATTLE keeps at its lengths.
+// Structural rods alone leave a block free to shear; with shear or body
+// rods there are more rods than the block's 3 N - 6 degrees of freedom, a
+// redundant set that XPBD takes and RATTLE and Witkin's force refuse (their
+// system is singular).
+Family lattice_rods(BuilderHost& host, const YAML::Node& l, const std::string& path,
+                    const LatticeIds& L) {
+  const Family rods =
+      family(host, l, "rods", path,
+             "rods: { structural: { compliance: m/N }, shear: {...}, body: {...} }");
+  if (rods != Family::Given) return rods;
+  const std::string rp = path + ".rods";
+  const YAML::Node rn = l["rods"];
+  if (!host.read_params(rn, rp, {}, {"structural", "shear", "body"})) return Family::Bad;
+  for (const char* f : {"structural", "shear", "body"}) {
+    if (family(host, rn, f, rp, "{ compliance: m/N }") != Family::Given) continue;
+    std::vector<IndexPair> pairs = lattice_pairs(L, f);
+    const bool any = !pairs.empty();
+    host.add_constraint("distance", rn[f], rp + "." + f, with_pairs(std::move(pairs)), any);
+  }
+  return rods;
+}
+
+// Without `springs` (and without `rods`), structural and shear springs with
+// the defaults: a lattice that holds its shape. With it, exactly the
+// families it lists.
 void lattice_springs(BuilderHost& host, const YAML::Node& l, const std::string& path,
-                     const LatticeIds& L) {
+                     const LatticeIds& L, Family rods) {
   const Family springs =
       family(host, l, "springs", path, "springs: { structural: {...}, shear: {...}, body: {...} }");
   if (springs == Family::Bad) return;
+  if (springs == Family::Absent && rods != Family::Absent) return;
   const std::string sp = path + ".springs";
   const YAML::Node sn = l["springs"];
   if (springs == Family::Given && !host.read_params(sn, sp, {}, {"structural", "shear", "body"})) {
@@ -288,7 +314,7 @@ void lattice_springs(BuilderHost& host, const YAML::Node& l, const std::string& 
 
 void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& path) {
   if (!host.check_map(l, path, "lattice: { origin, n: [nx, ny, nz], spacing, mass, ... }")) return;
-  auto p = host.read_params(l, path, lattice_specs(), {"springs"});
+  auto p = host.read_params(l, path, lattice_specs(), {"springs", "rods"});
   if (!p) return;
   const Vec3 nv = p->vec3("n");
   if (nv != nv.array().round().matrix()) {
@@ -318,7 +344,8 @@ void read_lattice(BuilderHost& host, const YAML::Node& l, const std::string& pat
   const std::int64_t count = L.nx * L.ny * L.nz;
   host.set_properties(L.base, count, particle_properties(*p));
   group(host, *p, l, path, L.base, count);
-  lattice_springs(host, l, path, L);
+  const Family rods = lattice_rods(host, l, path, L);
+  lattice_springs(host, l, path, L, rods);
 }
 
 // ---------------------------------------------------------------------------
@@ -576,7 +603,15 @@ std::vector<BuilderSpec> more_builder_specs() {
          "spring",
          "pairs",
          {"structural", "shear", "body"},
-         {}}}},
+         {}},
+        {"rods",
+         "rod families (distance constraints) instead of the default springs: `distance` plugin "
+         "parameters and `compliance` per family",
+         "distance",
+         "pairs",
+         {"structural", "shear", "body"},
+         {},
+         PluginKind::Constraint}}},
       {"cloud",
        "n particles uniform in a box or a ball, reproducible from `seed`",
        cloud_specs(),
