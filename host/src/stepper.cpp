@@ -25,6 +25,61 @@ namespace pdyn {
 
 namespace {
 
+// Copies m doubles and tells whether all are finite, in one loop: the copy
+// is the last good state, read only if a later step fails, so it is written
+// with streaming stores where the CPU has them (it should not displace the
+// working set from the caches, nor be read from memory first, as a plain
+// store reads each cache line before writing it), and x * 0 is 0 for a
+// finite x and NaN for an infinity or a NaN, so the products' sum is 0 or
+// NaN. Eigen's allFinite() took longer than the copy (8% of a velocity
+// Verlet step of the 1000 x 1000 cloth against 6%: its early exit keeps the
+// loop scalar).
+bool copy_finite(const double* from, double* to, Index m) {
+#ifdef __SSE2__
+  Index k = 0;
+  double scalar = 0.0;
+  if (m > 0 && (reinterpret_cast<std::uintptr_t>(to) & 15) != 0) {
+    to[0] = from[0];
+    scalar += from[0] * 0.0;
+    k = 1;
+  }
+  const __m128d zero = _mm_setzero_pd();
+  __m128d sum = zero;
+  for (; k + 1 < m; k += 2) {
+    const __m128d x = _mm_loadu_pd(from + k);
+    sum = _mm_add_pd(sum, _mm_mul_pd(x, zero));
+    _mm_stream_pd(to + k, x);
+  }
+  for (; k < m; ++k) {
+    to[k] = from[k];
+    scalar += from[k] * 0.0;
+  }
+  return _mm_movemask_pd(_mm_cmpunord_pd(sum, sum)) == 0 && scalar == 0.0;
+#else
+  std::memcpy(to, from, static_cast<std::size_t>(m) * sizeof(double));
+  double sum = 0.0;
+  for (Index k = 0; k < m; ++k) sum += from[k] * 0.0;
+  return sum == 0.0;
+#endif
+}
+
+// Copies `from` into `to` and tells whether every value is finite, in one
+// pass over memory, split over the threads. This is the only pass the
+// Stepper makes over a good step's state; a separate check and copy cost
+// two (issue 17, item 1).
+bool copy_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::VectorXd& to) {
+  to.resize(from.size());  // allocates on the first step only
+  std::atomic<bool> finite{true};
+  parallel_state_chunks(from.size(), from.size(), [&](Index b, Index e) {
+    const bool ok = copy_finite(from.data() + b, to.data() + b, e - b);
+#ifdef __SSE2__
+    _mm_sfence();  // the streaming stores are weakly ordered: done before the barrier
+#endif
+    if (!ok) finite.store(false, std::memory_order_relaxed);
+  });
+  return finite.load(std::memory_order_relaxed);
+}
+
 // Whether m doubles are all finite: x * 0 is 0 for a finite x and NaN for an
 // infinity or a NaN, so the products' sum is 0 or NaN. Eigen's allFinite()
 // took longer than a copy (its early exit keeps the loop scalar).
@@ -69,11 +124,12 @@ void stream_copy(const double* from, double* to, Index m) {
 
 // Keeps a step's end state as the last good one if every value is finite,
 // in two passes split over the threads: a check, then the copy over the
-// previous last good state. One pass into a second buffer (then swapped)
-// saves a read of the state per step, about 1% of a step of the 1000 x 1000
-// cloth, but holds a second copy of the state, 48 bytes per particle
-// (issue 32, item 4); a single buffer cannot be written before the check
-// has passed, since a failed step must find the state it started from.
+// previous last good state. A single buffer cannot be written before the
+// check has passed, since a failed step must find the state it started
+// from; copy_if_finite's one pass needs a second buffer. The Stepper takes
+// this path for states above kSecondBufferBytes, where the second buffer
+// would be 48 bytes per particle of the peak (issue 32, item 4) and the
+// extra read about 1% of a step.
 bool keep_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::VectorXd& to) {
   std::atomic<bool> finite{true};
   parallel_state_chunks(from.size(), from.size(), [&](Index b, Index e) {
@@ -85,6 +141,16 @@ bool keep_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::Vector
     stream_copy(from.data() + b, to.data() + b, e - b);
   });
   return true;
+}
+
+// The largest state that gets a second buffer, so that a step's end state
+// is checked and kept in one pass (copy_if_finite, then a swap): 8 MB, a
+// state of 174,762 particles. A small step is short, and a second pass over
+// its state measured several per cent of it (32 x 32 cloth).
+constexpr std::size_t kSecondBufferBytes = std::size_t{8} << 20;
+
+bool second_buffer(Index dimension) {
+  return static_cast<std::size_t>(dimension) * sizeof(double) <= kSecondBufferBytes;
 }
 
 // Index of the first particle whose position or velocity is not finite, or -1.
@@ -112,7 +178,7 @@ void begin_step(System& sys, double h) {
 
 }  // namespace
 
-// The state buffer is allocated and its pages touched here, before the
+// The state buffers are allocated and their pages touched here, before the
 // first step: at 10^6 particles that is 48 MB of page faults a timed loop
 // would otherwise pay in its first step.
 Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
@@ -123,6 +189,7 @@ Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
   SystemAssembly(sys).enable_constraint_force(projecting == nullptr ||
                                               !projecting->enforces_constraints());
   previous_.setZero(sys.dimension());
+  if (second_buffer(sys.dimension())) next_.setZero(sys.dimension());
 }
 
 // The solver's time after step() is overwritten with `t_end` itself: a run's
@@ -199,7 +266,9 @@ std::optional<double> Stepper::guarded(const Take& take) {
     fault_.non_standard = true;
     return fail();
   }
-  if (!keep_if_finite(std::as_const(sys_).state(), previous_)) {
+  const bool one_pass = second_buffer(sys_.dimension());
+  if (!(one_pass ? copy_if_finite(std::as_const(sys_).state(), next_)
+                 : keep_if_finite(std::as_const(sys_).state(), previous_))) {
     const Index bad = first_non_finite(sys_);
     fault_.kind = StepFault::Kind::NonFiniteState;
     fault_.particle = bad;
@@ -211,6 +280,7 @@ std::optional<double> Stepper::guarded(const Take& take) {
     }
     return fail();
   }
+  if (one_pass) previous_.swap(next_);  // the next step's last good state
   // Only after a good step: a failed one leaves the images alone. A wrap
   // that moved a particle leaves previous_ behind the state (and its image
   // counts) even when it did not change state_version() (every force

@@ -105,6 +105,7 @@ class Stepper {
   Solver& solver_;
   const std::string* label_;
   Eigen::VectorXd previous_;  // the last good state: where the current step started
+  Eigen::VectorXd next_;      // a small state's end, copied there while it is checked
   std::uint64_t version_ = ~std::uint64_t{0};  // System::state_version() when previous_ was kept
   double t_previous_ = 0.0;
   StepFault fault_;
