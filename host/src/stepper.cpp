@@ -25,6 +25,29 @@ namespace pdyn {
 
 namespace {
 
+// Whether m doubles are all finite: x * 0 is 0 for a finite x and NaN for an
+// infinity or a NaN, so the products' sum is 0 or NaN. Eigen's allFinite()
+// took longer than a copy (its early exit keeps the loop scalar).
+bool all_finite(const double* from, Index m) {
+#ifdef __SSE2__
+  const __m128d zero = _mm_setzero_pd();
+  __m128d sum0 = zero, sum1 = zero;
+  Index k = 0;
+  for (; k + 3 < m; k += 4) {
+    sum0 = _mm_add_pd(sum0, _mm_mul_pd(_mm_loadu_pd(from + k), zero));
+    sum1 = _mm_add_pd(sum1, _mm_mul_pd(_mm_loadu_pd(from + k + 2), zero));
+  }
+  double scalar = 0.0;
+  for (; k < m; ++k) scalar += from[k] * 0.0;
+  const __m128d sum = _mm_add_pd(sum0, sum1);
+  return _mm_movemask_pd(_mm_cmpunord_pd(sum, sum)) == 0 && scalar == 0.0;
+#else
+  double sum = 0.0;
+  for (Index k = 0; k < m; ++k) sum += from[k] * 0.0;
+  return sum == 0.0;
+#endif
+}
+
 // Copies m doubles and tells whether all are finite, in one loop: the copy
 // is the last good state, read only if a later step fails, so it is written
 // with streaming stores where the CPU has them (it should not displace the
@@ -57,9 +80,7 @@ bool copy_finite(const double* from, double* to, Index m) {
   return _mm_movemask_pd(_mm_cmpunord_pd(sum, sum)) == 0 && scalar == 0.0;
 #else
   std::memcpy(to, from, static_cast<std::size_t>(m) * sizeof(double));
-  double sum = 0.0;
-  for (Index k = 0; k < m; ++k) sum += from[k] * 0.0;
-  return sum == 0.0;
+  return all_finite(from, m);
 #endif
 }
 
@@ -78,29 +99,6 @@ bool copy_if_finite(const Eigen::Ref<const Eigen::VectorXd>& from, Eigen::Vector
     if (!ok) finite.store(false, std::memory_order_relaxed);
   });
   return finite.load(std::memory_order_relaxed);
-}
-
-// Whether m doubles are all finite: x * 0 is 0 for a finite x and NaN for an
-// infinity or a NaN, so the products' sum is 0 or NaN. Eigen's allFinite()
-// took longer than a copy (its early exit keeps the loop scalar).
-bool all_finite(const double* from, Index m) {
-#ifdef __SSE2__
-  const __m128d zero = _mm_setzero_pd();
-  __m128d sum0 = zero, sum1 = zero;
-  Index k = 0;
-  for (; k + 3 < m; k += 4) {
-    sum0 = _mm_add_pd(sum0, _mm_mul_pd(_mm_loadu_pd(from + k), zero));
-    sum1 = _mm_add_pd(sum1, _mm_mul_pd(_mm_loadu_pd(from + k + 2), zero));
-  }
-  double scalar = 0.0;
-  for (; k < m; ++k) scalar += from[k] * 0.0;
-  const __m128d sum = _mm_add_pd(sum0, sum1);
-  return _mm_movemask_pd(_mm_cmpunord_pd(sum, sum)) == 0 && scalar == 0.0;
-#else
-  double sum = 0.0;
-  for (Index k = 0; k < m; ++k) sum += from[k] * 0.0;
-  return sum == 0.0;
-#endif
 }
 
 // Copies m doubles into the last good state, which is read only if a later
