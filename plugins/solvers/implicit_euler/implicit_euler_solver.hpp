@@ -41,14 +41,19 @@ struct ImplicitEulerOptions {
 /// Linearised backward Euler (Baraff & Witkin 1998): see implicit_euler_solver.cpp.
 namespace detail {
 
-/// Sparse LDL^T of a symmetric positive definite matrix of 3 x 3 blocks,
-/// up-looking, one block row of L at a time (T. A. Davis, "Algorithm 849: a
-/// concise sparse Cholesky factorization package", ACM TOMS 31 (2005), with
-/// each scalar replaced by a 3 x 3 block), after an approximate minimum
-/// degree ordering of the block graph (Eigen's AMD). analyze() does
-/// everything that depends only on the pattern and allocates; factorize()
-/// and solve() then reuse that storage, so they allocate nothing.
-class BlockLdlt {
+/// Sparse Cholesky factorisation A = L L^T of a symmetric positive definite
+/// matrix of 3 x 3 blocks, supernodal and left-looking (Ng & Peyton, "Block
+/// sparse Cholesky algorithms on advanced uniprocessor computers", SIAM J.
+/// Sci. Comput. 14 (1993); the linked lists of descendants as in CHOLMOD,
+/// Chen, Davis, Hager & Rajamanickam, ACM TOMS 35 (2008)), after an
+/// approximate minimum degree ordering of the block graph (Eigen's AMD).
+/// Block columns of L with nested patterns are grouped into supernodes and
+/// stored as dense column-major panels, so that nearly all of the work is
+/// dense matrix products (BLAS dgemm / dsyrk), a dense Cholesky (LAPACK
+/// dpotrf) and a dense triangular solve (dtrsm). analyze() does everything
+/// that depends only on the pattern; the first factorize() after it
+/// allocates, later ones and solve() allocate nothing.
+class SupernodalCholesky {
  public:
   /// The pattern: `particles` lists the unknowns' particle indices; block row
   /// r (of particle particles[r]) holds slots row_start[particles[r]] ..
@@ -58,33 +63,42 @@ class BlockLdlt {
   void analyze(const std::vector<Index>& particles, const std::vector<Index>& compact,
                const std::vector<Index>& row_start, const std::vector<Index>& col);
   /// Factorises the matrix whose block-CSR values are `val` (same slots as
-  /// given to analyze). Returns -1, or the elimination step at which a pivot
-  /// block was not positive definite.
+  /// given to analyze). Returns -1, or the elimination step of the first
+  /// block column whose pivot was not positive.
   Index factorize(const std::vector<Eigen::Matrix3d>& val);
   /// x = A^-1 b on the unknowns' particles; other entries of x are not touched.
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
-  /// 3 x 3 blocks in L below the diagonal, known after analyze().
-  std::size_t factor_blocks() const noexcept {
-    return lp_.empty() ? 0 : static_cast<std::size_t>(lp_.back());
-  }
+  /// 3 x 3 blocks of L below the diagonal blocks, known after analyze().
+  std::size_t factor_blocks() const noexcept { return blocks_; }
   /// Memory factorize() needs, known after analyze().
   double factor_bytes() const noexcept;
-  /// Floating-point operations of one factorize(), known after analyze():
-  /// 54 per 3 x 3 block product (27 multiplies, 27 additions), for bench/.
-  double factor_flops() const noexcept;
+  /// Floating-point operations of one factorize() on L's nonzero blocks,
+  /// known after analyze(): 54 per 3 x 3 block product (27 multiplies, 27
+  /// additions), counted as the up-looking block algorithm would, for bench/.
+  double factor_flops() const noexcept { return flops_; }
+  /// Supernodes, known after analyze() (bench/ and tests).
+  std::size_t supernodes() const noexcept { return super_.empty() ? 0 : super_.size() - 1; }
 
  private:
-  std::vector<Index> order_;                      // elimination step -> particle
-  std::vector<Index> ucol_start_, urow_, uslot_;  // A's upper triangle, permuted, by column
-  std::vector<Index> parent_, lp_, lnz_, li_;     // elimination tree and L's columns
-  // L's blocks and the work row are stored 4 x 3, the fourth row zero: a
-  // column is then two SSE2 packets (one AVX one) and Eigen vectorises the
-  // block products that make up nearly all of the factorisation's work.
-  using Block = Eigen::Matrix<double, 4, 3>;
-  std::vector<Block> lx_, y_;
-  std::vector<Eigen::Matrix3d> dinv_;  // D^-1
-  std::vector<Index> flag_, pattern_;
-  std::vector<Eigen::Vector4d> z_;
+  std::vector<Index> order_;  // elimination step -> particle
+  // A's lower triangle in elimination order, by block column: column j
+  // lists (step i >= j, slot of A(order_[i], order_[j])).
+  std::vector<Index> acol_start_, arow_, aslot_;
+  // Supernode s covers block columns super_[s] .. super_[s + 1] - 1; its
+  // block rows are rows_[row_start_[s] ..], the columns themselves first,
+  // then the rows below in increasing order. Its panel of 3 x 3 blocks is
+  // dense, column-major, 3 rows per block row, at lx_[panel_[s]].
+  std::vector<Index> super_, super_of_, row_start_, rows_;
+  std::vector<std::size_t> panel_;
+  std::vector<double> lx_, work_;
+  std::size_t work_size_ = 0;  // the largest update, doubles
+  // Factorisation workspace: per supernode, the next of its rows still to
+  // update an ancestor and the link of the list of descendants waiting to
+  // update the supernode head_[t] belongs to; block row -> panel row.
+  std::vector<Index> head_, next_, cursor_, local_;
+  std::vector<double> z_, t_;  // solve's permuted right side and a gather buffer
+  std::size_t blocks_ = 0;
+  double flops_ = 0.0;
   bool allocated_ = false;  // the storage above, by the first factorize() after analyze()
 };
 
@@ -105,34 +119,50 @@ class ImplicitEuler final : public Solver {
   /// Whether the last step solved its linear system directly (else by CG).
   bool last_step_direct() const noexcept { return last_direct_; }
   /// 3 x 3 blocks in the direct solve's L (0 before its analysis).
-  std::size_t factor_blocks() const noexcept { return ldlt_.factor_blocks(); }
+  std::size_t factor_blocks() const noexcept { return cholesky_.factor_blocks(); }
   /// Floating-point operations of one factorisation (0 before its analysis).
-  double factor_flops() const noexcept { return ldlt_.factor_flops(); }
+  double factor_flops() const noexcept { return cholesky_.factor_flops(); }
   /// Wall time spent factorising so far, s (bench/ reads it; two clock
   /// reads per step cost nothing next to a factorisation).
   double factor_seconds() const noexcept { return factor_seconds_; }
 
  private:
+  struct Key {
+    Index i, j;
+    int kind;  // 0: df/dx, 1: df/dv
+    bool operator==(const Key&) const = default;
+  };
   struct Block {
     Index i, j;
+    int kind;
     Eigen::Matrix3d b;
   };
-  // Collects the 3 x 3 blocks that forces report, in the order they come.
+  // Takes the 3 x 3 blocks that forces report: while `assembling`, enters
+  // each straight into A as long as they come as `key` says (else sets
+  // `missed`); otherwise records them in the order they come.
   class Sink final : public JacobianSink {
    public:
-    void add_dfdx(Index i, Index j, const Eigen::Matrix3d& block) override {
-      dfdx.push_back({i, j, block});
-    }
-    void add_dfdv(Index i, Index j, const Eigen::Matrix3d& block) override {
-      dfdv.push_back({i, j, block});
-    }
-    std::vector<Block> dfdx, dfdv;
+    void add_dfdx(Index i, Index j, const Eigen::Matrix3d& block) override { add(i, j, 0, block); }
+    void add_dfdv(Index i, Index j, const Eigen::Matrix3d& block) override { add(i, j, 1, block); }
+    std::vector<Block> blocks;
+    bool assembling = false, missed = false;
+    std::size_t cursor = 0;
+    const std::vector<Key>* key = nullptr;
+    const std::ptrdiff_t* slot = nullptr;
+    Eigen::Matrix3d* val = nullptr;
+    double* kxv = nullptr;
+    const double* v0 = nullptr;
+    double scale[2] = {0.0, 0.0};  // h^2 for df/dx, h for df/dv
+
+   private:
+    void add(Index i, Index j, int kind, const Eigen::Matrix3d& block);
   };
 
-  void collect_jacobians(const System& sys);
-  bool pattern_matches(const System& sys) const;
+  void collect_jacobians(const System& sys, double h);
+  void ask_forces(const System& sys);
+  void begin_assembly(const System& sys);
   void build_pattern(const System& sys);
-  void assemble(const System& sys, double h, bool precondition);
+  void invert_diagonal_blocks(const System& sys);
   void apply(const System& sys, double h, const Eigen::VectorXd& u, Eigen::VectorXd& out);
   void fd_jvp(const System& sys, const Eigen::VectorXd& dx, const Eigen::VectorXd& dv,
               Eigen::VectorXd& out);
@@ -149,17 +179,18 @@ class ImplicitEuler final : public Solver {
   // the 3 x 3 block at column col_[s]. Rows and columns of fixed particles
   // are not stored (the constraint filter). The pattern is rebuilt only when
   // the sequence of (i, j) the forces report, or the set of fixed particles,
-  // changes; slot_x_ / slot_v_ map each reported block to its slot (-1:
-  // touches a fixed particle).
-  std::vector<std::pair<Index, Index>> pattern_key_;
+  // changes; slot_ maps each reported block to its slot (-1: touches a
+  // fixed particle).
+  std::vector<Key> pattern_key_;
+  bool have_pattern_ = false;
   std::vector<std::uint8_t> pattern_fixed_;
   std::vector<Index> row_start_, col_, diag_slot_;
-  std::vector<std::ptrdiff_t> slot_x_, slot_v_;
+  std::vector<std::ptrdiff_t> slot_;
   std::vector<Eigen::Matrix3d> val_;
   std::vector<Eigen::Matrix3d> precond_;  // inverses of the diagonal blocks; 0 if fixed
   std::vector<Index> free_, compact_;     // free particles; particle -> position in free_
-  detail::BlockLdlt ldlt_;
-  bool ldlt_analyzed_ = false;  // for the current pattern
+  detail::SupernodalCholesky cholesky_;
+  bool cholesky_analyzed_ = false;  // for the current pattern
   bool last_direct_ = false;
 
   Eigen::VectorXd x0_, v0_, f0_, b_, dv_, r_, z_, p_, q_, kxv_;
