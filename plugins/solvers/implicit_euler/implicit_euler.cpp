@@ -17,11 +17,11 @@ pdyn::PluginDescriptor describe() {
   d.version = "1.1.0";
   d.description =
       "linearised backward Euler (Baraff & Witkin 1998), (M - h df/dv - h^2 df/dx) dv = "
-      "h (f0 + h df/dx v0) by sparse LDL^T or conjugate gradients; order 1";
+      "h (f0 + h df/dx v0) by sparse Cholesky or conjugate gradients; order 1";
   d.params = {
       pdyn::param::string(
           "linear_solver", "auto",
-          "direct (sparse LDL^T; every force needs Jacobians), cg (conjugate "
+          "direct (sparse Cholesky; every force needs Jacobians), cg (conjugate "
           "gradients), or auto: direct when every force has Jacobians and the factor "
           "fits in 1 GiB, else cg"),
       pdyn::param::real("cg_tolerance", pdyn::solvers::ImplicitEulerOptions{}.cg_tolerance, "",

@@ -18,8 +18,11 @@
 // * Fixed particles' rows and columns are left out of A (Baraff & Witkin's
 //   constraint filter, section 5.3, with z = 0), so the system is solved on
 //   the free particles only.
-// * When every force supplies Jacobians, A is factorised, A = L D L^T with
-//   3 x 3 blocks (BlockLdlt below), by default. Preconditioned CG needs
+// * When every force supplies Jacobians, A is factorised, A = L L^T, by a
+//   supernodal Cholesky (SupernodalCholesky below), by default. Its dense
+//   panels put nearly all of the work in BLAS products: on the stiff cloth
+//   it runs at 20 to 32 GFlop/s where the up-looking block LDL^T it
+//   replaced ran at 6 to 13 (docs/solvers.md). Preconditioned CG needs
 //   ~sqrt(cond A) ~ h w_max iterations, and on stiff cloth h w_max is in the
 //   hundreds; a sparse factorisation costs about as much as 50 CG
 //   iterations on the 30 x 30 cloth of bench/ and is exact, so it is 1.5x
@@ -83,13 +86,21 @@ Eigen::Map<Eigen::VectorXd> flat(Matrix3X& m) { return {m.data(), m.size()}; }
 void ImplicitEuler::step(System& sys, double h) {
   const double t0 = sys.time();
   const Index n3 = 3 * sys.size();
+  auto clock = std::chrono::steady_clock::now();
+  auto lap = [&clock](double& part) {  // adds the time since the last lap to `part`
+    const auto now = std::chrono::steady_clock::now();
+    part += std::chrono::duration<double>(now - clock).count();
+    clock = now;
+  };
   sys.set_time(t0 + h);
   x0_ = Eigen::Map<const Eigen::VectorXd>(sys.positions().data(), n3);
   v0_ = Eigen::Map<const Eigen::VectorXd>(sys.velocities().data(), n3);
   sys.compute_accelerations();  // fills sys.forces() with f0, contact forces included
   f0_ = Eigen::Map<const Eigen::VectorXd>(sys.forces().data(), n3);
+  lap(parts_.forces);
 
   collect_jacobians(sys, h);
+  lap(parts_.jacobians);
   // The direct solve needs the whole matrix, so every force must have
   // Jacobians: auto falls back to CG without them, an explicit request is
   // refused. Auto also falls back when the factor would outgrow
@@ -115,6 +126,7 @@ void ImplicitEuler::step(System& sys, double h) {
     direct = o_.linear_solver == LinearSolver::Direct ||
              cholesky_.factor_bytes() <= static_cast<double>(o_.direct_max_bytes);
   }
+  lap(parts_.analysis);
   if (!direct) invert_diagonal_blocks(sys);
 
   // b = h (f0 + h df/dx v0): the analytic blocks' part is in kxv_ already,
@@ -129,6 +141,7 @@ void ImplicitEuler::step(System& sys, double h) {
     if (sys.fixed()[static_cast<std::size_t>(i)]) b_.segment<3>(3 * i).setZero();
   }
 
+  const double factorised = parts_.factorisation;
   try {
     if (direct) {
       solve_direct(sys);
@@ -145,6 +158,8 @@ void ImplicitEuler::step(System& sys, double h) {
   v = v0_ + dv_;
   x = x0_ + h * v;
   ++steps_;
+  lap(parts_.solve);
+  parts_.solve -= parts_.factorisation - factorised;  // counted as the factorisation's
 }
 
 namespace {
@@ -416,11 +431,11 @@ void ImplicitEuler::solve(const System& sys, double h) {
       o_.cg_max_iterations, sys.time(), residual, o_.cg_tolerance));
 }
 
-// The direct solve: A = L D L^T on the free particles, then two triangular
+// The direct solve: A = L L^T on the free particles, then two triangular
 // solves. The factor's pattern (ordering, elimination tree, L's columns) is
 // analysed once per matrix pattern; each step only refactorises. A is
 // symmetric positive definite for the same reason CG needs it to be, and
-// a pivot block that is not is the same error.
+// a pivot that is not positive is the same error.
 void ImplicitEuler::solve_direct(const System& sys) {
   dv_.setZero(b_.size());
   last_iterations_ = 0;
@@ -430,7 +445,8 @@ void ImplicitEuler::solve_direct(const System& sys) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   const Index bad = cholesky_.factorize(val_);
-  factor_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  parts_.factorisation +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (bad >= 0) {
     throw Error(fmt::format(
         "implicit_euler: the linear system is not positive definite at t = {:.17g} s (pivot "
@@ -750,80 +766,100 @@ Index SupernodalCholesky::factorize(const std::vector<Eigen::Matrix3d>& val) {
     t_.resize(3 * static_cast<std::size_t>(widest));
   }
   std::fill(head_.begin(), head_.end(), -1);
-  const double one = 1.0, zero = 0.0;
+  const double one = 1.0;
   for (Index s = 0; s < ns; ++s) {
-    const Index f = super_[s], nc = super_[s + 1] - f;
-    const Index* rows = rows_.data() + row_start_[s];
-    const Index nr = row_start_[s + 1] - row_start_[s];
-    const int ld = static_cast<int>(3 * nr);
-    double* panel = lx_.data() + panel_[s];
-    for (Index r = 0; r < nr; ++r) local_[rows[r]] = r;
-    std::fill(panel, panel + 9 * nr * nc, 0.0);
-    for (Index c = 0; c < nc; ++c) {
-      for (Index p = acol_start_[f + c]; p < acol_start_[f + c + 1]; ++p) {
-        const Eigen::Matrix3d& a = val[static_cast<std::size_t>(aslot_[p])];
-        double* dst = panel + 3 * c * ld + 3 * local_[arow_[p]];
-        for (int cc = 0; cc < 3; ++cc) {
-          for (int rr = 0; rr < 3; ++rr) dst[cc * ld + rr] = a(rr, cc);
-        }
-      }
-    }
+    const Panel p = panel(s);
+    gather(p, val);
     for (Index d = head_[s]; d >= 0;) {
-      const Index dnext = next_[d];
-      const Index* drows = rows_.data() + row_start_[d];
-      const Index dnr = row_start_[d + 1] - row_start_[d];
-      const Index p1 = cursor_[d];
-      Index p2 = p1;
-      while (p2 < dnr && drows[p2] < f + nc) ++p2;
-      const int m = static_cast<int>(3 * (dnr - p1)), k = static_cast<int>(3 * (p2 - p1));
-      const int kd = static_cast<int>(3 * (super_[d + 1] - super_[d])),
-                ldd = static_cast<int>(3 * dnr);
-      const double* ld1 = lx_.data() + panel_[d] + 3 * p1;
-      // W = L_d(p1:, :) L_d(p1:p2, :)^T: the lower triangle of its top
-      // square by dsyrk, the rows below by dgemm.
-      dsyrk_("L", "N", &k, &kd, &one, ld1, &ldd, &zero, work_.data(), &m, 1, 1);
-      if (m > k) {
-        const int mb = m - k;
-        dgemm_("N", "T", &mb, &k, &kd, &one, ld1 + k, &ldd, ld1, &ldd, &zero, work_.data() + k, &m,
-               1, 1);
-      }
-      for (Index c = 0; c < p2 - p1; ++c) {
-        double* dst_col = panel + 3 * (drows[p1 + c] - f) * ld;
-        const double* src_col = work_.data() + 3 * c * m;
-        for (int cc = 0; cc < 3; ++cc) {
-          double* dst = dst_col + cc * ld;
-          const double* src = src_col + cc * m;
-          for (Index r = c; r < dnr - p1; ++r) {
-            double* t = dst + 3 * local_[drows[p1 + r]];
-            const double* w = src + 3 * r;
-            t[0] -= w[0];
-            t[1] -= w[1];
-            t[2] -= w[2];
-          }
-        }
-      }
-      cursor_[d] = p2;
-      if (p2 < dnr) {
-        const Index t = super_of_[drows[p2]];
-        next_[d] = head_[t];
-        head_[t] = d;
-      }
-      d = dnext;
+      const Index after = next_[d];  // update() links d into the next list
+      update(d, p);
+      d = after;
     }
-    const int w = static_cast<int>(3 * nc);
     int info = 0;
-    dpotrf_("L", &w, panel, &ld, &info, 1);
-    if (info != 0) return f + (info - 1) / 3;
-    if (nr > nc) {
-      const int mb = ld - w;
-      dtrsm_("R", "L", "T", "N", &mb, &w, &one, panel, &ld, panel + w, &ld, 1, 1, 1, 1);
-      cursor_[s] = nc;
-      const Index t = super_of_[rows[nc]];
-      next_[s] = head_[t];
-      head_[t] = s;
+    dpotrf_("L", &p.width, p.x, &p.ld, &info, 1);
+    if (info != 0) return p.first + (info - 1) / 3;
+    if (p.below > 0) {
+      dtrsm_("R", "L", "T", "N", &p.below, &p.width, &one, p.x, &p.ld, p.x + p.width, &p.ld, 1, 1,
+             1, 1);
+      link(s, p.cols);
     }
   }
   return -1;
+}
+
+// A's columns of supernode p into its panel, zero elsewhere; local_ maps
+// the panel's block rows to their places.
+void SupernodalCholesky::gather(const Panel& p, const std::vector<Eigen::Matrix3d>& val) {
+  for (Index r = 0; r < p.nrows; ++r) local_[p.rows[r]] = r;
+  std::fill(p.x, p.x + 9 * p.nrows * p.cols, 0.0);
+  for (Index c = 0; c < p.cols; ++c) {
+    for (Index q = acol_start_[p.first + c]; q < acol_start_[p.first + c + 1]; ++q) {
+      const Eigen::Matrix3d& a = val[static_cast<std::size_t>(aslot_[q])];
+      double* dst = p.x + 3 * c * p.ld + 3 * local_[arow_[q]];
+      for (int cc = 0; cc < 3; ++cc) {
+        for (int rr = 0; rr < 3; ++rr) dst[cc * p.ld + rr] = a(rr, cc);
+      }
+    }
+  }
+}
+
+// Supernode d's update of supernode p: with d's rows from its cursor on,
+// L_d(rows, :) L_d(rows in p, :)^T, subtracted from p's panel at the rows
+// local_ gives; then d waits for the supernode its next row falls in.
+void SupernodalCholesky::update(Index d, const Panel& p) {
+  const Panel dp = panel(d);
+  const Index p1 = cursor_[d];
+  Index p2 = p1;
+  while (p2 < dp.nrows && dp.rows[p2] < p.first + p.cols) ++p2;
+  const int m = static_cast<int>(3 * (dp.nrows - p1)), k = static_cast<int>(3 * (p2 - p1));
+  const double* l1 = dp.x + 3 * p1;
+  const double one = 1.0, zero = 0.0;
+  // W = L_d(p1:, :) L_d(p1:p2, :)^T: the lower triangle of its top square
+  // by dsyrk, the rows below by dgemm.
+  dsyrk_("L", "N", &k, &dp.width, &one, l1, &dp.ld, &zero, work_.data(), &m, 1, 1);
+  if (m > k) {
+    const int mb = m - k;
+    dgemm_("N", "T", &mb, &k, &dp.width, &one, l1 + k, &dp.ld, l1, &dp.ld, &zero, work_.data() + k,
+           &m, 1, 1);
+  }
+  for (Index c = 0; c < p2 - p1; ++c) {
+    double* dst_col = p.x + 3 * (dp.rows[p1 + c] - p.first) * p.ld;
+    const double* src_col = work_.data() + 3 * c * m;
+    for (int cc = 0; cc < 3; ++cc) {
+      double* dst = dst_col + cc * p.ld;
+      const double* src = src_col + cc * m;
+      for (Index r = c; r < dp.nrows - p1; ++r) {
+        double* t = dst + 3 * local_[dp.rows[p1 + r]];
+        const double* w = src + 3 * r;
+        t[0] -= w[0];
+        t[1] -= w[1];
+        t[2] -= w[2];
+      }
+    }
+  }
+  if (p2 < dp.nrows) link(d, p2);
+}
+
+// Supernode d, its rows before `row` used, waits in the list of the
+// supernode its row `row` falls in.
+void SupernodalCholesky::link(Index d, Index row) {
+  cursor_[d] = row;
+  const Index t = super_of_[rows_[row_start_[d] + row]];
+  next_[d] = head_[t];
+  head_[t] = d;
+}
+
+SupernodalCholesky::Panel SupernodalCholesky::panel(Index s) {
+  Panel p;
+  p.first = super_[s];
+  p.cols = super_[s + 1] - p.first;
+  p.rows = rows_.data() + row_start_[s];
+  p.nrows = row_start_[s + 1] - row_start_[s];
+  p.ld = static_cast<int>(3 * p.nrows);
+  p.width = static_cast<int>(3 * p.cols);
+  p.below = p.ld - p.width;
+  p.x = lx_.data() + panel_[s];
+  return p;
 }
 
 // L y = P b by supernodes (a dense triangular solve, then the rows below by
@@ -838,33 +874,27 @@ void SupernodalCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   const double one = 1.0, minus = -1.0, zero = 0.0;
   const int inc = 1;
   for (Index s = 0; s < ns; ++s) {
-    const Index f = super_[s], nc = super_[s + 1] - f;
-    const Index* rows = rows_.data() + row_start_[s];
-    const Index nr = row_start_[s + 1] - row_start_[s];
-    const int ld = static_cast<int>(3 * nr), w = static_cast<int>(3 * nc), mb = ld - w;
-    const double* panel = lx_.data() + panel_[s];
-    double* zs = z_.data() + 3 * f;
-    dtrsv_("L", "N", "N", &w, panel, &ld, zs, &inc, 1, 1, 1);
-    if (mb == 0) continue;
-    dgemv_("N", &mb, &w, &one, panel + w, &ld, zs, &inc, &zero, t_.data(), &inc, 1);
-    for (Index r = nc; r < nr; ++r) {
-      for (int c = 0; c < 3; ++c) z_[3 * rows[r] + c] -= t_[3 * (r - nc) + c];
+    const Panel p = panel(s);
+    double* zs = z_.data() + 3 * p.first;
+    dtrsv_("L", "N", "N", &p.width, p.x, &p.ld, zs, &inc, 1, 1, 1);
+    if (p.below == 0) continue;
+    dgemv_("N", &p.below, &p.width, &one, p.x + p.width, &p.ld, zs, &inc, &zero, t_.data(), &inc,
+           1);
+    for (Index r = p.cols; r < p.nrows; ++r) {
+      for (int c = 0; c < 3; ++c) z_[3 * p.rows[r] + c] -= t_[3 * (r - p.cols) + c];
     }
   }
   for (Index s = ns - 1; s >= 0; --s) {
-    const Index f = super_[s], nc = super_[s + 1] - f;
-    const Index* rows = rows_.data() + row_start_[s];
-    const Index nr = row_start_[s + 1] - row_start_[s];
-    const int ld = static_cast<int>(3 * nr), w = static_cast<int>(3 * nc), mb = ld - w;
-    const double* panel = lx_.data() + panel_[s];
-    double* zs = z_.data() + 3 * f;
-    if (mb > 0) {
-      for (Index r = nc; r < nr; ++r) {
-        for (int c = 0; c < 3; ++c) t_[3 * (r - nc) + c] = z_[3 * rows[r] + c];
+    const Panel p = panel(s);
+    double* zs = z_.data() + 3 * p.first;
+    if (p.below > 0) {
+      for (Index r = p.cols; r < p.nrows; ++r) {
+        for (int c = 0; c < 3; ++c) t_[3 * (r - p.cols) + c] = z_[3 * p.rows[r] + c];
       }
-      dgemv_("T", &mb, &w, &minus, panel + w, &ld, t_.data(), &inc, &one, zs, &inc, 1);
+      dgemv_("T", &p.below, &p.width, &minus, p.x + p.width, &p.ld, t_.data(), &inc, &one, zs, &inc,
+             1);
     }
-    dtrsv_("L", "T", "N", &w, panel, &ld, zs, &inc, 1, 1, 1);
+    dtrsv_("L", "T", "N", &p.width, p.x, &p.ld, zs, &inc, 1, 1, 1);
   }
   for (Index k = 0; k < n; ++k) {
     for (int c = 0; c < 3; ++c) x[3 * order_[k] + c] = z_[3 * k + c];

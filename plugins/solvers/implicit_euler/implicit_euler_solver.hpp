@@ -17,7 +17,7 @@ namespace pdyn::solvers {
 /// How the linear system of a step is solved.
 enum class LinearSolver {
   Auto,    ///< direct when every force has Jacobians and the cloth is small enough, else cg
-  Direct,  ///< sparse block LDL^T factorisation (every force must supply Jacobians)
+  Direct,  ///< sparse supernodal Cholesky factorisation (every force must supply Jacobians)
   Cg,      ///< preconditioned conjugate gradients (matrix-free forces allowed)
 };
 
@@ -99,6 +99,20 @@ class SupernodalCholesky {
   std::vector<double> z_, t_;  // solve's permuted right side and a gather buffer
   std::size_t blocks_ = 0;
   double flops_ = 0.0;
+  // Supernode s's panel: block columns first .. first + cols - 1, nrows
+  // block rows (rows[0 .. nrows)), values at x: ld = 3 nrows scalar rows,
+  // width = 3 cols scalar columns, below = ld - width rows under the
+  // diagonal block.
+  struct Panel {
+    Index first, cols, nrows;
+    const Index* rows;
+    int ld, width, below;
+    double* x;
+  };
+  Panel panel(Index s);
+  void gather(const Panel& p, const std::vector<Eigen::Matrix3d>& val);
+  void update(Index d, const Panel& p);
+  void link(Index d, Index row);
   bool allocated_ = false;  // the storage above, by the first factorize() after analyze()
 };
 
@@ -120,11 +134,22 @@ class ImplicitEuler final : public Solver {
   bool last_step_direct() const noexcept { return last_direct_; }
   /// 3 x 3 blocks in the direct solve's L (0 before its analysis).
   std::size_t factor_blocks() const noexcept { return cholesky_.factor_blocks(); }
+  /// Memory of the direct solve's factor, bytes (0 before its analysis).
+  double factor_bytes() const noexcept { return cholesky_.factor_bytes(); }
   /// Floating-point operations of one factorisation (0 before its analysis).
   double factor_flops() const noexcept { return cholesky_.factor_flops(); }
-  /// Wall time spent factorising so far, s (bench/ reads it; two clock
-  /// reads per step cost nothing next to a factorisation).
-  double factor_seconds() const noexcept { return factor_seconds_; }
+  /// Wall time of each part of the steps so far, s (bench/ reads it: a few
+  /// clock reads per step cost nothing next to a factorisation).
+  struct PartSeconds {
+    double forces = 0.0;         ///< f0 (every force and collider)
+    double jacobians = 0.0;      ///< the forces' Jacobians, entered into A
+    double analysis = 0.0;       ///< the factor's symbolic analysis (once per pattern)
+    double factorisation = 0.0;  ///< the numeric factorisation
+    double solve = 0.0;          ///< right side, triangular solves or CG, the update
+  };
+  const PartSeconds& part_seconds() const noexcept { return parts_; }
+  /// Wall time spent factorising so far, s.
+  double factor_seconds() const noexcept { return parts_.factorisation; }
 
  private:
   struct Key {
@@ -197,7 +222,7 @@ class ImplicitEuler final : public Solver {
   Eigen::VectorXd ux_, uv_, fd_out_;  // finite-difference directions and result
   Matrix3X xp_, vp_, fp_, fm_;        // finite-difference states and forces
   std::int64_t last_iterations_ = 0, total_iterations_ = 0, steps_ = 0;
-  double factor_seconds_ = 0.0;
+  PartSeconds parts_;
 };
 
 }  // namespace pdyn::solvers
