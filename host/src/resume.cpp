@@ -14,8 +14,10 @@ namespace {
 
 std::string flow(const YAML::Node& n) {
   if (!n.IsDefined()) return "(absent)";
+  YAML::Node one_line = YAML::Clone(n);  // a block-style node keeps its style otherwise
+  one_line.SetStyle(YAML::EmitterStyle::Flow);
   YAML::Emitter e;
-  e << YAML::Flow << n;
+  e << one_line;
   return e.c_str();
 }
 
@@ -23,7 +25,10 @@ std::string flow(const YAML::Node& n) {
 void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path,
           std::vector<std::string>& out) {
   const std::string here = path.empty() ? "(scene)" : path;
-  if (a.IsMap() && b.IsMap()) {
+  // A key on one side only: yaml-cpp's missing node throws on anything but
+  // IsDefined(), so it is told apart first.
+  const bool both = a.IsDefined() && b.IsDefined();
+  if (both && a.IsMap() && b.IsMap()) {
     std::vector<std::string> keys;
     for (const auto& kv : a) keys.push_back(kv.first.Scalar());
     for (const auto& kv : b) {
@@ -34,7 +39,7 @@ void diff(const YAML::Node& a, const YAML::Node& b, const std::string& path,
     }
     return;
   }
-  if (a.IsSequence() && b.IsSequence() && a.size() == b.size()) {
+  if (both && a.IsSequence() && b.IsSequence() && a.size() == b.size()) {
     for (std::size_t i = 0; i < a.size(); ++i)
       diff(a[i], b[i], fmt::format("{}[{}]", path, i), out);
     return;

@@ -965,9 +965,38 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
 
 }  // namespace loading
 
+namespace {
+
+// An object added after loading becomes part of what a checkpoint must
+// match (resume.cpp compares the canonical texts): appended to the
+// canonical text as an item of a last top-level key `added:`, its kind and
+// its YAML, not its origin, which only names the caller. So a run resumed
+// into a simulation without the object, with another, or with other
+// parameters, is refused with the difference instead of going on silently.
+// Appending keeps this linear in the number of additions; `added` is never
+// a scene's own key (the schema refuses it), so it stays the last one.
+void record_addition(Scene& scene, PluginKind kind, const std::string& text) {
+  YAML::Node node = YAML::Load(text);
+  node.SetStyle(YAML::EmitterStyle::Flow);  // one line, whatever style the caller wrote
+  YAML::Emitter object;
+  object << node;
+  if (!scene.canonical_text.empty() && scene.canonical_text.back() != '\n') {
+    scene.canonical_text += '\n';
+  }
+  if (scene.canonical_text.find("\nadded:\n") == std::string::npos) {
+    scene.canonical_text += "added:\n";
+  }
+  scene.canonical_text +=
+      fmt::format("  - {{kind: {}, object: {}}}\n", kind_name(kind), object.c_str());
+}
+
+}  // namespace
+
 std::string add_plugin(Scene& scene, const PluginRegistry& registry, PluginKind kind,
                        const std::string& text, const std::string& origin) {
-  return loading::Loader(origin, registry, {}).add_to(scene, kind, text);
+  std::string label = loading::Loader(origin, registry, {}).add_to(scene, kind, text);
+  record_addition(scene, kind, text);
+  return label;
 }
 
 namespace {

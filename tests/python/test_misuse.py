@@ -51,6 +51,34 @@ def test_a_file_is_not_a_plugin_folder(tmp_path):
         pdyn.load(FALL, plugin_path=f)
 
 
+def test_checkpoint_remembers_what_python_added(fall, tmp_path):
+    # A constraint (or force) added from Python is not in the scene's text,
+    # but it is part of what a checkpoint must match: restoring into a
+    # simulation without it, or with other parameters, is refused with the
+    # difference, and into one with the same addition it goes on as before.
+    fall.add_constraint("distance", pairs=[[0, 1]])
+    fall.step(5)
+    fall.save(tmp_path / "rod.ckpt")
+    bare = pdyn.loads(FALL, name="fall.yaml", threads=1)
+    with pytest.raises(pdyn.CheckpointError) as e:
+        bare.restore(tmp_path / "rod.ckpt")
+    assert str(e.value) == (
+        "the checkpoint was written for a different scene (fall.yaml): added: "
+        "[{kind: constraint, object: {type: distance, pairs: [[0, 1]]}}] in the checkpoint, "
+        "(absent) now (expected the same scene; restore(path, force=True) restores anyway)")
+    other = pdyn.loads(FALL, name="fall.yaml", threads=1)
+    other.add_constraint("distance", pairs=[[1, 0]])
+    with pytest.raises(pdyn.CheckpointError) as e:
+        other.restore(tmp_path / "rod.ckpt")
+    assert "): added[0].object.pairs[0][0]: 0 in the checkpoint, 1 now and 1 more (" in str(e.value)
+    same = pdyn.loads(FALL, name="fall.yaml", threads=1)
+    same.add_constraint("distance", pairs=[[0, 1]])
+    same.restore(tmp_path / "rod.ckpt")
+    fall.step(5)
+    same.step(5)
+    np.testing.assert_array_equal(same.x, fall.x)  # bit for bit
+
+
 def test_the_command_line_words_it_the_same(pdyn_program, tmp_path):
     missing = str(tmp_path / "nowhere")
     r = run_pdyn(pdyn_program, "plugins", "--plugin-path", missing, cwd=tmp_path)
