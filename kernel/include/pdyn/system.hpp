@@ -118,6 +118,9 @@ class System {
 
   const Eigen::VectorXd& masses() const noexcept { return mass_; }
   const std::vector<std::uint8_t>& fixed() const noexcept { return fixed_; }
+  /// 1/m per particle, 1/kg; 0 for a fixed particle, which no force or
+  /// constraint impulse moves. Kept in step with masses() and fixed().
+  const Eigen::VectorXd& inverse_masses() const noexcept { return inv_mass_; }
   const Domain& domain() const noexcept { return domain_; }
   const std::vector<double>& radii() const noexcept { return radius_; }
   const std::vector<std::int32_t>& types() const noexcept { return type_; }

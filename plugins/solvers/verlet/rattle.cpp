@@ -9,14 +9,6 @@
 
 namespace pdyn_verlet {
 
-namespace {
-
-double inverse_mass(const pdyn::System& sys, Index k) {
-  return sys.fixed()[static_cast<std::size_t>(k)] != 0 ? 0.0 : 1.0 / sys.masses()(k);
-}
-
-}  // namespace
-
 void Rattle::begin(const pdyn::System& sys) {
   // The rows and factor the last step ended with (J(x1), for its velocity
   // stage) are J(x0) of this one, unless something wrote the state since.
@@ -68,13 +60,8 @@ void Rattle::factorise(const pdyn::System& sys, const pdyn::ConstraintRows& rows
   }
   jacobian_ = rows.jacobian;
   rate_ = rows.rate;
+  fill_products(sys, jacobian_, a_);
   double* values = a_.valuePtr();
-  std::fill(values, values + a_.nonZeros(), 0.0);
-  for (std::size_t k = 0; k < pair_slot_.size(); ++k) {
-    const Index e = pair_first_[k];
-    values[pair_slot_[k]] +=
-        inverse_mass(sys, particle_[e]) * jacobian_.col(e).dot(jacobian_.col(pair_second_[k]));
-  }
   for (Index r = 0; r < m; ++r) {
     double& d = values[diagonal_slot_[r]];
     active_[r] = d > 0.0 ? 1 : 0;
@@ -144,17 +131,26 @@ void Rattle::project_positions(pdyn::System& sys, double h, pdyn::Matrix3X* half
   }
 }
 
+// target = left W J0^T on J W J^T's pattern: for each pair of entries on
+// one particle, W_k times row r's gradient in `left` against row s's at the
+// step's start (jacobian_).
+void Rattle::fill_products(const pdyn::System& sys, const pdyn::Matrix3X& left,
+                           Eigen::SparseMatrix<double>& target) const {
+  double* values = target.valuePtr();
+  std::fill(values, values + target.nonZeros(), 0.0);
+  for (std::size_t k = 0; k < pair_slot_.size(); ++k) {
+    const Index e = pair_first_[k];
+    values[pair_slot_[k]] +=
+        sys.inverse_masses()(particle_[e]) * left.col(e).dot(jacobian_.col(pair_second_[k]));
+  }
+}
+
 void Rattle::factorise_newton(const pdyn::System& sys, const pdyn::ConstraintRows& rows) {
   // Same pattern as J W J^T: the pairs of entries on one particle, row r's
   // gradient now against row s's at the step's start.
   if (newton_.rows() == 0) newton_ = a_;
+  fill_products(sys, rows.jacobian, newton_);
   double* values = newton_.valuePtr();
-  std::fill(values, values + newton_.nonZeros(), 0.0);
-  for (std::size_t k = 0; k < pair_slot_.size(); ++k) {
-    const Index e = pair_first_[k];
-    values[pair_slot_[k]] +=
-        inverse_mass(sys, particle_[e]) * rows.jacobian.col(e).dot(jacobian_.col(pair_second_[k]));
-  }
   for (Index r = 0; r < rows.rows(); ++r) {
     if (active_[r] == 0) values[diagonal_slot_[r]] = 1.0;
   }

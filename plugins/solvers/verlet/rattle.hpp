@@ -71,6 +71,8 @@ class Rattle {
   // Copies J and c_t of the rows just evaluated, assembles J W J^T over
   // them and factorises it.
   void factorise(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
+  void fill_products(const pdyn::System& sys, const pdyn::Matrix3X& left,
+                     Eigen::SparseMatrix<double>& target) const;
   // Newton's matrix J(x) W J0^T at the rows just evaluated, factorised.
   void factorise_newton(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
   // Throws if the last solve gave a non-finite multiplier.
@@ -84,7 +86,7 @@ class Rattle {
       for (Index e = row_begin_[r]; e < row_begin_[r + 1]; ++e) {
         const Index k = particle_[e];
         if (sys.fixed()[static_cast<std::size_t>(k)] != 0) continue;
-        const double w = 1.0 / sys.masses()(k);
+        const double w = sys.inverse_masses()(k);
         add(k, pdyn::Vec3(-(w * mu_(r)) * jacobian_.col(e)));
       }
     }

@@ -52,10 +52,6 @@ class Xpbd final : public pdyn::Solver, public pdyn::ConstraintSolver {
     const double t0 = sys.time();
     previous_.resize(3, n);
     if (delta_.cols() != n) delta_.setZero(3, n);
-    weight_.resize(n);
-    for (Index k = 0; k < n; ++k) {
-      weight_(k) = sys.fixed()[static_cast<std::size_t>(k)] != 0 ? 0.0 : 1.0 / sys.masses()(k);
-    }
     for (Index s = 0; s < substeps_; ++s) {
       const pdyn::Matrix3X& a = sys.compute_accelerations();
       auto x = sys.positions();
@@ -75,6 +71,7 @@ class Xpbd final : public pdyn::Solver, public pdyn::ConstraintSolver {
  private:
   void project(pdyn::System& sys, double hs) {
     const Index m = sys.constraint_rows();
+    const Eigen::VectorXd& weight = sys.inverse_masses();  // 0 for fixed particles
     lambda_.setZero(m);
     for (Index it = 0; it < iterations_; ++it) {
       const pdyn::ConstraintRows& rows = sys.evaluate_constraint_rows();
@@ -84,14 +81,14 @@ class Xpbd final : public pdyn::Solver, public pdyn::ConstraintSolver {
         for (Index e = rows.row_begin[r]; e < rows.row_begin[r + 1]; ++e) {
           const Index k = rows.particle[e];
           c += rows.jacobian.col(e).dot(delta_.col(k));
-          denominator += weight_(k) * rows.jacobian.col(e).squaredNorm();
+          denominator += weight(k) * rows.jacobian.col(e).squaredNorm();
         }
         if (!(denominator > 0.0)) continue;  // every particle fixed, or no gradient
         const double dlambda = (-c - alpha * lambda_(r)) / denominator;
         lambda_(r) += dlambda;
         for (Index e = rows.row_begin[r]; e < rows.row_begin[r + 1]; ++e) {
           const Index k = rows.particle[e];
-          delta_.col(k) += (weight_(k) * dlambda) * rows.jacobian.col(e);
+          delta_.col(k) += (weight(k) * dlambda) * rows.jacobian.col(e);
         }
       }
       // Apply the sweep's displacements and clear them where they were set.
@@ -106,7 +103,6 @@ class Xpbd final : public pdyn::Solver, public pdyn::ConstraintSolver {
   Index substeps_, iterations_;
   pdyn::Matrix3X previous_;  // x at the substep's start
   pdyn::Matrix3X delta_;     // one sweep's displacements, zero outside it
-  Eigen::VectorXd weight_;   // inverse masses, 0 for fixed particles
   Eigen::VectorXd lambda_;   // per row: the substep's accumulated multiplier (N s^2 per unit)
 };
 
