@@ -983,7 +983,8 @@ void record_addition(Scene& scene, PluginKind kind, const std::string& text) {
   if (!scene.canonical_text.empty() && scene.canonical_text.back() != '\n') {
     scene.canonical_text += '\n';
   }
-  if (scene.canonical_text.find("\nadded:\n") == std::string::npos) {
+  // From the end: once there, `added:` is followed only by the additions.
+  if (scene.canonical_text.rfind("\nadded:\n") == std::string::npos) {
     scene.canonical_text += "added:\n";
   }
   scene.canonical_text +=

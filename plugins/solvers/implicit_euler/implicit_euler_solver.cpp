@@ -517,6 +517,86 @@ void elimination_tree(const std::vector<Index>& ucol_start, const std::vector<In
   }
 }
 
+// The nodes of a forest given by `parent` (-1: a root) in postorder: each
+// node after its children, each subtree contiguous. Children in increasing
+// order, iteratively (a chain of a million particles is a million deep).
+std::vector<Index> postorder(const std::vector<Index>& parent) {
+  const Index n = static_cast<Index>(parent.size());
+  std::vector<Index> first_child(static_cast<std::size_t>(n), -1),
+      sibling(static_cast<std::size_t>(n), -1), post, stack;
+  for (Index k = n - 1; k >= 0; --k) {
+    if (parent[k] >= 0) {
+      sibling[k] = first_child[parent[k]];
+      first_child[parent[k]] = k;
+    }
+  }
+  post.reserve(static_cast<std::size_t>(n));
+  for (Index root = 0; root < n; ++root) {
+    if (parent[root] != -1) continue;
+    stack.push_back(root);
+    while (!stack.empty()) {
+      const Index k = stack.back();
+      if (first_child[k] >= 0) {  // descend, detaching the child visited
+        const Index c = first_child[k];
+        first_child[k] = sibling[c];
+        stack.push_back(c);
+      } else {
+        post.push_back(k);
+        stack.pop_back();
+      }
+    }
+  }
+  return post;
+}
+
+// The first column of each supernode, then n, for the postordered
+// elimination tree `parent` and L's column counts `count`. Fundamental
+// supernodes first: column j joins column j - 1's supernode when j is its
+// parent and their patterns are nested (one block fewer). Then relaxed: a
+// supernode is merged with the next one when that holds its last column's
+// parent and the explicit zeros the merge adds are few (CHOLMOD's rule:
+// always up to 4 columns, then at most 80%, 10%, 5% zeros up to 16, 48 and
+// more columns; here in block columns). Small supernodes cost a call each;
+// dense updates of a few zeros cost less.
+std::vector<Index> relaxed_supernodes(const std::vector<Index>& parent,
+                                      const std::vector<Index>& count) {
+  const Index n = static_cast<Index>(parent.size());
+  std::vector<Index> fundamental{0};
+  for (Index j = 1; j < n; ++j) {
+    if (!(parent[j - 1] == j && count[j - 1] == count[j] + 1)) fundamental.push_back(j);
+  }
+  fundamental.push_back(n);
+  std::vector<Index> merged{0};
+  Index below = count[fundamental[1] - 1];  // rows below the current group
+  double zeros = 0.0;                       // explicit zero blocks in its panel
+  const Index ns = static_cast<Index>(fundamental.size()) - 1;
+  auto group_blocks = [](double ncols, double nbelow) {
+    return ncols * (ncols + 1.0) / 2.0 + ncols * nbelow;
+  };
+  for (Index s = 1; s < ns; ++s) {
+    const Index gf = merged.back(), gl = fundamental[s] - 1;  // the group so far
+    const Index f = fundamental[s], l = fundamental[s + 1] - 1;
+    const Index nbelow = count[l];
+    const double gcols = static_cast<double>(gl - gf + 1), cols = static_cast<double>(l - f + 1);
+    const double new_zeros =
+        zeros + gcols * (cols + static_cast<double>(nbelow) - static_cast<double>(below));
+    const double new_size = group_blocks(gcols + cols, static_cast<double>(nbelow));
+    const double total = gcols + cols, fraction = new_zeros / new_size;
+    const bool merge = parent[gl] >= f && parent[gl] <= l &&
+                       (total <= 4 || (total <= 16 && fraction < 0.8) ||
+                        (total <= 48 && fraction < 0.1) || fraction < 0.05);
+    if (merge) {
+      zeros = new_zeros;
+    } else {
+      merged.push_back(f);
+      zeros = 0.0;
+    }
+    below = nbelow;
+  }
+  merged.push_back(n);
+  return merged;
+}
+
 }  // namespace
 
 void SupernodalCholesky::analyze(const std::vector<Index>& particles,
@@ -579,30 +659,7 @@ void SupernodalCholesky::analyze(const std::vector<Index>& particles,
   // the same fill, and a chain of columns with nested patterns then sits in
   // consecutive columns, which is what a supernode needs.
   {
-    std::vector<Index> first_child(static_cast<std::size_t>(n), -1),
-        sibling(static_cast<std::size_t>(n), -1), post, stack;
-    for (Index k = n - 1; k >= 0; --k) {
-      if (parent[k] >= 0) {
-        sibling[k] = first_child[parent[k]];
-        first_child[parent[k]] = k;
-      }
-    }
-    post.reserve(static_cast<std::size_t>(n));
-    for (Index root = 0; root < n; ++root) {
-      if (parent[root] != -1) continue;
-      stack.push_back(root);
-      while (!stack.empty()) {
-        const Index k = stack.back();
-        if (first_child[k] >= 0) {  // descend, detaching the child visited
-          const Index c = first_child[k];
-          first_child[k] = sibling[c];
-          stack.push_back(c);
-        } else {
-          post.push_back(k);
-          stack.pop_back();
-        }
-      }
-    }
+    const std::vector<Index> post = postorder(parent);
     std::vector<Index> reordered(static_cast<std::size_t>(n));
     for (Index k = 0; k < n; ++k) reordered[k] = node[post[k]];
     node.swap(reordered);
@@ -635,49 +692,7 @@ void SupernodalCholesky::analyze(const std::vector<Index>& particles,
     acol_start_[j + 1] = static_cast<Index>(arow_.size());
   }
 
-  // Fundamental supernodes: column j joins column j - 1's supernode when j
-  // is its parent and their patterns are nested (one block fewer).
-  super_.assign(1, 0);
-  for (Index j = 1; j < n; ++j) {
-    if (!(parent[j - 1] == j && count[j - 1] == count[j] + 1)) super_.push_back(j);
-  }
-  super_.push_back(n);
-  // Relaxed supernodes: a supernode is merged with the next one when that
-  // holds its last column's parent and the explicit zeros the merge adds
-  // are few (CHOLMOD's rule: always up to 4 columns, then at most 80%, 10%,
-  // 5% zeros up to 16, 48 and more columns; here in block columns). Small
-  // supernodes cost a call each; dense updates of a few zeros cost less.
-  {
-    std::vector<Index> merged{0};
-    Index below = count[super_[1] - 1];  // rows below the current group
-    double zeros = 0.0;                  // explicit zero blocks in its panel
-    const Index ns = static_cast<Index>(super_.size()) - 1;
-    auto group_blocks = [](double ncols, double nbelow) {
-      return ncols * (ncols + 1.0) / 2.0 + ncols * nbelow;
-    };
-    for (Index s = 1; s < ns; ++s) {
-      const Index gf = merged.back(), gl = super_[s] - 1;  // the group so far
-      const Index f = super_[s], l = super_[s + 1] - 1;
-      const Index nbelow = count[l];
-      const double gcols = static_cast<double>(gl - gf + 1), cols = static_cast<double>(l - f + 1);
-      const double new_zeros =
-          zeros + gcols * (cols + static_cast<double>(nbelow) - static_cast<double>(below));
-      const double new_size = group_blocks(gcols + cols, static_cast<double>(nbelow));
-      const double total = gcols + cols, fraction = new_zeros / new_size;
-      const bool merge = parent[gl] >= f && parent[gl] <= l &&
-                         (total <= 4 || (total <= 16 && fraction < 0.8) ||
-                          (total <= 48 && fraction < 0.1) || fraction < 0.05);
-      if (merge) {
-        zeros = new_zeros;
-      } else {
-        merged.push_back(f);
-        zeros = 0.0;
-      }
-      below = nbelow;
-    }
-    merged.push_back(n);
-    super_.swap(merged);
-  }
+  super_ = relaxed_supernodes(parent, count);
   const Index ns = static_cast<Index>(super_.size()) - 1;
   super_of_.resize(static_cast<std::size_t>(n));
   for (Index s = 0; s < ns; ++s) {
