@@ -8,7 +8,9 @@
 #   bash scripts/package_smoke.sh [DEB_DIR]      (default build-deb)
 #
 # Checks: `pdyn --version`; the demo from /usr/share/pdyn/configs writes its
-# outputs; every plugin in the package is found from the installed layout;
+# outputs; the hanging cloth steps with implicit_euler (OpenBLAS, loaded
+# at its first factorisation, from the Depends); every plugin in the
+# package is found from the installed layout;
 # `pdyn serve` serves the page and its three.js from /usr/share/pdyn/viewer;
 # `pdyn new force wind` builds against pdyn-dev with a plain
 # `cmake -S wind -B wind/build` and passes `pdyn check`; `import pdyn` comes
@@ -54,6 +56,12 @@ pdyn --version
 mkdir "$work/demo"
 (cd "$work/demo" && pdyn run /usr/share/pdyn/configs/demo.yaml --quiet)
 ran=$(date +%s.%N)
+# implicit_euler's direct solve loads OpenBLAS itself (dlopen, not linked):
+# the package's Depends must have brought it.
+mkdir "$work/implicit"
+(cd "$work/implicit" && pdyn run /usr/share/pdyn/configs/hanging_cloth.yaml --quiet --steps 3 \
+  --set simulation.solver.type=implicit_euler --set simulation.dt=0.01) ||
+  fail "the hanging cloth did not run with implicit_euler (its BLAS)"
 # 2500 steps, a frame every 40 and the last: 64 frames of 900 particles.
 rows=$(wc -l <"$work/demo/out/demo.csv")
 ((rows == 64 * 900 + 1)) || fail "out/demo.csv has $rows lines (expected $((64 * 900 + 1)))"

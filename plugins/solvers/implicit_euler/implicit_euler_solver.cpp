@@ -63,6 +63,7 @@
 //   allocates nothing once the first has run.
 #include "implicit_euler_solver.hpp"
 
+#include <dlfcn.h>
 #include <fmt/format.h>
 
 #include <Eigen/LU>
@@ -71,9 +72,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <pdyn/error.hpp>
 #include <pdyn/system.hpp>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 namespace pdyn::solvers {
 
@@ -461,37 +466,87 @@ namespace detail {
 
 namespace {
 
-// The reference BLAS / LAPACK interface (Fortran calling convention, the
-// hidden lengths of the character arguments last), so that any BLAS links;
-// the build links OpenBLAS (BSD-3-Clause), whose kernels use AVX2 and FMA
-// where the CPU has them.
-extern "C" {
-void dgemm_(const char* transa, const char* transb, const int* m, const int* n, const int* k,
-            const double* alpha, const double* a, const int* lda, const double* b, const int* ldb,
-            const double* beta, double* c, const int* ldc, std::size_t, std::size_t);
-void dsyrk_(const char* uplo, const char* trans, const int* n, const int* k, const double* alpha,
-            const double* a, const int* lda, const double* beta, double* c, const int* ldc,
-            std::size_t, std::size_t);
-void dtrsm_(const char* side, const char* uplo, const char* transa, const char* diag, const int* m,
-            const int* n, const double* alpha, const double* a, const int* lda, double* b,
-            const int* ldb, std::size_t, std::size_t, std::size_t, std::size_t);
-void dtrsv_(const char* uplo, const char* trans, const char* diag, const int* n, const double* a,
-            const int* lda, double* x, const int* incx, std::size_t, std::size_t, std::size_t);
-void dgemv_(const char* trans, const int* m, const int* n, const double* alpha, const double* a,
-            const int* lda, const double* x, const int* incx, const double* beta, double* y,
-            const int* incy, std::size_t);
-void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info, std::size_t);
-// OpenBLAS's own: its threaded builds would otherwise start a thread pool
-// that spins beside the runner's OpenMP threads. Weak, for other BLAS.
-void openblas_set_num_threads(int) __attribute__((weak));
+// The dense kernels come from a BLAS and LAPACK loaded the first time a
+// matrix is factorised, not linked: the registry loads every plugin to read
+// its descriptor, so a linked OpenBLAS (and its start-up: 5 to 9 ms of
+// dlopen, measured) was paid by every pdyn process, implicit or not, as
+// h5md's HDF5 was (plugins/writers/h5md/h5md.cpp). The routines are the
+// reference interface (Fortran calling convention, the hidden lengths of
+// the character arguments last), so any BLAS serves; Debian's OpenBLAS
+// (BSD-3-Clause) is tried first, for its kernels chosen for the CPU.
+struct Blas {
+  void (*dgemm)(const char* transa, const char* transb, const int* m, const int* n, const int* k,
+                const double* alpha, const double* a, const int* lda, const double* b,
+                const int* ldb, const double* beta, double* c, const int* ldc, std::size_t,
+                std::size_t) = nullptr;
+  void (*dsyrk)(const char* uplo, const char* trans, const int* n, const int* k,
+                const double* alpha, const double* a, const int* lda, const double* beta, double* c,
+                const int* ldc, std::size_t, std::size_t) = nullptr;
+  void (*dtrsm)(const char* side, const char* uplo, const char* transa, const char* diag,
+                const int* m, const int* n, const double* alpha, const double* a, const int* lda,
+                double* b, const int* ldb, std::size_t, std::size_t, std::size_t,
+                std::size_t) = nullptr;
+  void (*dtrsv)(const char* uplo, const char* trans, const char* diag, const int* n,
+                const double* a, const int* lda, double* x, const int* incx, std::size_t,
+                std::size_t, std::size_t) = nullptr;
+  void (*dgemv)(const char* trans, const int* m, const int* n, const double* alpha, const double* a,
+                const int* lda, const double* x, const int* incx, const double* beta, double* y,
+                const int* incy, std::size_t) = nullptr;
+  void (*dpotrf)(const char* uplo, const int* n, double* a, const int* lda, int* info,
+                 std::size_t) = nullptr;
+};
+
+// PDYN_BLAS, when set, names the library (a path or a soname) and nothing
+// else is tried. Loaded for good (RTLD_NODELETE): a threaded OpenBLAS keeps
+// a thread pool that must not outlive its code.
+Blas load_blas() {
+  const char* chosen = std::getenv("PDYN_BLAS");
+  const std::vector<std::string> names =
+      chosen != nullptr && *chosen != '\0'
+          ? std::vector<std::string>{chosen}
+          : std::vector<std::string>{"libopenblas.so.0", "liblapack.so.3"};
+  std::string tried;
+  for (const std::string& name : names) {
+    void* handle = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+    if (handle == nullptr) {
+      const char* why = dlerror();
+      tried += (tried.empty() ? "" : "; ") + std::string(why != nullptr ? why : name);
+      continue;
+    }
+    Blas b;
+    std::string missing;
+    auto find = [&](auto& fn, const char* symbol) {
+      fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(dlsym(handle, symbol));
+      if (fn == nullptr) missing += (missing.empty() ? "" : ", ") + std::string(symbol);
+    };
+    find(b.dgemm, "dgemm_");
+    find(b.dsyrk, "dsyrk_");
+    find(b.dtrsm, "dtrsm_");
+    find(b.dtrsv, "dtrsv_");
+    find(b.dgemv, "dgemv_");
+    find(b.dpotrf, "dpotrf_");
+    if (!missing.empty()) {
+      tried += (tried.empty() ? "" : "; ") + name + " lacks " + missing;
+      continue;
+    }
+    // OpenBLAS's own: its threaded builds would otherwise start a thread
+    // pool that spins beside the runner's OpenMP threads.
+    if (auto threads = reinterpret_cast<void (*)(int)>(dlsym(handle, "openblas_set_num_threads"))) {
+      threads(1);
+    }
+    return b;
+  }
+  throw Error(fmt::format(
+      "implicit_euler: cannot load a BLAS and LAPACK for its direct solve: {} (expected "
+      "Debian's libopenblas0 installed, or PDYN_BLAS naming a library with dgemm_, dsyrk_, "
+      "dtrsm_, dtrsv_, dgemv_ and dpotrf_; linear_solver: cg needs none)",
+      tried));
 }
 
-void serial_blas() {
-  static const bool done = [] {
-    if (openblas_set_num_threads != nullptr) openblas_set_num_threads(1);
-    return true;
-  }();
-  (void)done;
+// A failed load throws and is tried again at the next factorisation.
+const Blas& blas() {
+  static const Blas b = load_blas();
+  return b;
 }
 
 // The elimination tree of the pattern whose upper triangle, by column in
@@ -767,8 +822,8 @@ Index SupernodalCholesky::factorize(const std::vector<Eigen::Matrix3d>& val) {
   if (n == 0) return -1;  // every particle fixed
   const Index ns = static_cast<Index>(super_.size()) - 1;
   if (!allocated_) {  // the first factorisation since analyze()
+    blas();           // throws before anything changes if there is no BLAS
     allocated_ = true;
-    serial_blas();
     lx_.resize(panel_.back());
     work_.resize(work_size_);
     head_.resize(static_cast<std::size_t>(ns));
@@ -781,6 +836,7 @@ Index SupernodalCholesky::factorize(const std::vector<Eigen::Matrix3d>& val) {
     t_.resize(3 * static_cast<std::size_t>(widest));
   }
   std::fill(head_.begin(), head_.end(), -1);
+  const Blas& lapack = blas();
   const double one = 1.0;
   for (Index s = 0; s < ns; ++s) {
     const Panel p = panel(s);
@@ -791,11 +847,11 @@ Index SupernodalCholesky::factorize(const std::vector<Eigen::Matrix3d>& val) {
       d = after;
     }
     int info = 0;
-    dpotrf_("L", &p.width, p.x, &p.ld, &info, 1);
+    lapack.dpotrf("L", &p.width, p.x, &p.ld, &info, 1);
     if (info != 0) return p.first + (info - 1) / 3;
     if (p.below > 0) {
-      dtrsm_("R", "L", "T", "N", &p.below, &p.width, &one, p.x, &p.ld, p.x + p.width, &p.ld, 1, 1,
-             1, 1);
+      lapack.dtrsm("R", "L", "T", "N", &p.below, &p.width, &one, p.x, &p.ld, p.x + p.width, &p.ld,
+                   1, 1, 1, 1);
       link(s, p.cols);
     }
   }
@@ -829,13 +885,14 @@ void SupernodalCholesky::update(Index d, const Panel& p) {
   const int m = static_cast<int>(3 * (dp.nrows - p1)), k = static_cast<int>(3 * (p2 - p1));
   const double* l1 = dp.x + 3 * p1;
   const double one = 1.0, zero = 0.0;
+  const Blas& lapack = blas();
   // W = L_d(p1:, :) L_d(p1:p2, :)^T: the lower triangle of its top square
   // by dsyrk, the rows below by dgemm.
-  dsyrk_("L", "N", &k, &dp.width, &one, l1, &dp.ld, &zero, work_.data(), &m, 1, 1);
+  lapack.dsyrk("L", "N", &k, &dp.width, &one, l1, &dp.ld, &zero, work_.data(), &m, 1, 1);
   if (m > k) {
     const int mb = m - k;
-    dgemm_("N", "T", &mb, &k, &dp.width, &one, l1 + k, &dp.ld, l1, &dp.ld, &zero, work_.data() + k,
-           &m, 1, 1);
+    lapack.dgemm("N", "T", &mb, &k, &dp.width, &one, l1 + k, &dp.ld, l1, &dp.ld, &zero,
+                 work_.data() + k, &m, 1, 1);
   }
   for (Index c = 0; c < p2 - p1; ++c) {
     double* dst_col = p.x + 3 * (dp.rows[p1 + c] - p.first) * p.ld;
@@ -886,15 +943,16 @@ void SupernodalCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   for (Index k = 0; k < n; ++k) {
     for (int c = 0; c < 3; ++c) z_[3 * k + c] = b[3 * order_[k] + c];
   }
+  const Blas& lapack = blas();
   const double one = 1.0, minus = -1.0, zero = 0.0;
   const int inc = 1;
   for (Index s = 0; s < ns; ++s) {
     const Panel p = panel(s);
     double* zs = z_.data() + 3 * p.first;
-    dtrsv_("L", "N", "N", &p.width, p.x, &p.ld, zs, &inc, 1, 1, 1);
+    lapack.dtrsv("L", "N", "N", &p.width, p.x, &p.ld, zs, &inc, 1, 1, 1);
     if (p.below == 0) continue;
-    dgemv_("N", &p.below, &p.width, &one, p.x + p.width, &p.ld, zs, &inc, &zero, t_.data(), &inc,
-           1);
+    lapack.dgemv("N", &p.below, &p.width, &one, p.x + p.width, &p.ld, zs, &inc, &zero, t_.data(),
+                 &inc, 1);
     for (Index r = p.cols; r < p.nrows; ++r) {
       for (int c = 0; c < 3; ++c) z_[3 * p.rows[r] + c] -= t_[3 * (r - p.cols) + c];
     }
@@ -906,10 +964,10 @@ void SupernodalCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
       for (Index r = p.cols; r < p.nrows; ++r) {
         for (int c = 0; c < 3; ++c) t_[3 * (r - p.cols) + c] = z_[3 * p.rows[r] + c];
       }
-      dgemv_("T", &p.below, &p.width, &minus, p.x + p.width, &p.ld, t_.data(), &inc, &one, zs, &inc,
-             1);
+      lapack.dgemv("T", &p.below, &p.width, &minus, p.x + p.width, &p.ld, t_.data(), &inc, &one, zs,
+                   &inc, 1);
     }
-    dtrsv_("L", "T", "N", &p.width, p.x, &p.ld, zs, &inc, 1, 1, 1);
+    lapack.dtrsv("L", "T", "N", &p.width, p.x, &p.ld, zs, &inc, 1, 1, 1);
   }
   for (Index k = 0; k < n; ++k) {
     for (int c = 0; c < 3; ++c) x[3 * order_[k] + c] = z_[3 * k + c];
