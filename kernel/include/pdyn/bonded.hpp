@@ -589,13 +589,14 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
                                    coefficients_.data(),
                                    rest0_};
     const Index* block_start = block_start_.data();
-    auto interior = [&](Index blk) {
-      const Index begin = block_start[blk], end = block_start[blk + 1];
+    // Terms [begin, end) scattered straight into f, in order.
+    auto direct = [&](Index begin, Index end) {
       const Coefficients c0 = k.coeffs[0];
+      const auto* terms = k.terms;  // a local: stores into f cannot change it
       for (Index s = begin; s < end; ++s) {
         const BondedTerm<N> t = k.term(s, c0);
         for (int a = 0; a < N; ++a) {
-          double* fa = f + fs * k.terms[s][a];
+          double* fa = f + fs * terms[s][a];
           fa[0] += t.force[a][0];
           fa[1] += t.force[a][1];
           fa[2] += t.force[a][2];
@@ -605,14 +606,18 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
     // Not `omp parallel for if (parallel)`: libgomp allocates a team for
     // every region, even a serial one, and stepping must not allocate. A
     // plugin built without OpenMP runs the blocks in order on one thread.
-    if (parallel) {
+    if (!parallel) {
+      // On one thread the blocks serve nothing: every term in order, the
+      // boundary terms last. Each particle then receives its terms' forces
+      // in the order the buffered path below adds them (block by block,
+      // then its boundary terms in term order), so the bits are the same.
+      direct(0, term_count());
+      return;
+    }
 #ifdef _OPENMP
 #pragma omp parallel for schedule(static)
 #endif
-      for (Index blk = 0; blk < n_blocks; ++blk) interior(blk);
-    } else {
-      for (Index blk = 0; blk < n_blocks; ++blk) interior(blk);
-    }
+    for (Index blk = 0; blk < n_blocks; ++blk) direct(block_start[blk], block_start[blk + 1]);
     const Index first = block_start_.back(), n_boundary = term_count() - first;
     if (n_boundary == 0) return;
     double* buffer = buffer_.data();
