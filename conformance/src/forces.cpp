@@ -220,6 +220,56 @@ void derivative_checks(ForceCase& c, std::vector<CheckResult>& out) {
   });
 }
 
+// What a local force declares: that it may be added range by range, and
+// its linear law.
+void local_checks(ForceCase& c, std::vector<CheckResult>& out) {
+  // The kernel adds a local force range by range inside its gather pass:
+  // that must give add_forces' bits, however the particles are split.
+  if (LocalForce* local = local_force(c.force); local != nullptr && local->acts_locally()) {
+    guarded(out, "force.local_range", [&] {
+      const Matrix3X whole = forces_of(c.force, c.home);
+      double worst = 0.0;
+      const Index n = c.home.size();
+      for (const Index cut : {Index{1}, n / 3, n - 1}) {
+        Matrix3X f = Matrix3X::Zero(3, n);
+        local->add_forces_range(c.home.view(), f, cut, n);
+        local->add_forces_range(c.home.view(), f, 0, cut);
+        worst = std::max(worst, bits_apart(f, whole));
+      }
+      return result("force.local_range", worst == 0.0, worst, 0,
+                    "add_forces_range over [cut, N) then [0, cut), 3 cuts: add_forces' bits");
+    });
+  } else {
+    out.push_back(skip("force.local_range", "no LocalForce interface"));
+  }
+
+  // The kernel evaluates a linear local force's declared law in place of
+  // add_forces_range, onto the forces already there: the same bits.
+  LinearLocalLaw law;
+  LinearLocalForce* linear = linear_local_force(c.force);
+  LocalForce* local = local_force(c.force);
+  if (linear != nullptr && local != nullptr && local->acts_locally() && linear->linear_law(law)) {
+    guarded(out, "force.linear_law", [&] {
+      double worst = 0.0;
+      for (int trial = 0; trial < 3; ++trial) {
+        const State s = trial == 0 ? c.home : random_state(c.rng);
+        const Matrix3X before = random_state(c.rng).v;  // forces already there, N
+        Matrix3X by_plugin = before, by_law = before;
+        local->add_forces_range(s.view(), by_plugin, 0, s.size());
+        for (Index i = 0; i < s.size(); ++i) {
+          apply_linear_law(law, s.mass(i), s.v.col(i).data(), by_law(0, i), by_law(1, i),
+                           by_law(2, i));
+        }
+        worst = std::max(worst, bits_apart(by_law, by_plugin));
+      }
+      return result("force.linear_law", worst == 0.0, worst, 0,
+                    "the declared law onto random forces, 3 states: add_forces_range's bits");
+    });
+  } else {
+    out.push_back(skip("force.linear_law", "no linear law declared"));
+  }
+}
+
 // What the force declares: dissipation, independence of velocity or time,
 // local action range by range.
 void claim_checks(ForceCase& c, std::vector<CheckResult>& out) {
@@ -263,25 +313,7 @@ void claim_checks(ForceCase& c, std::vector<CheckResult>& out) {
     out.push_back(skip("force.dependence", "declares it depends on velocity and time"));
   }
 
-  // The kernel adds a local force range by range inside its gather pass:
-  // that must give add_forces' bits, however the particles are split.
-  if (LocalForce* local = local_force(c.force); local != nullptr && local->acts_locally()) {
-    guarded(out, "force.local_range", [&] {
-      const Matrix3X whole = forces_of(c.force, c.home);
-      double worst = 0.0;
-      const Index n = c.home.size();
-      for (const Index cut : {Index{1}, n / 3, n - 1}) {
-        Matrix3X f = Matrix3X::Zero(3, n);
-        local->add_forces_range(c.home.view(), f, cut, n);
-        local->add_forces_range(c.home.view(), f, 0, cut);
-        worst = std::max(worst, bits_apart(f, whole));
-      }
-      return result("force.local_range", worst == 0.0, worst, 0,
-                    "add_forces_range over [cut, N) then [0, cut), 3 cuts: add_forces' bits");
-    });
-  } else {
-    out.push_back(skip("force.local_range", "no LocalForce interface"));
-  }
+  local_checks(c, out);
 }
 
 // A force that declares itself periodic-invariant gives the same forces, to

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 
 #include "constraint_force.hpp"
@@ -166,7 +167,8 @@ void System::update_inverse_mass() {
 }
 
 void System::add_force(std::shared_ptr<Force> force, std::string label) {
-  local_.push_back(force ? local_force(*force) : nullptr);
+  local_.push_back(force ? LocalEntry{local_force(*force), linear_local_force(*force)}
+                         : LocalEntry{});
   forces_.push_back({std::move(force), std::move(label)});
   touch();
 }
@@ -323,8 +325,8 @@ std::size_t System::evaluate_forces() {
   std::size_t first_local = forces_.size();
   const bool constrained = constraint_force_on_ && constraint_rows() > 0;
   if (colliders_.empty() && !constrained && !finite_checks_) {
-    while (first_local > 0 && local_[first_local - 1] != nullptr &&
-           local_[first_local - 1]->acts_locally()) {
+    while (first_local > 0 && local_[first_local - 1].local != nullptr &&
+           local_[first_local - 1].local->acts_locally()) {
       --first_local;
     }
   }
@@ -356,9 +358,25 @@ void System::add_local_forces(std::size_t first, Index begin, Index end) {
   const ParticleView p = view();
   for (std::size_t k = first; k < forces_.size(); ++k) {
     const crash::CallScope scope(forces_[k].label, "add_forces");
-    local_[k]->add_forces_range(p, force_, begin, end);
+    local_[k].local->add_forces_range(p, force_, begin, end);
   }
 }
+
+// The laws (pdyn/local_force.hpp) of local forces [first, end of list), in
+// list order, when each has one now and there are at most kMaxLinearLaws;
+// otherwise 0, and the gather calls add_forces_range.
+int System::linear_laws(std::size_t first, LinearLocalLaw* laws) const {
+  const std::size_t count = forces_.size() - first;
+  if (count == 0 || count > static_cast<std::size_t>(kMaxLinearLaws)) return 0;
+  for (std::size_t k = first; k < forces_.size(); ++k) {
+    const LinearLocalForce* linear = local_[k].linear;
+    const crash::CallScope scope(forces_[k].label, "linear_law");
+    if (linear == nullptr || !linear->linear_law(laws[k - first])) return 0;
+  }
+  return static_cast<int>(count);
+}
+
+namespace {
 
 // Particles per chunk of the gather: the local forces' passes and the gather
 // then find the chunk's f, v, masses and output (about 28 KB) in the L1
@@ -366,33 +384,79 @@ void System::add_local_forces(std::size_t first, Index begin, Index end) {
 // 316 x 316 cloth; 128 measured the same as 256.
 constexpr Index kGatherChunk = 256;
 
-// Step 3, the gather: [v | f/m]. A fixed particle has zero velocity (nailing
-// zeroes it and its acceleration is zero) and zero inverse mass, so both
-// halves vanish for it without a branch.
+// Particle i's force after the laws, in their order, stored back so that
+// f holds the total force as when the plugins add it. The count is a
+// template argument so that the loop over the laws unrolls.
+template <int N>
+inline void apply_laws(const LinearLocalLaw* laws, double m, const double* v, double* f) {
+  double f0 = f[0], f1 = f[1], f2 = f[2];
+  for (int k = 0; k < N; ++k) apply_linear_law(laws[k], m, v, f0, f1, f2);
+  f[0] = f0;
+  f[1] = f1;
+  f[2] = f2;
+}
+
+}  // namespace
+
+// Step 3, the gather, chunk by chunk: the local forces [first_local, end)
+// added into the chunk's f (by their laws in the same loop when they all
+// have one, else by add_forces_range), then each particle's f/m handed to
+// out(i, f_i, 1/m_i). Each column is independent, so the split over
+// threads cannot change a bit.
+template <class Out>
+void System::gather(std::size_t first_local, Out out) {
+  LinearLocalLaw laws[kMaxLinearLaws];
+  const int n_laws = linear_laws(first_local, laws);
+  double* f = force_.data();
+  const double* w = inv_mass_.data();
+  const double* m = mass_.data();
+  const double* v = std::as_const(*this).velocities().data();
+  parallel_chunks(size(), kGatherChunk, [&](Index b, Index e) {
+    auto by_laws = [&]<int N>(std::integral_constant<int, N>) {
+      for (Index i = b; i < e; ++i) {
+        apply_laws<N>(laws, m[i], v + 3 * i, f + 3 * i);
+        out(i, f + 3 * i, w[i]);
+      }
+    };
+    static_assert(kMaxLinearLaws == 4, "a case for every count of laws");
+    switch (n_laws) {
+      case 1:
+        return by_laws(std::integral_constant<int, 1>{});
+      case 2:
+        return by_laws(std::integral_constant<int, 2>{});
+      case 3:
+        return by_laws(std::integral_constant<int, 3>{});
+      case 4:
+        return by_laws(std::integral_constant<int, 4>{});
+      default:
+        break;
+    }
+    add_local_forces(first_local, b, e);
+    for (Index i = b; i < e; ++i) out(i, f + 3 * i, w[i]);
+  });
+}
+
+// [v | f/m]. A fixed particle has zero velocity (nailing zeroes it and its
+// acceleration is zero) and zero inverse mass, so both halves vanish for it
+// without a branch.
 void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
   const std::size_t first_local = evaluate_forces();
   const Index n = size();
   // One pass over the particles writes both halves (both streams are
-  // memory-bound at large N; one pass reads the state and f once), chunk by
-  // chunk, after the local forces have added into the chunk. Each column is
-  // independent, so the split over threads cannot change a bit.
-  Eigen::Map<Matrix3X> vel(dydt.data(), 3, n), a(dydt.data() + 3 * n, 3, n);
-  const auto v = std::as_const(*this).velocities();
-  double* out_v = vel.data();
-  double* out_a = a.data();
-  const double* in_v = v.data();
-  const double* f = force_.data();
-  const double* w = inv_mass_.data();
-  parallel_chunks(n, kGatherChunk, [&](Index b, Index e) {
-    add_local_forces(first_local, b, e);
-    // Over locals: through Eigen's expressions the pointers were reloaded
-    // per element. The copy is one flat loop the compiler vectorises.
-    for (Index q = 3 * b; q < 3 * e; ++q) out_v[q] = in_v[q];
-    for (Index i = b; i < e; ++i) {
-      out_a[3 * i] = f[3 * i] * w[i];
-      out_a[3 * i + 1] = f[3 * i + 1] * w[i];
-      out_a[3 * i + 2] = f[3 * i + 2] * w[i];
-    }
+  // memory-bound at large N; one pass reads the state and f once), over
+  // local pointers: through Eigen's expressions they were reloaded per
+  // element.
+  Eigen::Map<Matrix3X> a(dydt.data() + 3 * n, 3, n);
+  double* out_v = dydt.data();
+  double* out_a = dydt.data() + 3 * n;
+  const double* in_v = std::as_const(*this).velocities().data();
+  gather(first_local, [&](Index i, const double* fi, double wi) {
+    out_v[3 * i] = in_v[3 * i];
+    out_v[3 * i + 1] = in_v[3 * i + 1];
+    out_v[3 * i + 2] = in_v[3 * i + 2];
+    out_a[3 * i] = fi[0] * wi;
+    out_a[3 * i + 1] = fi[1] * wi;
+    out_a[3 * i + 2] = fi[2] * wi;
   });
   // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
   // blew up, so the blow-up is reported at the particle that moved.
@@ -402,10 +466,11 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
 const Matrix3X& System::compute_accelerations() {
   const std::size_t first_local = evaluate_forces();
   accel_.resize(3, size());  // allocates on the first call only
-  parallel_chunks(size(), kGatherChunk, [&](Index b, Index e) {
-    add_local_forces(first_local, b, e);
-    accel_.middleCols(b, e - b) =
-        force_.middleCols(b, e - b) * inv_mass_.segment(b, e - b).asDiagonal();
+  double* out = accel_.data();
+  gather(first_local, [&](Index i, const double* fi, double wi) {
+    out[3 * i] = fi[0] * wi;
+    out[3 * i + 1] = fi[1] * wi;
+    out[3 * i + 2] = fi[2] * wi;
   });
   for (const Index i : fixed_ids_) accel_.col(i).setZero();
   return accel_;

@@ -1,5 +1,6 @@
 // The key functions of the optional force interfaces MovableTargets
-// (pdyn/targets.hpp) and LocalForce (pdyn/local_force.hpp): their type_info
+// (pdyn/targets.hpp), LocalForce and LinearLocalForce
+// (pdyn/local_force.hpp): their type_info
 // lives in the kernel, so a dynamic_cast recognises the interface in a force
 // created by any plugin library.
 #include "pdyn/targets.hpp"
@@ -10,5 +11,6 @@ namespace pdyn {
 
 MovableTargets::~MovableTargets() = default;
 LocalForce::~LocalForce() = default;
+LinearLocalForce::~LinearLocalForce() = default;
 
 }  // namespace pdyn

@@ -43,4 +43,56 @@ class LocalForce {
 /// The force's LocalForce interface, or nullptr if it has none.
 inline LocalForce* local_force(Force& force) { return dynamic_cast<LocalForce*>(&force); }
 
+/// A local force linear in the mass and the velocity: on every particle i,
+///
+///   f_i <- f_i + acceleration * m_i   (if has_acceleration; N, gravity)
+///   f_i <- f_i - damping * v_i        (then, if has_damping; N, drag)
+///
+/// each product and sum in double precision as written, component by
+/// component, with no fused multiply-add.
+struct LinearLocalLaw {
+  bool has_acceleration = false;
+  Vec3 acceleration = Vec3::Zero();  ///< m/s^2
+  bool has_damping = false;
+  double damping = 0.0;  ///< kg/s
+};
+
+/// Applies `law` to one particle's force f = (f0, f1, f2), N, of mass m
+/// (kg) and velocity v (m/s): the operations the kernel performs.
+inline void apply_linear_law(const LinearLocalLaw& law, double m, const double* v, double& f0,
+                             double& f1, double& f2) {
+  if (law.has_acceleration) {
+    f0 += law.acceleration[0] * m;
+    f1 += law.acceleration[1] * m;
+    f2 += law.acceleration[2] * m;
+  }
+  if (law.has_damping) {
+    f0 -= law.damping * v[0];
+    f1 -= law.damping * v[1];
+    f2 -= law.damping * v[2];
+  }
+}
+
+/// Optional, beside LocalForce (since pdyn 0.10, within ABI 7): a local
+/// force whose add_forces_range is a LinearLocalLaw says so, and the kernel
+/// then evaluates the law itself inside its gather loop, one pass for every
+/// such force and f/m together, instead of calling add_forces_range (the
+/// plugin boundary cost the 1000 x 1000 cloth about 10% of its step;
+/// docs/performance.md). The law must give add_forces' bits: `pdyn check`
+/// compares them (force.linear_law).
+class LinearLocalForce {
+ public:
+  virtual ~LinearLocalForce();  // defined in the kernel: one type_info for every library
+
+  /// Fills `law` and returns true when add_forces_range is that law now;
+  /// false to be called through add_forces_range. Asked once per force
+  /// evaluation, only while acts_locally() is true. Must not throw.
+  virtual bool linear_law(LinearLocalLaw& law) const = 0;
+};
+
+/// The force's LinearLocalForce interface, or nullptr if it has none.
+inline LinearLocalForce* linear_local_force(Force& force) {
+  return dynamic_cast<LinearLocalForce*>(&force);
+}
+
 }  // namespace pdyn

@@ -27,6 +27,8 @@
 namespace pdyn {
 
 class LocalForce;
+class LinearLocalForce;
+struct LinearLocalLaw;
 class ConstraintForce;
 
 /// The settings of Witkin's constraint force (since ABI 7; docs/constraints.md):
@@ -235,9 +237,21 @@ class System {
   /// runner turns it on to replay a step that blew up.
   void set_finite_checks(bool on) noexcept { finite_checks_ = on; }
 
+  // A force's optional interfaces (pdyn/local_force.hpp), found when it is
+  // added.
+  struct LocalEntry {
+    LocalForce* local = nullptr;
+    LinearLocalForce* linear = nullptr;
+  };
+  // At most this many local forces are evaluated by their laws in the gather.
+  static constexpr int kMaxLinearLaws = 4;
+
   std::size_t evaluate_forces();
   void evaluate_constraints() const;
   void add_local_forces(std::size_t first, Index begin, Index end);
+  int linear_laws(std::size_t first, LinearLocalLaw* laws) const;
+  template <class Out>
+  void gather(std::size_t first_local, Out out);
   void update_inverse_mass();
 
   Eigen::VectorXd state_;     // [x | v], 6N
@@ -250,7 +264,7 @@ class System {
   double time_ = 0.0;
   bool finite_checks_ = false;
   std::vector<ForceEntry> forces_;
-  std::vector<LocalForce*> local_;  // per force: its LocalForce interface, or nullptr
+  std::vector<LocalEntry> local_;  // per force (the same size as a vector of pointers)
   std::vector<ColliderEntry> colliders_;
   std::uint64_t evaluations_ = 0;
   std::uint64_t version_ = 0;  // state_version()

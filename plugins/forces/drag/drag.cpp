@@ -10,11 +10,13 @@
 namespace {
 
 // f_i = -k v_i depends on particle i alone: a LocalForce, which the kernel
-// adds inside its gather pass when it can.
+// adds inside its gather pass when it can, and a LinearLocalForce, whose
+// law the kernel then evaluates itself in that pass's loop.
 // PeriodicInvariant: it reads velocities only, so a wrap into a periodic box
 // cannot change it (pdyn/periodic_invariant.hpp).
 class Drag final : public pdyn::Force,
                    public pdyn::LocalForce,
+                   public pdyn::LinearLocalForce,
                    public pdyn::PeriodicInvariant,
                    public pdyn::VirialSource {
  public:
@@ -34,6 +36,12 @@ class Drag final : public pdyn::Force,
   }
 
   bool acts_locally() const override { return selection_.all(); }
+  // f_i -= k v_i, as add_forces_range computes it.
+  bool linear_law(pdyn::LinearLocalLaw& law) const override {
+    law.has_damping = true;
+    law.damping = k_;
+    return true;
+  }
   void add_forces_range(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f, pdyn::Index b,
                         pdyn::Index e) override {
     // Plain loops over locals, as gravity's (the gather's chunk is in cache);

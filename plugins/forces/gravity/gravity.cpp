@@ -10,11 +10,13 @@
 namespace {
 
 // f_i = m_i g depends on particle i alone: a LocalForce, which the kernel
-// adds inside its gather pass when it can.
+// adds inside its gather pass when it can, and a LinearLocalForce, whose
+// law the kernel then evaluates itself in that pass's loop.
 // PeriodicInvariant: a uniform field, so a wrap into a periodic box
 // cannot change it (pdyn/periodic_invariant.hpp).
 class Gravity final : public pdyn::Force,
                       public pdyn::LocalForce,
+                      public pdyn::LinearLocalForce,
                       public pdyn::PeriodicInvariant,
                       public pdyn::VirialSource {
  public:
@@ -35,6 +37,12 @@ class Gravity final : public pdyn::Force,
   }
 
   bool acts_locally() const override { return selection_.all(); }
+  // f_i += g m_i, as add_forces_range computes it.
+  bool linear_law(pdyn::LinearLocalLaw& law) const override {
+    law.has_acceleration = true;
+    law.acceleration = g_;
+    return true;
+  }
   void add_forces_range(const pdyn::ParticleView& p, Eigen::Ref<pdyn::Matrix3X> f, pdyn::Index b,
                         pdyn::Index e) override {
     // Plain loops over locals: Eigen's outer product g m^T through a Ref
