@@ -88,12 +88,12 @@ def cloth_pairs():
 
 # What the fused reference does that pdyn's plugin path does not (the
 # profiles printed with a miss show each part).
-CLOTH_LEVER = ("gravity and drag are separate passes over the particles (each a few per cent in "
-               "the profile), and the Stepper copies the end state over the last good one "
-               "(48 B per particle per step) to roll back a non-finite step: evaluate local "
-               "forces inside the spring plugin's chunk pass through an optional per-chunk force "
-               "interface, and let rk4 write its end state into the Stepper's spare buffer (an "
-               "optional solver interface) so that the check needs no copy")
+CLOTH_LEVER = ("the step now takes the reference's instructions (gravity and drag are laws the "
+               "kernel evaluates in its gather, pdyn/local_force.hpp); what is left is memory "
+               "traffic: the Stepper copies the end state over the last good one (48 B per "
+               "particle per step) to roll back a non-finite step. Let rk4 write its end state "
+               "into the Stepper's spare buffer (an optional solver interface), so that the check "
+               "needs no copy")
 
 
 def wall(cmd):
