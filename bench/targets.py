@@ -274,11 +274,27 @@ def profiles():
             print("|---|---|---|---|")
             for pct, count, dso, sym in top:
                 print(f"| {pct:.1f} | {count} | {dso} | `{sym}` |")
-    if any(n >= 316 for n in missed(("2. 2 threads",))):
+    threads_missed = [n for n in missed(("2. 2 threads",)) if n >= 316]
+    if threads_missed:
         print("\nA missed 2-thread speed-up: what the second core adds to the memory bandwidth "
               f"(`{BUILD}/bin/pdyn_bench_triad 256 5`); at 10^6 particles the step moves "
               "~2.6 kB per particle, so 2 threads gain at most the triad's 2-thread ratio:\n")
         print(run([f"{BUILD}/bin/pdyn_bench_triad", "256", "5"]))
+    for n in threads_missed:
+        # One long run of each thread count, and where the 2-thread run's time goes.
+        steps = str(max(15, 30_000_000 // (n * n)))
+        cmd = [bench, "--run", "pdyn_run", str(n), steps]
+        one, two = wall(cmd + ["1"]), wall(cmd + ["2"])
+        print(f"\n{n} x {n}, one run of {steps} steps each (`{' '.join(cmd)} 1|2`, set-up "
+              f"included): 1 thread {one:.2f} s, 2 threads {two:.2f} s, {one / two:.2f}x. "
+              "The 2-thread run's profile (samples of both threads):\n")
+        if shutil.which("perf"):
+            top, samples = perf_top(cmd + ["2"], "two_threads")
+            print(f"pdyn_run, 2 threads: {samples} samples\n")
+            print("| % | samples | library | function |")
+            print("|---|---|---|---|")
+            for pct, count, dso, sym in top:
+                print(f"| {pct:.1f} | {count} | {dso} | `{sym}` |")
 
 
 def load():
