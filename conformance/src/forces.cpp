@@ -223,9 +223,10 @@ void derivative_checks(ForceCase& c, std::vector<CheckResult>& out) {
 // What a local force declares: that it may be added range by range, and
 // its linear law.
 void local_checks(ForceCase& c, std::vector<CheckResult>& out) {
+  LocalForce* local = local_force(c.force);
   // The kernel adds a local force range by range inside its gather pass:
   // that must give add_forces' bits, however the particles are split.
-  if (LocalForce* local = local_force(c.force); local != nullptr && local->acts_locally()) {
+  if (local != nullptr && local->acts_locally()) {
     guarded(out, "force.local_range", [&] {
       const Matrix3X whole = forces_of(c.force, c.home);
       double worst = 0.0;
@@ -247,7 +248,6 @@ void local_checks(ForceCase& c, std::vector<CheckResult>& out) {
   // add_forces_range, onto the forces already there: the same bits.
   LinearLocalLaw law;
   LinearLocalForce* linear = linear_local_force(c.force);
-  LocalForce* local = local_force(c.force);
   if (linear != nullptr && local != nullptr && local->acts_locally() && linear->linear_law(law)) {
     guarded(out, "force.linear_law", [&] {
       double worst = 0.0;
