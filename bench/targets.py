@@ -66,7 +66,8 @@ def cloth_pairs():
     out = run([f"{BUILD}/bin/pdyn_bench_cloth", "--pairs", str(CLOTH_ROUNDS), "32", "100", "316", "1000"])
     print(out, file=sys.stderr)
     pat = re.compile(r"^\| (\d+) x \d+ \| \d+ \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) "
-                     r"\| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) \|$")
+                     r"\| ([\d.]+) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) "
+                     r"\| ([\d.]+) \(([\d.]+)-([\d.]+)\) \| ([\d.]+) \(([\d.]+)-([\d.]+)\) \|$")
     for line in out.splitlines():
         m = pat.match(line)
         if not m:
@@ -84,10 +85,17 @@ def cloth_pairs():
             if ratio > 1.0:
                 levers.append((item, CLOTH_LEVER))
         if n in (316, 1000):
+            # Issue 32: >= 1.8, or within 5% of the machine's own triad ratio,
+            # both taken in the same rounds (the ratio of the two per round).
             item = f"2. 2 threads over 1, {n} x {n}"
-            rows.append((item, ">= 1.8", f"{speedup:.2f} ({m[9]}-{m[10]})",
-                         verdict(speedup, 1.8, at_most=False)))
-            if speedup < 1.8:
+            triad, of_triad = float(m[11]), float(m[14])
+            met = speedup >= 1.8 or of_triad >= 0.95
+            how = "" if speedup >= 1.8 else (" (within 5% of the triad's)" if met else "")
+            rows.append((item, ">= 1.8, or >= 0.95 of the triad's 2-thread ratio",
+                         f"{speedup:.2f} ({m[9]}-{m[10]}); triad {triad:.2f} ({m[12]}-{m[13]}); "
+                         f"speed-up / triad's {of_triad:.2f} ({m[15]}-{m[16]})",
+                         ("**met**" + how) if met else verdict(speedup, 1.8, at_most=False)))
+            if not met:
                 levers.append((item, THREADS_LEVER))
 
 
@@ -104,12 +112,12 @@ CLOTH_LEVER = ("the step now takes the reference's instructions (gravity and dra
 # 316 x 316 speed-up of `pdyn_bench_cloth --pairs 6 316` was 1.36 and 1.86
 # two minutes apart, and one long run of each (`--run pdyn_run 316 300 T`)
 # 1.99 (8.16 s against 4.11 s): what varies is the machine's second core.
-THREADS_LEVER = ("the 2-thread time follows the machine's second core, which varies from minute "
-                 "to minute on this machine (the same build gave 1.36 and 1.86 two minutes "
-                 "apart, and 1.99 in one long run); the profile of a long 2-thread run shows no "
-                 "serial part above 2%. Next: measure STREAM's triad ratio inside each round, "
-                 "beside the cloth's, so that the target's alternative (within 5% of the "
-                 "machine's own ratio) compares the same minutes")
+# Since then each round times the triad beside the cloth, so a miss here is
+# one against what the second core gave in the same minutes.
+THREADS_LEVER = ("below 1.8 and below 0.95 of what a second core added to STREAM's triad in the "
+                 "same rounds, so not the machine alone: the profile of a long 2-thread run is "
+                 "printed below; the parts it shows serial (the runner's per-step checks, the "
+                 "Stepper's rollback copy, the energy reduction) are the next levers")
 
 
 def wall(cmd):

@@ -806,6 +806,7 @@ void SupernodalCholesky::analyze(const std::vector<Index>& particles,
 }
 
 double SupernodalCholesky::factor_bytes() const noexcept {
+  if (panel_.empty()) return 0.0;  // not analysed (a CG-only solver never is)
   return static_cast<double>(panel_.back() + work_size_) * sizeof(double) +
          static_cast<double>(order_.size()) * (6.0 * sizeof(double) + 2.0 * sizeof(Index)) +
          static_cast<double>(super_.size()) * 3.0 * sizeof(Index);

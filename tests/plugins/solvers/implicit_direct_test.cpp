@@ -172,5 +172,23 @@ TEST(ImplicitEuler, AFreshSolverStepsAsOneThatHasRunAllAlong) {
   }
 }
 
+// The direct solve's statistics are 0 until its analysis, also for a solver
+// that only ever runs CG (the stiff-cloth bench asks one for them; factor_bytes
+// once read past an empty vector there).
+TEST(ImplicitEuler, DirectStatisticsAreZeroForASolverThatOnlyRanCg) {
+  solvers::ImplicitEulerOptions options;
+  options.linear_solver = solvers::LinearSolver::Cg;
+  solvers::ImplicitEuler cg(options);
+  EXPECT_EQ(cg.factor_bytes(), 0.0);
+  Scene scene = StiffCloth("{ type: implicit_euler }", 2);
+  cg.step(*scene.system, 0.01);
+  cg.step(*scene.system, 0.01);
+  EXPECT_FALSE(cg.last_step_direct());
+  EXPECT_GT(cg.total_cg_iterations(), 0);
+  EXPECT_EQ(cg.factor_blocks(), 0u);
+  EXPECT_EQ(cg.factor_bytes(), 0.0);
+  EXPECT_EQ(cg.factor_flops(), 0.0);
+}
+
 }  // namespace
 }  // namespace pdyn
