@@ -40,13 +40,13 @@
 #include <vector>
 
 #include "fused_cloth.hpp"
-#include "stream_triad.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/side_files.hpp"
 #include "pdyn/host/stepper.hpp"
 #include "pdyn/host/threads.hpp"
+#include "stream_triad.hpp"
 
 namespace {
 

@@ -19,7 +19,9 @@ class StreamTriad {
   /// Three arrays of `mib` MiB each, touched once so that no page fault
   /// falls inside a timing.
   explicit StreamTriad(long mib)
-      : n_(mib * (1 << 20) / static_cast<long>(sizeof(double))), a_(n_, 0.0), b_(n_, 1.0),
+      : n_(mib * (1 << 20) / static_cast<long>(sizeof(double))),
+        a_(n_, 0.0),
+        b_(n_, 1.0),
         c_(n_, 2.0) {}
 
   /// Best of `repeats` triads on `threads` threads, s.
@@ -31,8 +33,8 @@ class StreamTriad {
       for (int t = 1; t < threads; ++t) pool.emplace_back([this, t, threads] { part(t, threads); });
       part(0, threads);
       for (std::thread& th : pool) th.join();
-      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                                .count());
+      best = std::min(best,
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
     // Keep the result observable, so the loop is not optimised away.
     if (a_[n_ / 2] != b_[n_ / 2] + kScale * c_[n_ / 2]) std::abort();
