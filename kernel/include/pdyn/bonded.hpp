@@ -35,6 +35,15 @@
 //     // Optional: the exact derivatives of operator() where jacobian()
 //     // approximates them, for the conformance kit's bonded.jacobian_exact.
 //     bool exact_jacobian(... same arguments ...) const;
+//     // Optional, in place of jacobian() for a two-body law whose force
+//     // depends on x_0 - x_1 and v_0 - v_1 alone, with f_1 = -f_0 (a
+//     // spring): its one 3 x 3 block k = df_0/dx_0 (d = df_0/dv_0), given
+//     // zeroed; the term's Jacobian is then [k -k; -k k] ([d -d; -d d]).
+//     // Implicit solvers get the four blocks without a 6 x 6 matrix being
+//     // built, zeroed and scanned per term (half the instructions of the
+//     // Jacobians of the stiff cloth's springs).
+//     bool pair_jacobian(const pdyn::BondedPoint<2>& p, const Coefficients& c,
+//                        Eigen::Matrix3d& k, Eigen::Matrix3d& d) const;
 //   };
 //
 // Most bonded terms are one damped harmonic spring on one scalar coordinate
@@ -451,7 +460,26 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
   /// The law's jacobian() of every term, in term order; false (numerical
   /// differentiation) when the law has none.
   bool add_jacobians(const ParticleView& p, JacobianSink& sink) override {
-    if constexpr (kHasJacobian) {
+    if constexpr (kHasPairJacobian) {
+      // The blocks (a, b) of [k -k; -k k] in the order below, as the
+      // general loop would report them: the same calls, the same bits.
+      Eigen::Matrix3d k, d;
+      for (Index s = 0; s < term_count(); ++s) {
+        k.setZero();
+        d.setZero();
+        if (!law_.pair_jacobian(point(p, s), coefficients(s), k, d)) continue;
+        const bool damped = !d.isZero(0.0);
+        const Eigen::Matrix3d minus_k = -k, minus_d = -d;
+        const Index ends[2] = {terms_[s][0], terms_[s][1]};
+        for (int a = 0; a < 2; ++a) {
+          for (int b = 0; b < 2; ++b) {
+            sink.add_dfdx(ends[a], ends[b], a == b ? k : minus_k);
+            if (damped) sink.add_dfdv(ends[a], ends[b], a == b ? d : minus_d);
+          }
+        }
+      }
+      return true;
+    } else if constexpr (kHasJacobian) {
       BondedMatrix<N> dfdx, dfdv;
       for (Index s = 0; s < term_count(); ++s) {
         dfdx.setZero();
@@ -493,13 +521,13 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
       if constexpr (kHasExactJacobian) {
         law_.exact_jacobian(point(p, s), coefficients(s), dx, dv);
       } else if constexpr (kHasJacobian) {
-        law_.jacobian(point(p, s), coefficients(s), dx, dv);
+        law_jacobian(point(p, s), coefficients(s), dx, dv);
       } else {
         return false;
       }
     } else {
       if constexpr (kHasJacobian) {
-        law_.jacobian(point(p, s), coefficients(s), dx, dv);
+        law_jacobian(point(p, s), coefficients(s), dx, dv);
       } else {
         return false;
       }
@@ -510,10 +538,33 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
   }
 
  private:
+  static constexpr bool kHasPairJacobian =
+      N == 2 && requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c,
+                         Eigen::Matrix3d& k) { l.pair_jacobian(q, c, k, k); };
   static constexpr bool kHasJacobian =
+      kHasPairJacobian ||
       requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c, BondedMatrix<N>& m) {
     l.jacobian(q, c, m, m);
   };
+
+  // The law's jacobian(), or its pair_jacobian() as [k -k; -k k] blocks
+  // (dfdx and dfdv given zeroed).
+  bool law_jacobian(const BondedPoint<N>& q, const Coefficients& c, BondedMatrix<N>& dfdx,
+                    BondedMatrix<N>& dfdv) const {
+    if constexpr (kHasPairJacobian) {
+      Eigen::Matrix3d k = Eigen::Matrix3d::Zero(), d = Eigen::Matrix3d::Zero();
+      if (!law_.pair_jacobian(q, c, k, d)) return false;
+      for (int a = 0; a < 2; ++a) {
+        for (int b = 0; b < 2; ++b) {
+          dfdx.template block<3, 3>(3 * a, 3 * b) = a == b ? k : Eigen::Matrix3d(-k);
+          dfdv.template block<3, 3>(3 * a, 3 * b) = a == b ? d : Eigen::Matrix3d(-d);
+        }
+      }
+      return true;
+    } else {
+      return law_.jacobian(q, c, dfdx, dfdv);
+    }
+  }
   static constexpr bool kHasExactJacobian =
       requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c, BondedMatrix<N>& m) {
     l.exact_jacobian(q, c, m, m);

@@ -79,17 +79,18 @@ struct Hooke {
   //   out (Baraff & Witkin, "Large Steps in Cloth Simulation", 1998,
   //   section 5.2). It vanishes when dv = 0.
   // Elsewhere (stretched or at rest, kd = 0 or dv = 0) the blocks are the
-  // exact derivatives of operator().
-  bool jacobian(const BondedPoint<2>& p, const Coefficients& c, BondedMatrix<2>& dfdx,
-                BondedMatrix<2>& dfdv) const {
+  // exact derivatives of operator(). Given as the (i,i) blocks alone
+  // (pdyn/bonded.hpp's pair_jacobian): BondedForce reports all four.
+  bool pair_jacobian(const BondedPoint<2>& p, const Coefficients& c, Eigen::Matrix3d& k,
+                     Eigen::Matrix3d& d) const {
     const pdyn::Vec3 dx = p.position(0) - p.position(1);
     const double len = dx.norm();
     if (len == 0.0) return false;  // operator() adds nothing here either
     const pdyn::Vec3 n = dx / len;
     const Eigen::Matrix3d nn = n * n.transpose();
     const double geometric = std::max(0.0, 1.0 - p.rest / len);
-    blocks(-c.ks * (nn + geometric * (Eigen::Matrix3d::Identity() - nn)), dfdx);
-    if (c.kd > 0.0) blocks(-c.kd * nn, dfdv);
+    k = -c.ks * (nn + geometric * (Eigen::Matrix3d::Identity() - nn));
+    if (c.kd > 0.0) d = -c.kd * nn;
     return true;
   }
 

@@ -185,13 +185,20 @@ inline void enter_block(Eigen::Matrix3d* val, std::ptrdiff_t slot, const double 
 
 }  // namespace
 
+// Recording is rare (a first step, a new pattern): kept out of line, so
+// that the entering path, taken once per block every step, stays small.
+[[gnu::noinline]] void ImplicitEuler::Sink::record(Index i, Index j, int kind,
+                                                   const Eigen::Matrix3d& block) {
+  blocks.push_back({i, j, kind, block});
+}
+
 void ImplicitEuler::Sink::add(Index i, Index j, int kind, const Eigen::Matrix3d& block) {
-  if (!assembling) {
-    blocks.push_back({i, j, kind, block});
+  if (!assembling) [[unlikely]] {
+    record(i, j, kind, block);
     return;
   }
   if (missed) return;
-  if (cursor == key->size() || !((*key)[cursor] == Key{i, j, kind})) {
+  if (cursor == key_size || !(key[cursor] == Key{i, j, kind})) {
     missed = true;  // another pattern than the last step's: recorded again
     return;
   }
@@ -212,7 +219,8 @@ void ImplicitEuler::collect_jacobians(const System& sys, double h) {
     sink_.assembling = true;
     sink_.missed = false;
     sink_.cursor = 0;
-    sink_.key = &pattern_key_;
+    sink_.key = pattern_key_.data();
+    sink_.key_size = pattern_key_.size();
     sink_.slot = slot_.data();
     sink_.val = val_.data();
     sink_.kxv = kxv_.data();

@@ -172,7 +172,8 @@ class ImplicitEuler final : public Solver {
     std::vector<Block> blocks;
     bool assembling = false, missed = false;
     std::size_t cursor = 0;
-    const std::vector<Key>* key = nullptr;
+    const Key* key = nullptr;  // the last step's pattern, key_size blocks
+    std::size_t key_size = 0;
     const std::ptrdiff_t* slot = nullptr;
     Eigen::Matrix3d* val = nullptr;
     double* kxv = nullptr;
@@ -181,6 +182,7 @@ class ImplicitEuler final : public Solver {
 
    private:
     void add(Index i, Index j, int kind, const Eigen::Matrix3d& block);
+    void record(Index i, Index j, int kind, const Eigen::Matrix3d& block);
   };
 
   void collect_jacobians(const System& sys, double h);
