@@ -226,12 +226,13 @@ def stiff_lever(profile):
                        "call each, and give panels narrower than 24 columns inline kernels. "
                        "Measured and not levers: METIS's nested dissection (no gain at 100 x 100), "
                        "bigger relaxed supernodes (4.3-6.0 s against 4.0 s at 100 x 100)",
-        "Jacobians": "the Jacobians, ~1,100 instructions per spring (callgrind). Not the virtual "
-                     "calls: a sink taking a spring's whole 6 x 6 matrices in one call (measured "
-                     "2026-12-05, not kept) moved their share only from 26% to 24.5%. What is "
-                     "left is arithmetic and stores: two 6 x 6 matrices zeroed and filled per "
-                     "spring, four 3 x 3 blocks each entered with its pattern check; next: let a "
-                     "law hand over the one 3 x 3 block K of a two-body term ([K -K; -K K])",
+        "Jacobians": "the Jacobians, ~950 instructions per spring (callgrind, after the spring "
+                     "gave its one 3 x 3 block through pair_jacobian: 28% of the 30 x 30 run "
+                     "before, 21% after). Not the virtual calls: a sink taking a spring's whole "
+                     "6 x 6 matrices in one call (measured 2026-12-05, not kept) moved the share "
+                     "only from 26% to 24.5%. What is left is implicit_euler's entry of each "
+                     "3 x 3 block (its pattern check, A's block, df/dx v0): next, enter a "
+                     "spring's four blocks from k with one pattern check",
         "solve": "the triangular solves, bound by reading the factor's panels twice: store the "
                  "panels without the explicit zeros of relaxed supernodes",
         "forces": "the force evaluation f0",

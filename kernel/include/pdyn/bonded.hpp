@@ -539,8 +539,10 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
 
  private:
   static constexpr bool kHasPairJacobian =
-      N == 2 && requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c,
-                         Eigen::Matrix3d& k) { l.pair_jacobian(q, c, k, k); };
+      N == 2 &&
+      requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c, Eigen::Matrix3d& k) {
+    l.pair_jacobian(q, c, k, k);
+  };
   static constexpr bool kHasJacobian =
       kHasPairJacobian ||
       requires(const Law& l, const BondedPoint<N>& q, const Coefficients& c, BondedMatrix<N>& m) {
