@@ -44,7 +44,8 @@ int cmd_check(const CheckArgs& a, std::ostream& out, std::ostream& err) {
     record = &registry.plugins().back();
   } else {
     registry.discover(PluginRegistry::search_path(
-        std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+        std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end()),
+        DefaultFolders::LibraryAndProgram));
     try {
       registry.require_healthy(a.name);
     } catch (const PluginError& e) {

@@ -40,8 +40,14 @@ void add_plugin_path_option(CLI::App* app, Common& c) {
 PluginRegistry discover(const Common& c) {
   std::vector<fs::path> extra(c.plugin_path.begin(), c.plugin_path.end());
   PluginRegistry registry;
-  registry.discover(PluginRegistry::search_path(extra));
+  registry.discover(PluginRegistry::search_path(extra, DefaultFolders::LibraryAndProgram));
   return registry;
+}
+
+// What a scene loaded but will not use (Scene::warnings): printed even with
+// --quiet, as the run's result is probably not what the user meant.
+void warn_scene(const Scene& scene, std::ostream& err) {
+  for (const auto& w : scene.warnings) err << "pdyn: warning: " << w << "\n";
 }
 
 void warn_faults(const PluginRegistry& registry, std::ostream& err) {
@@ -108,6 +114,7 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
   if (!c.quiet) warn_faults(registry, err);
   try {
     Scene scene = load(a, c, registry);
+    warn_scene(scene, err);
     if (!c.quiet) {
       // An adaptive solver chooses its own steps: dt is only the first one.
       const std::string stepping =
@@ -172,6 +179,7 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
   if (!c.quiet) warn_faults(registry, err);
   try {
     Scene scene = load(a, c, registry);
+    warn_scene(scene, err);
     RunOptions options;
     options.progress = terminal && !c.quiet;
     options.log = &err;
@@ -299,6 +307,11 @@ int cmd_plugins(const Common& c, bool json, std::ostream& out) {
       j["faults"].push_back(
           {{"library", f.library.string()}, {"plugin", f.plugin}, {"message", f.message}});
     }
+    j["shadowed"] = nlohmann::json::array();
+    for (const auto& h : registry.shadowed()) {
+      j["shadowed"].push_back(
+          {{"library", h.library.string()}, {"plugin", h.plugin}, {"by", h.by.string()}});
+    }
     j["searched"] = nlohmann::json::array();
     for (const auto& s : registry.searched()) j["searched"].push_back(s.string());
     out << j.dump(2) << "\n";
@@ -324,6 +337,10 @@ int cmd_plugins(const Common& c, bool json, std::ostream& out) {
   }
   out << "\nfrom:\n";
   for (const auto& s : registry.searched()) out << "  " << s.string() << "\n";
+  for (const auto& h : registry.shadowed()) {
+    out << fmt::format("\nshadowed: {}: plugin '{}' (provided by {}, an earlier default folder)\n",
+                       h.library.string(), h.plugin, h.by.string());
+  }
   for (const auto& f : registry.faults()) {
     out << fmt::format("\nerror: {}: plugin '{}': {}\n", f.library.string(), f.plugin, f.message);
   }

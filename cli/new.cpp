@@ -88,8 +88,9 @@ bool name_is_free(const NewArgs& a, std::ostream& err) {
   // A second plugin of that name would be refused as a duplicate wherever
   // both are on the search path, so refuse the name now.
   PluginRegistry registry;
-  registry.discover(PluginRegistry::search_path(
-      std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+  registry.discover(
+      PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end()),
+                                  DefaultFolders::LibraryAndProgram));
   if (const PluginRecord* r = registry.find_any(a.name)) {
     err << fmt::format("pdyn: a plugin named '{}' already exists ({}) (expected a new name)\n",
                        a.name, r->library.string());

@@ -390,8 +390,9 @@ bool render_args_ok(const RenderArgs& a, int& width, int& height, render::View& 
 int run_to_frames(const RenderArgs& a, std::vector<render::Frame>& frames, render::Drawables& drawn,
                   std::ostream& err) {
   PluginRegistry registry;
-  registry.discover(PluginRegistry::search_path(
-      std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+  registry.discover(
+      PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end()),
+                                  DefaultFolders::LibraryAndProgram));
   std::vector<Override> base;
   for (const auto& s : a.sets) base.push_back(parse_override(s));
 

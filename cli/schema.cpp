@@ -429,8 +429,9 @@ Json make_schema(const PluginRegistry& registry) {
 
 int cmd_schema(const SchemaArgs& a, std::ostream& out, std::ostream& err) {
   PluginRegistry registry;
-  registry.discover(PluginRegistry::search_path(
-      std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end())));
+  registry.discover(
+      PluginRegistry::search_path(std::vector<fs::path>(a.plugin_path.begin(), a.plugin_path.end()),
+                                  DefaultFolders::LibraryAndProgram));
   for (const auto& f : registry.faults()) {
     err << fmt::format("pdyn: warning: {}: plugin '{}' left out of the schema: {}\n",
                        f.library.string(), f.plugin, f.message);

@@ -116,6 +116,41 @@ print("python3-pdyn", pdyn.__version__, "from", pdyn.__file__, "ends the demo on
 PY
 ) || fail "import pdyn from /usr/lib/python3/dist-packages failed"
 
+# Two installations side by side (issue 42): where quickstart.sh pointed
+# Debian's python3 at a build tree, that tree's `import pdyn` and its pdyn
+# program still run the demo with the packages installed, each with its own
+# plugins and no fault (the registry no longer searches the folder beside an
+# embedding interpreter, /usr/bin/python3's ../lib, the packages' own).
+if [[ -f "$pth.smoke" ]]; then
+  mv "$pth.smoke" "$pth"
+  tree=$(dirname "$(cat "$pth")")  # BUILD/python -> BUILD
+  mkdir "$work/side"
+  (cd "$work/side" && "$tree/bin/pdyn" run /usr/share/pdyn/configs/demo.yaml --quiet) ||
+    fail "the build tree's pdyn did not run the demo beside the packages"
+  "$tree/bin/pdyn" plugins --json | /usr/bin/python3 -c "
+import json, sys
+d = json.load(sys.stdin)
+assert not d['faults'] and not d['shadowed'], (d['faults'], d['shadowed'])
+assert all(p['library'].startswith(sys.argv[1]) for p in d['plugins'])" "$tree/" ||
+    fail "the build tree's pdyn did not take its own plugins"
+  (cd "$work/side" && /usr/bin/python3 - "$tree" "$work/side/out/demo.csv" <<'PY'
+import sys
+import numpy as np
+import pdyn
+tree = sys.argv[1]
+assert pdyn.__file__.startswith(tree + "/"), pdyn.__file__
+libs = {p["library"] for p in pdyn.plugins()}
+assert all(l.startswith(tree + "/") for l in libs), libs
+sim = pdyn.load("/usr/share/pdyn/configs/demo.yaml")
+sim.step(round(sim.end_time / sim.dt))
+last = np.loadtxt(sys.argv[2], delimiter=",", skiprows=1)[-sim.n:]
+assert np.array_equal(last[:, 2:5], sim.x) and np.array_equal(last[:, 5:8], sim.v)
+print("build tree's import pdyn beside python3-pdyn: its own", len(libs), "plugins, the demo to its end")
+PY
+  ) || fail "the build tree's import pdyn failed beside the packages"
+  mv "$pth" "$pth.smoke"
+fi
+
 # Nothing installed names the build tree; every RUNPATH is relative.
 files=$(dpkg -L "${packages[@]}" | while read -r f; do if [[ -f "$f" && ! -L "$f" ]]; then echo "$f"; fi; done)
 ! grep -l -F "$repo" $files || fail "installed files name the build tree $repo"

@@ -361,6 +361,29 @@ CheckResult continuous_at_cutoff(const PluginDescriptor& d, const Params& params
                             how));
 }
 
+// Which loop the force runs (PairLoop): a central law that branches at the
+// cutoff is correct but slower, and the author may not know the one line
+// that changes it. Advice, so a skip with the reason rather than a failure.
+CheckResult selecting_loop(const Force& force) {
+  const char* name = "pair.selecting_loop";
+  const auto* loop = dynamic_cast<const PairLoop*>(&force);
+  if (!loop) return skip(name, "built against an SDK that does not report its loop (before 0.10)");
+  if (!loop->central_law()) {
+    return skip(name, "a general law (it takes the pair): the loop branches at the cutoff");
+  }
+  if (!loop->selects_beyond_cutoff()) {
+    return skip(name,
+                "the loop branches at the cutoff: if the law is finite at every r2 > 0 (not a "
+                "table indexed by r2), declare `static constexpr bool evaluate_beyond_cutoff = "
+                "true;` in it, and the loop selects instead (docs/pairs.md, about 0.7 times the "
+                "time on a liquid)");
+  }
+  return result(name, true, 1.0, 1.0,
+                "the law declares evaluate_beyond_cutoff: the loop evaluates it on every listed "
+                "pair and selects those within the cutoff (pair.matches_brute_force checks that "
+                "the values beyond it are never used)");
+}
+
 }  // namespace
 
 void pair_checks(const PluginDescriptor& d, const Params& params, const Force& force,
@@ -369,7 +392,7 @@ void pair_checks(const PluginDescriptor& d, const Params& params, const Force& f
   if (!home) {
     const char* why = "not a pair force (offers no pdyn::PairReference, pdyn/pair.hpp)";
     for (const char* name : {"pair.newton_third_law", "pair.gradient", "pair.matches_brute_force",
-                             "pair.continuous_at_cutoff"}) {
+                             "pair.continuous_at_cutoff", "pair.selecting_loop"}) {
       out.push_back(skip(name, why));
     }
     return;
@@ -384,6 +407,7 @@ void pair_checks(const PluginDescriptor& d, const Params& params, const Force& f
           [&] { return matches_brute_force(d, params, usable_cutoff(*home), rng); });
   guarded(out, "pair.continuous_at_cutoff",
           [&] { return continuous_at_cutoff(d, params, *home, rng); });
+  guarded(out, "pair.selecting_loop", [&] { return selecting_loop(force); });
 }
 
 }  // namespace pdyn::conformance::detail

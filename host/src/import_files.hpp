@@ -58,6 +58,16 @@ struct Imported {
   std::vector<std::uint32_t> kind;
   bool species = false;       ///< kinds are XYZ species, not LAMMPS types
   std::optional<Domain> box;  ///< the file's box (orthogonal), if it has one
+  /// Sections with rows that no part of pdyn reads yet (a data file's Bonds,
+  /// Angles, Dihedrals, Impropers, Ellipsoids, Lines, Triangles, Bodies):
+  /// the scene's loader names them in a warning, so that a molecule never
+  /// runs as free atoms without a word.
+  struct Unread {
+    std::string section;  ///< its title: "Bonds"
+    long long rows = 0;
+    std::size_t line = 0;  ///< its title's line
+  };
+  std::vector<Unread> unread;
 };
 
 /// The outcome of reading a file: its particles, or nothing (the problems

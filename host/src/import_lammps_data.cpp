@@ -4,7 +4,8 @@
 // a title line (which may carry a comment, "Atoms # full"), a blank line
 // and as many rows as the header's count for it says. Only Atoms, Masses
 // and Velocities are read; the other sections (Bonds, Pair Coeffs, ...) are
-// skipped by their counts.
+// skipped by their counts, and those that hold particles' topology or shape
+// (kUnread) are listed in Imported::unread for the loader to warn about.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -74,6 +75,13 @@ constexpr Section kSections[] = {
     {"Dihedral Type Labels", "dihedral types"},
     {"Improper Type Labels", "improper types"},
 };
+// The sections whose rows change the physics and that pdyn does not read:
+// loading such a file without a word would run a molecule as free atoms
+// (issue 42). Coefficient sections go with the scene's own forces and are
+// not listed.
+constexpr const char* kUnread[] = {"Bonds",      "Angles", "Dihedrals", "Impropers",
+                                   "Ellipsoids", "Lines",  "Triangles", "Bodies"};
+
 // The header lines that count something ("N atoms", "N atom types", ...).
 constexpr const char* kCounts[] = {"atoms",          "bonds",         "angles",     "dihedrals",
                                    "impropers",      "ellipsoids",    "lines",      "triangles",
@@ -105,6 +113,7 @@ struct DataFile {
   bool bad_masses = false;  // a Masses row was refused: its type's atoms are not blamed too
   std::map<long long, double> type_mass;
   std::map<long long, std::pair<Vec3, std::size_t>> velocity;  // id -> v, line
+  std::vector<Imported::Unread> unread;
 
   long long count(const std::string& key) const {
     if (key == "atom type pairs") {
@@ -379,6 +388,10 @@ ReadResult read_lammps_data(const std::string& text, Problems& problems) {
       return {std::nullopt, 1, false};
     }
     const auto rows = section_rows(lines, k, *s, d, problems);
+    if (!rows.empty() &&
+        std::find(std::begin(kUnread), std::end(kUnread), name) != std::end(kUnread)) {
+      d.unread.push_back({name, static_cast<long long>(rows.size()), title.number});
+    }
     if (name == "Atoms") read_atoms(title, rows, d, problems);
     if (name == "Masses") read_masses(rows, d, problems);
     if (name == "Velocities") read_velocities(rows, d, problems);
@@ -390,6 +403,7 @@ ReadResult read_lammps_data(const std::string& text, Problems& problems) {
                              count_of(d.count("atoms"), "atom")));
   }
   Imported out;
+  out.unread = std::move(d.unread);
   complete(d, out, problems);
   // read_data's boundary is the input script's; its default is periodic.
   out.box = orthogonal_box(d.lo, d.hi, {true, true, true});

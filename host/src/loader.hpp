@@ -173,6 +173,7 @@ class Loader final : public BuilderHost {
   void read_particle_file(const YAML::Node& item, const std::string& path);
   /// A file's format (`format`, or its extension) and its contents (frame
   /// `frame`); `for_box`: the keys of simulation.box's, else a particle entry's.
+  void warn_unread(const std::filesystem::path& file, const import_files::Imported& in);
   std::optional<import_files::Imported> import_file(const YAML::Node& map, const std::string& path,
                                                     bool for_box);
   std::optional<import_files::Format> file_format(const YAML::Node& map, const std::string& path);
@@ -213,7 +214,8 @@ class Loader final : public BuilderHost {
   const PluginRegistry& registry_;
   std::vector<Override> overrides_;
   std::vector<Diagnostic> diags_;
-  YAML::Node root_;  // the whole scene: where a missing section is reported
+  std::vector<std::string> warnings_;  // Scene::warnings
+  YAML::Node root_;                    // the whole scene: where a missing section is reported
 
   // particles as read
   std::vector<Vec3> x_, v_;

@@ -173,7 +173,39 @@ std::string PluginRegistry::folder_problem(const fs::path& dir) {
                      dir.string(), fs::exists(dir, ec) ? "not a folder" : "no such folder");
 }
 
-std::vector<fs::path> PluginRegistry::search_path(const std::vector<fs::path>& extra) {
+namespace {
+
+// The plugin folder beside the kernel library (this installation's), and
+// the one beside the running program; empty where it cannot be found.
+fs::path library_folder() {
+  boost::dll::fs::error_code ec;
+  const fs::path kernel = boost::dll::symbol_location_ptr(&is_valid_plugin_name, ec);
+  return ec ? fs::path() : kernel.parent_path() / PDYN_LIB_TO_PLUGINS;
+}
+fs::path program_folder() {
+  boost::dll::fs::error_code ec;
+  const fs::path program = boost::dll::program_location(ec);
+  return ec ? fs::path() : program.parent_path() / PDYN_BIN_TO_PLUGINS;
+}
+
+// Existing folders of `candidates`, canonical where possible, each once.
+std::vector<fs::path> existing_once(const std::vector<fs::path>& candidates) {
+  std::vector<fs::path> dirs;
+  std::set<fs::path> seen;
+  for (const auto& c : candidates) {
+    std::error_code fec;
+    if (c.empty() || !fs::is_directory(c, fec)) continue;
+    const fs::path canon = fs::weakly_canonical(c, fec);
+    const fs::path key = fec ? c : canon;
+    if (seen.insert(key).second) dirs.push_back(key);
+  }
+  return dirs;
+}
+
+}  // namespace
+
+std::vector<fs::path> PluginRegistry::search_path(const std::vector<fs::path>& extra,
+                                                  DefaultFolders defaults) {
   std::vector<fs::path> candidates = extra;
   if (const char* env = std::getenv("PDYN_PLUGIN_PATH")) {
     std::string_view s(env);
@@ -185,22 +217,20 @@ std::vector<fs::path> PluginRegistry::search_path(const std::vector<fs::path>& e
       s.remove_prefix(colon + 1);
     }
   }
-  boost::dll::fs::error_code ec;
-  const fs::path program = boost::dll::program_location(ec);
-  if (!ec) candidates.push_back(program.parent_path() / PDYN_BIN_TO_PLUGINS);
-  const fs::path kernel = boost::dll::symbol_location_ptr(&is_valid_plugin_name, ec);
-  if (!ec) candidates.push_back(kernel.parent_path() / PDYN_LIB_TO_PLUGINS);
+  candidates.push_back(library_folder());
+  if (defaults == DefaultFolders::LibraryAndProgram) candidates.push_back(program_folder());
+  return existing_once(candidates);
+}
 
-  std::vector<fs::path> dirs;
-  std::set<fs::path> seen;
-  for (const auto& c : candidates) {
-    std::error_code fec;
-    if (!fs::is_directory(c, fec)) continue;
-    const fs::path canon = fs::weakly_canonical(c, fec);
-    const fs::path key = fec ? c : canon;
-    if (seen.insert(key).second) dirs.push_back(key);
-  }
-  return dirs;
+std::vector<fs::path> PluginRegistry::default_folders() {
+  return existing_once({library_folder(), program_folder()});
+}
+
+bool PluginRegistry::in_default_folder(const fs::path& library) {
+  if (!defaults_) defaults_ = default_folders();
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(library.parent_path(), ec);
+  return !ec && std::find(defaults_->begin(), defaults_->end(), dir) != defaults_->end();
 }
 
 void PluginRegistry::fault(const fs::path& lib, std::string plugin, std::string message) {
@@ -293,6 +323,11 @@ bool PluginRegistry::admit(const PluginDescriptor& d, const fs::path& file, cons
     return false;
   }
   if (const PluginRecord* other = find_any(d.name)) {
+    if (file.parent_path() != other->library.parent_path() && in_default_folder(file) &&
+        in_default_folder(other->library)) {
+      shadowed_.push_back({file, d.name, other->library});
+      return false;
+    }
     fault(file, d.name,
           fmt::format("plugin '{}' is already provided by {}", d.name, other->library.string()));
     return false;

@@ -140,6 +140,7 @@ std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
                       "from the end: the file has {})",
                       path, *frame, file->filename().string(), n - 1, n, count_of(n, "frame")));
   }
+  if (r.imported && !r.imported->unread.empty() && !for_box) warn_unread(*file, *r.imported);
   if (for_box) {
     std::optional<import_files::Imported> only_box;
     if (r.imported) only_box.emplace().box = r.imported->box;
@@ -147,6 +148,21 @@ std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
     return only_box;
   }
   return std::move(r.imported);
+}
+
+// A data file's topology (Bonds, Angles, ...) that pdyn does not read yet:
+// one line naming every such section, at the first one's title.
+void Loader::warn_unread(const std::filesystem::path& file, const import_files::Imported& in) {
+  std::vector<std::string> parts;
+  for (const auto& u : in.unread) {
+    parts.push_back(fmt::format("{} ({})", u.section, count_of(u.rows, "row")));
+  }
+  warnings_.push_back(fmt::format(
+      "{}:{}:1: {} {} not read: pdyn takes only a data file's atoms, masses and velocities, so "
+      "these particles run without those terms (give the scene the forces or constraints they "
+      "stand for)",
+      file.string(), in.unread.front().line, fmt::join(parts, ", "),
+      parts.size() == 1 ? "is" : "are"));
 }
 
 // `mass` for every particle, or `masses` per kind (LAMMPS type, XYZ

@@ -845,6 +845,7 @@ Scene Loader::load(const std::string& text) {
   assemble_system(scene);
   create_plugins(scene, forces, colliders, constraints, solvers);
   if (!diags_.empty()) fail();
+  scene.warnings = std::move(warnings_);
   return scene;
 }
 

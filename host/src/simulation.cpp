@@ -41,10 +41,12 @@ void require_finite(const System& sys) {
 
 }  // namespace
 
-Simulation::Simulation(Scene scene, int threads) : scene_(std::move(scene)) {
-  set_threads(threads > 0          ? threads
-              : scene_.threads > 0 ? scene_.threads
-                                   : default_threads(scene_.system->size()));
+Simulation::Simulation(Scene scene, int threads)
+    : scene_(std::move(scene)),
+      threads_(threads > 0          ? threads
+               : scene_.threads > 0 ? scene_.threads
+                                    : default_threads(scene_.system->size())) {
+  set_threads(threads_);
   stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
 }
 

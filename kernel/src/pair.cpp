@@ -9,6 +9,7 @@
 namespace pdyn {
 
 PairReference::~PairReference() = default;
+PairLoop::~PairLoop() = default;
 
 void check_cutoff_fits(const Domain& domain, double cutoff, double skin) {
   const double reach = cutoff + skin;

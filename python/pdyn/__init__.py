@@ -14,10 +14,11 @@ import math
 import operator
 import os
 import re
+import warnings
 
 import numpy as np
 
-from .errors import CheckpointError, Error, PluginError, SceneError, StepError
+from .errors import CheckpointError, Error, PluginError, SceneError, SceneWarning, StepError
 from . import _pdyn
 from .sweep import sweep
 
@@ -29,7 +30,7 @@ abi_version = _pdyn.abi_version
 __all__ = [
     "load", "loads", "Simulation", "Force", "param", "plugins", "describe", "check",
     "CheckReport", "sweep", "Error", "SceneError", "PluginError", "StepError",
-    "CheckpointError",
+    "CheckpointError", "SceneWarning",
 ]
 
 
@@ -135,6 +136,11 @@ class Simulation:
 
     def __init__(self, core):
         self._core = core
+        # What the scene loaded but will not use (a data file's Bonds, ...),
+        # as `pdyn validate` and `pdyn run` print it: a Python warning, raised
+        # at the caller's load() or loads().
+        for message in core._warnings:
+            warnings.warn(message, SceneWarning, stacklevel=3)
 
     # ---- state ----
     def _forward(name, doc):

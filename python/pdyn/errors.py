@@ -38,3 +38,10 @@ class StepError(Error, ArithmeticError):
 
 class CheckpointError(Error):
     """A checkpoint cannot be read or does not fit the simulation."""
+
+
+class SceneWarning(UserWarning):
+    """The scene loaded something it will not use, as ``pdyn validate`` and
+    ``pdyn run`` warn: a LAMMPS data file's Bonds, Angles, Dihedrals or
+    Impropers, which pdyn does not read yet, so its particles run as free
+    atoms. The message is located ("data.lmp:40:1: ...")."""

@@ -5,11 +5,15 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <pdyn/host/assembly.hpp>
 #include <pdyn/host/registry.hpp>
 #include <pdyn/host/simulation.hpp>
+#include <pdyn/host/threads.hpp>
 #include <pdyn/thermo.hpp>
+#include <thread>
 
 #include "bindings.hpp"
 #include "convert.hpp"
@@ -26,10 +30,68 @@ bool interrupted() {
   return PyErr_CheckSignals() != 0;
 }
 
+// One Python thread at a time inside a simulation. Stepping releases the
+// GIL, so without this two threads (a GUI and a worker, a thread pool) would
+// step, add to or restore one System at once and corrupt its memory. Every
+// call into a simulation holds its Turn for the whole call: a second thread
+// waits for it, a call from inside a call on the same thread (a Python
+// force that steps the simulation it belongs to) is refused. Distinct
+// simulations have distinct locks and step in parallel.
+class CallLock {
+ public:
+  class Turn {
+   public:
+    explicit Turn(CallLock& owner) : owner_(&owner), lock_(owner.mutex_, std::defer_lock) {}
+    Turn(Turn&& other) noexcept = default;
+    ~Turn() {
+      if (lock_.owns_lock()) owner_->holder_.store(std::thread::id());
+    }
+
+   private:
+    friend class CallLock;
+    CallLock* owner_;
+    std::unique_lock<std::mutex> lock_;
+  };
+
+  // Waits with the GIL released: the thread inside may need the GIL to
+  // finish its call (a Python force, Ctrl-C), and holding it while waiting
+  // would deadlock. Lock order is always this mutex, then the GIL.
+  Turn enter(const char* call) {
+    if (holder_.load() == std::this_thread::get_id()) {
+      throw std::runtime_error(fmt::format(
+          "{}: called from inside another call into the same simulation on this thread (a "
+          "Python force or callback cannot step, change or read the simulation that is calling "
+          "it; expected the call after the step returns)",
+          call));
+    }
+    Turn turn(*this);
+    if (!turn.lock_.try_lock()) {
+      py::gil_scoped_release release;
+      turn.lock_.lock();
+    }
+    holder_.store(std::this_thread::get_id());
+    return turn;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::atomic<std::thread::id> holder_{};
+};
+
 class PySimulation {
  public:
   PySimulation(std::shared_ptr<PluginRegistry> registry, Scene scene, int threads)
       : registry_(std::move(registry)), sim_(std::move(scene), threads) {}
+
+  // Every binding below enters first (CallLock). The thread count is set
+  // again on each entry: OpenMP keeps it per calling thread, and a Python
+  // thread other than the one that loaded the simulation would otherwise
+  // step with the process's default.
+  CallLock::Turn enter(const char* call) {
+    CallLock::Turn turn = lock_.enter(call);
+    set_threads(sim_.threads());
+    return turn;
+  }
 
   Simulation& sim() { return sim_; }
   System& sys() { return sim_.system(); }
@@ -316,6 +378,7 @@ class PySimulation {
     }
   };
 
+  CallLock lock_;
   std::shared_ptr<PluginRegistry> registry_;
   Simulation sim_;
   std::vector<py::weakref> views_;
@@ -338,6 +401,43 @@ std::unique_ptr<PySimulation> load(const std::string& source, bool is_text, cons
 
 }  // namespace
 
+namespace {
+
+// A member function bound with the simulation's turn held (CallLock):
+// `call` names it in the message of a refused re-entry.
+template <class R, class... A>
+auto entered(const char* call, R (PySimulation::*method)(A...)) {
+  return [call, method](PySimulation& s, A... a) -> R {
+    const auto turn = s.enter(call);
+    return (s.*method)(std::forward<A>(a)...);
+  };
+}
+template <class R, class... A>
+auto entered(const char* call, R (PySimulation::*method)(A...) const) {
+  return [call, method](PySimulation& s, A... a) -> R {
+    const auto turn = s.enter(call);
+    return (s.*method)(std::forward<A>(a)...);
+  };
+}
+// A view of the store, made with the turn held (add_particles may be
+// replacing the store on another thread).
+template <py::array (PySimulation::*View)(py::handle)>
+py::array entered_view(py::object self, const char* call) {
+  auto& s = self.cast<PySimulation&>();
+  const auto turn = s.enter(call);
+  return (s.*View)(self);
+}
+// A property read with the turn held.
+template <class Get>
+auto entered_get(const char* call, Get get) {
+  return [call, get](PySimulation& s) {
+    const auto turn = s.enter(call);
+    return get(s);
+  };
+}
+
+}  // namespace
+
 void bind_simulation(py::module_& m) {
   py::enum_<PluginKind>(m, "_Kind")
       .value("force", PluginKind::Force)
@@ -346,50 +446,68 @@ void bind_simulation(py::module_& m) {
       .value("constraint", PluginKind::Constraint);
   py::class_<PySimulation>(m, "_Simulation")
       .def_property_readonly(
-          "x", [](py::object self) { return self.cast<PySimulation&>().positions(self); })
+          "x", [](py::object self) { return entered_view<&PySimulation::positions>(self, "x"); })
       .def_property_readonly(
-          "v", [](py::object self) { return self.cast<PySimulation&>().velocities(self); })
+          "v", [](py::object self) { return entered_view<&PySimulation::velocities>(self, "v"); })
       .def_property_readonly(
-          "mass", [](py::object self) { return self.cast<PySimulation&>().masses(self); })
+          "mass", [](py::object self) { return entered_view<&PySimulation::masses>(self, "mass"); })
       .def_property_readonly(
-          "f", [](py::object self) { return self.cast<PySimulation&>().forces(self); })
-      .def_property_readonly("fixed",
-                             [](py::object self) { return self.cast<PySimulation&>().fixed(self); })
-      .def_property_readonly("n", [](PySimulation& s) { return s.sys().size(); })
-      .def_property_readonly("t", [](PySimulation& s) { return s.sys().time(); })
-      .def_property_readonly("steps", [](PySimulation& s) { return s.sim().steps(); })
-      .def_property_readonly("end_time", [](PySimulation& s) { return s.sim().scene().end_time; })
-      .def_property_readonly("scene_steps", [](PySimulation& s) { return s.sim().scene().steps; })
-      .def_property_readonly("file", [](PySimulation& s) { return s.sim().scene().file; })
-      .def_property_readonly("solver", [](PySimulation& s) { return s.sim().scene().solver_name; })
-      .def_property_readonly("force_evaluations",
-                             [](PySimulation& s) { return s.sys().force_evaluations(); })
-      .def_property(
-          "dt", [](PySimulation& s) { return s.sim().dt(); },
-          [](PySimulation& s, double dt) {
-            try {
-              s.sim().set_dt(dt);
-            } catch (const Error& e) {
-              throw py::value_error(e.what());
-            }
-          })
-      .def("_labels", &PySimulation::labels)
-      .def("_constraint_labels", &PySimulation::constraint_labels)
-      .def("constraint_error", &PySimulation::constraint_error)
-      .def("step", &PySimulation::step, py::arg("n") = 1)
-      .def("_run_until", &PySimulation::run_until)
-      .def("_run_to_end", &PySimulation::run_to_end)
-      .def("_add_plugin", &PySimulation::add_plugin)
-      .def("_add_python_force", &PySimulation::add_python_force)
-      .def("remove", &PySimulation::remove)
-      .def("energies", &PySimulation::energies, py::arg("extra_dof") = 3.0)
-      .def("_add_particles", &PySimulation::add_particles)
-      .def("set_masses", &PySimulation::set_masses)
-      .def("set_fixed", &PySimulation::set_fixed)
-      .def("evaluate_forces", &PySimulation::evaluate_forces)
+          "f", [](py::object self) { return entered_view<&PySimulation::forces>(self, "f"); })
+      .def_property_readonly(
+          "fixed",
+          [](py::object self) { return entered_view<&PySimulation::fixed>(self, "fixed"); })
+      .def_property_readonly("n", entered_get("n", [](PySimulation& s) { return s.sys().size(); }))
+      .def_property_readonly("t", entered_get("t", [](PySimulation& s) { return s.sys().time(); }))
+      .def_property_readonly("steps",
+                             entered_get("steps", [](PySimulation& s) { return s.sim().steps(); }))
+      .def_property_readonly(
+          "end_time",
+          entered_get("end_time", [](PySimulation& s) { return s.sim().scene().end_time; }))
+      .def_property_readonly(
+          "scene_steps",
+          entered_get("scene_steps", [](PySimulation& s) { return s.sim().scene().steps; }))
+      .def_property_readonly(
+          "file", entered_get("file", [](PySimulation& s) { return s.sim().scene().file; }))
+      .def_property_readonly(
+          "_warnings",
+          entered_get("warnings", [](PySimulation& s) { return s.sim().scene().warnings; }))
+      .def_property_readonly(
+          "solver",
+          entered_get("solver", [](PySimulation& s) { return s.sim().scene().solver_name; }))
+      .def_property_readonly("force_evaluations", entered_get("force_evaluations",
+                                                              [](PySimulation& s) {
+                                                                return s.sys().force_evaluations();
+                                                              }))
+      .def_property("dt", entered_get("dt", [](PySimulation& s) { return s.sim().dt(); }),
+                    [](PySimulation& s, double dt) {
+                      const auto turn = s.enter("dt");
+                      try {
+                        s.sim().set_dt(dt);
+                      } catch (const Error& e) {
+                        throw py::value_error(e.what());
+                      }
+                    })
+      .def("_labels", entered("forces", &PySimulation::labels))
+      .def("_constraint_labels", entered("constraints", &PySimulation::constraint_labels))
+      .def("constraint_error", entered("constraint_error", &PySimulation::constraint_error))
+      .def("step", entered("step", &PySimulation::step), py::arg("n") = 1)
+      .def("_run_until", entered("run", &PySimulation::run_until))
+      .def("_run_to_end", entered("run", &PySimulation::run_to_end))
+      .def("_add_plugin", entered("add", &PySimulation::add_plugin))
+      .def("_add_python_force", entered("add_force", &PySimulation::add_python_force))
+      .def("remove", entered("remove", &PySimulation::remove))
+      .def("energies", entered("energies", &PySimulation::energies), py::arg("extra_dof") = 3.0)
+      .def("_add_particles", entered("add_particles", &PySimulation::add_particles))
+      .def("set_masses", entered("set_masses", &PySimulation::set_masses))
+      .def("set_fixed", entered("set_fixed", &PySimulation::set_fixed))
+      .def("evaluate_forces", entered("evaluate_forces", &PySimulation::evaluate_forces))
       .def("save_checkpoint",
-           [](PySimulation& s, const std::filesystem::path& p) { s.sim().save_checkpoint(p); })
+           [](PySimulation& s, const std::filesystem::path& p) {
+             const auto turn = s.enter("save");
+             s.sim().save_checkpoint(p);
+           })
       .def("restore_checkpoint", [](PySimulation& s, const std::filesystem::path& p, bool force) {
+        const auto turn = s.enter("restore");
         s.sim().restore_checkpoint(p, force, "restore(path, force=True) restores anyway");
       });
   m.def("_load", &load);

@@ -97,13 +97,27 @@ TEST(Check, EachBrokenPairForceFailsOnlyItsOwnPairCheck) {
   for (const auto& [plugin, check] : own) {
     const auto res = test::pdyn({"check", plugin, "--plugin-path", kBroken});
     const auto verdicts = pair_verdicts(res.out);
-    EXPECT_EQ(verdicts.size(), 4u) << res.out;
+    EXPECT_EQ(verdicts.size(), 5u) << res.out;
     for (const auto& [name, verdict] : verdicts) {
       EXPECT_EQ(verdict, name == check ? "FAIL" : (verdict == "skip" ? "skip" : "pass"))
           << plugin << ": " << name << "\n"
           << res.out;
     }
   }
+}
+
+// pair.selecting_loop (issue 42): a central law that branches at the cutoff
+// is told the one line that makes the loop select; a hand-written pair
+// force that offers no PairLoop is told nothing of its loop.
+TEST(Check, SelectingLoopAdvisesACentralLawThatBranches) {
+  const auto branches = test::pdyn({"check", "jumping_pair", "--plugin-path", kBroken});
+  EXPECT_EQ(pair_verdicts(branches.out).at("pair.selecting_loop"), "skip") << branches.out;
+  EXPECT_NE(branches.out.find("static constexpr bool evaluate_beyond_cutoff = true;"),
+            std::string::npos)
+      << branches.out;
+  const auto by_hand = test::pdyn({"check", "stale_pair_list", "--plugin-path", kBroken});
+  EXPECT_EQ(pair_verdicts(by_hand.out).at("pair.selecting_loop"), "skip") << by_hand.out;
+  EXPECT_NE(by_hand.out.find("does not report its loop"), std::string::npos) << by_hand.out;
 }
 
 // Each broken bonded force fails its own bonded.* check and passes the
@@ -141,17 +155,20 @@ TEST(Check, PairForcesPassThePairChecks) {
        {{"pair.newton_third_law", conformance::Verdict::Pass},
         {"pair.gradient", conformance::Verdict::Pass},
         {"pair.matches_brute_force", conformance::Verdict::Pass},
-        {"pair.continuous_at_cutoff", conformance::Verdict::Pass}}},
-      {"soft_contact",
+        {"pair.continuous_at_cutoff", conformance::Verdict::Pass},
+        {"pair.selecting_loop", conformance::Verdict::Pass}}},
+      {"soft_contact",  // a general law (radii, velocities): it branches
        {{"pair.newton_third_law", conformance::Verdict::Pass},
         {"pair.gradient", conformance::Verdict::Pass},
         {"pair.matches_brute_force", conformance::Verdict::Pass},
-        {"pair.continuous_at_cutoff", conformance::Verdict::Skip}}},
+        {"pair.continuous_at_cutoff", conformance::Verdict::Skip},
+        {"pair.selecting_loop", conformance::Verdict::Skip}}},
       {"spring",  // not a pair force
        {{"pair.newton_third_law", conformance::Verdict::Skip},
         {"pair.gradient", conformance::Verdict::Skip},
         {"pair.matches_brute_force", conformance::Verdict::Skip},
-        {"pair.continuous_at_cutoff", conformance::Verdict::Skip}}}};
+        {"pair.continuous_at_cutoff", conformance::Verdict::Skip},
+        {"pair.selecting_loop", conformance::Verdict::Skip}}}};
   for (const auto& [plugin, verdicts] : expected) {
     const auto* r = test::shipped_plugins().find(PluginKind::Force, plugin);
     ASSERT_NE(r, nullptr) << plugin;

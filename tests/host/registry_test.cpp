@@ -15,8 +15,10 @@
 #include <dlfcn.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -221,6 +223,88 @@ TEST(Registry, DuplicateIsListedByPluginsWithBothPaths) {
                                   ": plugin 'gravity': plugin 'gravity' is already provided by " +
                                   (fixture("dup") / "pdyn_force_gravity.so").string()))
       << r.out;
+}
+
+// A program run as a user would (a copy of the real pdyn, PDYN_BIN, in a
+// folder of its own): its exit status, stdout and stderr.
+test::CommandResult run_program(const fs::path& program, const std::string& args) {
+  const fs::path err = test::temp_dir("program-stderr") / "err.txt";
+  const std::string cmd =
+      "env -u PDYN_PLUGIN_PATH '" + program.string() + "' " + args + " 2>'" + err.string() + "'";
+  test::CommandResult r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, pipe)) > 0;) r.out.append(buf, n);
+  const int status = pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = test::read_bytes(err);
+  return r;
+}
+
+// A pdyn program in `root`/bin whose own plugin folder (bin/../lib/pdyn/
+// plugins) is not its libraries' (those of the build tree): two
+// installations side by side. Returns the program.
+fs::path program_beside_another_install(const fs::path& root) {
+  fs::create_directories(root / "bin");
+  fs::create_directories(root / "lib/pdyn/plugins");
+  fs::copy_file(PDYN_BIN, root / "bin/pdyn");
+  return root / "bin/pdyn";
+}
+
+// Two installations side by side (issue 42): the program's own folder holds
+// another gravity. The libraries' folder comes first and wins; the other
+// library is listed as shadowed, not a fault, and a scene using gravity
+// validates without a word.
+TEST(Registry, APluginInTwoDefaultFoldersIsShadowedNotAFault) {
+  const fs::path root = real_path(test::temp_dir("two-installs"));
+  const fs::path program = program_beside_another_install(root);
+  const fs::path other = root / "lib/pdyn/plugins/pdyn_force_gravity.so";
+  fs::copy_file(fixture("dup") / "pdyn_force_gravity.so", other);
+  const fs::path ours = shipped_dir() / "pdyn_force_gravity.so";
+
+  const auto r = run_program(program, "plugins --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["faults"].empty()) << j["faults"].dump(2);
+  ASSERT_EQ(j["shadowed"].size(), 1u) << j["shadowed"].dump(2);
+  EXPECT_EQ(j["shadowed"][0]["library"], other.string());
+  EXPECT_EQ(j["shadowed"][0]["plugin"], "gravity");
+  EXPECT_EQ(j["shadowed"][0]["by"], ours.string());
+  EXPECT_EQ(j["searched"],
+            (nlohmann::json{shipped_dir().string(), (root / "lib/pdyn/plugins").string()}));
+  for (const auto& p : j["plugins"]) {
+    if (p["name"] == "gravity") {
+      EXPECT_EQ(p["library"], ours.string());
+    }
+  }
+  const auto text = run_program(program, "plugins");
+  EXPECT_TRUE(contains(text.out, "shadowed: " + other.string() +
+                                     ": plugin 'gravity' (provided by " + ours.string() +
+                                     ", an earlier default folder)"))
+      << text.out;
+  const fs::path scene = scene_with_force("two-installs-scene", "gravity");
+  const auto v = run_program(program, "validate '" + scene.string() + "'");
+  EXPECT_EQ(v.status, 0) << v.err;
+  EXPECT_EQ(v.err, "");
+}
+
+// Within one folder, two libraries of one name stay a fault, default
+// folder or not.
+TEST(Registry, TwoLibrariesOfOneNameInOneDefaultFolderStayAFault) {
+  const fs::path root = real_path(test::temp_dir("one-install-twice"));
+  const fs::path program = program_beside_another_install(root);
+  const fs::path dir = root / "lib/pdyn/plugins";
+  fs::copy_file(fixture("push") / "pdyn_force_test_push.so", dir / "pdyn_force_test_push.so");
+  fs::copy_file(fixture("push") / "pdyn_force_test_push.so", dir / "pdyn_force_test_push2.so");
+  const auto r = run_program(program, "plugins --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["shadowed"].empty()) << j.dump(2);
+  ASSERT_EQ(j["faults"].size(), 1u) << j.dump(2);
+  EXPECT_EQ(j["faults"][0]["library"], (dir / "pdyn_force_test_push2.so").string());
+  EXPECT_EQ(j["faults"][0]["message"], "plugin 'test_push' is already provided by " +
+                                           (dir / "pdyn_force_test_push.so").string());
 }
 
 // registry.hpp: require_healthy() refuses a plugin that two libraries

@@ -1,5 +1,6 @@
 """Bad input: Python exceptions with the command line's located messages."""
 import math
+import os
 
 import pytest
 
@@ -130,3 +131,81 @@ def test_bonded_quads_and_types_from_python():
     with pytest.raises(pdyn.SceneError, match=r"force.types\[0\]: 2 is not a term type "
                                               r"\(expected 0..1: k, kd give 2 types\)"):
         sim.add_force("dihedral", quads=[[0, 1, 2, 3]], types=[2], k=[2, 6])
+
+
+DIMER_DATA = """LAMMPS data file: two bonded atoms
+
+2 atoms
+1 bonds
+1 atom types
+1 bond types
+
+0 10 xlo xhi
+0 10 ylo yhi
+0 10 zlo zhi
+
+Masses
+
+1 1.0
+
+Atoms # bond
+
+1 1 1 4.5 5 5
+2 1 1 5.5 5 5
+
+Bonds
+
+1 1 1 2
+"""
+
+
+def test_unread_topology_is_a_located_warning(tmp_path):
+    """A data file's Bonds that pdyn does not read yet (issue 42): a
+    SceneWarning with the command line's located message, not silence."""
+    data = tmp_path / "dimer.data"
+    data.write_text(DIMER_DATA)
+    text = (f"simulation: {{ dt: 0.001, steps: 1, box: {{ file: {data} }}, "
+            f"solver: {{ type: verlet }} }}\nparticles:\n  - {{ file: {data} }}\n")
+    with pytest.warns(pdyn.SceneWarning) as caught:
+        sim = pdyn.loads(text)
+    assert [str(w.message) for w in caught] == [
+        f"{data}:21:1: Bonds (1 row) is not read: pdyn takes only a data file's atoms, masses "
+        "and velocities, so these particles run without those terms (give the scene the forces "
+        "or constraints they stand for)"]
+    assert caught[0].filename == __file__
+    assert sim.n == 2
+
+
+def test_an_interpreter_beside_another_installation_uses_only_its_own_plugins(
+        tmp_path, pdyn_program):
+    """A python3 whose ../lib/pdyn/plugins holds another installation's
+    plugins (Debian's python3 with the pdyn packages, importing a build
+    tree's module; issue 42): the module searches its own installation's
+    folder only, so the other gravity is neither loaded nor a duplicate."""
+    import pathlib
+    import shutil
+    import subprocess
+    import sys
+
+    build = pathlib.Path(pdyn_program).resolve().parents[1]
+    (tmp_path / "bin").mkdir()
+    plugins = tmp_path / "lib" / "pdyn" / "plugins"
+    plugins.mkdir(parents=True)
+    python = tmp_path / "bin" / "python3"
+    shutil.copy2(os.path.realpath(sys.executable), python)
+    shutil.copy2(build / "tests" / "fixtures" / "dup" / "pdyn_force_gravity.so", plugins)
+    script = (
+        "import pdyn\n"
+        "libs = {p['name']: p['library'] for p in pdyn.plugins()}\n"
+        "print(libs['gravity'])\n"
+        "sim = pdyn.loads('simulation: { dt: 0.01, steps: 1 }\\n"
+        "particles: [{ position: [0, 0, 0], mass: 1 }]\\n"
+        "forces: [{ type: gravity }]\\n')\n"
+        "sim.step(1)\n"
+        "print(sim.v[0, 2])\n")
+    env = {k: v for k, v in os.environ.items() if k != "PDYN_PLUGIN_PATH"}
+    r = subprocess.run([str(python), "-c", script], env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    library, vz = r.stdout.split()
+    assert pathlib.Path(library).resolve().parent == (build / "lib" / "pdyn" / "plugins").resolve()
+    assert abs(float(vz) + 9.81 * 0.01) <= 1e-15

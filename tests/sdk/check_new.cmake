@@ -109,7 +109,7 @@ foreach(kind force solver collider pair bonded writer constraint)
   message(STATUS "${last_output}")
   if(kind STREQUAL "pair")  # the pair checks ran on the law, none skipped
     foreach(check pair.newton_third_law pair.gradient pair.matches_brute_force
-                  pair.continuous_at_cutoff)
+                  pair.continuous_at_cutoff pair.selecting_loop)
       if(NOT last_output MATCHES "${check} +pass")
         message(FATAL_ERROR "pdyn check ${name}: ${check} did not pass:\n${last_output}")
       endif()

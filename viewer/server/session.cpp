@@ -57,7 +57,8 @@ void Session::load(bool from_disk) {
   std::unique_ptr<PluginRegistry> registry;
   auto make_registry = [&] {
     registry = std::make_unique<PluginRegistry>();
-    registry->discover(PluginRegistry::search_path(options_.plugin_path));
+    registry->discover(
+        PluginRegistry::search_path(options_.plugin_path, DefaultFolders::LibraryAndProgram));
   };
   if (from_disk || !registry_) {
     make_registry();

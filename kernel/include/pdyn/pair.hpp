@@ -155,12 +155,30 @@ class PairReference {
   virtual const NeighborList* pair_neighbors() const { return nullptr; }
 };
 
+/// The optional report of which loop a pair force runs, beside
+/// PairReference: `pdyn check`'s pair.selecting_loop reads it to tell an
+/// author whose central law branches at the cutoff that declaring
+/// `evaluate_beyond_cutoff` would make it faster. Found with dynamic_cast,
+/// so a force built against an SDK without it keeps its vtable and the kit
+/// says nothing of its loop.
+class PairLoop {
+ public:
+  virtual ~PairLoop();
+  /// True for a central law (U of the distance and the types): one that may
+  /// declare evaluate_beyond_cutoff.
+  virtual bool central_law() const = 0;
+  /// True when the loop evaluates the law on every listed pair and selects
+  /// those within the cutoff (the law declares evaluate_beyond_cutoff).
+  virtual bool selects_beyond_cutoff() const = 0;
+};
+
 /// A force from a central pair law within a cutoff (see the top of this
 /// file). `members`: N flags (a selection) or empty for every particle; only
 /// pairs of two members interact.
 template <class Law>
 class PairForce : public Force,
                   public PairReference,
+                  public PairLoop,
                   public PeriodicInvariant,
                   public VirialSource {
  public:
@@ -238,6 +256,10 @@ class PairForce : public Force,
       return Force::add_jacobians(p, sink);
     }
   }
+
+  // ---- PairLoop ----
+  bool central_law() const override { return kCentral; }
+  bool selects_beyond_cutoff() const override { return kSelect; }
 
   // ---- PairReference ----
   double pair_cutoff() const override { return std::sqrt(cutoff2_); }

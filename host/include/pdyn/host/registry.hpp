@@ -33,14 +33,39 @@ struct PluginFault {
   std::string message;  // one line: what is wrong
 };
 
+/// A plugin that a library in a later default folder also provides: the
+/// earlier folder's library wins, and `pdyn plugins` lists this one.
+struct PluginShadow {
+  std::filesystem::path library;  // the library not loaded
+  std::string plugin;
+  std::filesystem::path by;  // the library that provides the plugin
+};
+
+/// Which default folders a host searches after the user's: the plugin
+/// folder of this pdyn's own installation (beside the kernel library)
+/// always; the one beside the running program only for pdyn's own programs.
+/// An embedding program (python3 importing pdyn, a user's executable) is no
+/// part of any pdyn installation, and the folder beside it may belong to
+/// another one (a build tree's module on a machine with the packages too).
+enum class DefaultFolders { Library, LibraryAndProgram };
+
 class PluginRegistry {
  public:
-  /// The default search path, in order: `extra` (--plugin-path), the
-  /// directories in $PDYN_PLUGIN_PATH (':'-separated), then the plugin folder
-  /// beside the running program and beside the kernel library (build tree
-  /// and install tree alike). Duplicates and missing folders are dropped.
+  /// The search path, in order: `extra` (--plugin-path), the directories in
+  /// $PDYN_PLUGIN_PATH (':'-separated), then the default folders: the plugin
+  /// folder beside the kernel library, and, with
+  /// DefaultFolders::LibraryAndProgram, the one beside the running program
+  /// (build tree and install tree alike). Duplicates and missing folders are
+  /// dropped.
   static std::vector<std::filesystem::path> search_path(
-      const std::vector<std::filesystem::path>& extra);
+      const std::vector<std::filesystem::path>& extra,
+      DefaultFolders defaults = DefaultFolders::Library);
+  /// The default folders (both kinds), canonical, that exist. A plugin
+  /// found in two of them comes from the first searched and the other is
+  /// listed in shadowed(), not a fault: two installations side by side are
+  /// no user's mistake. Within one folder, and between a user's folder and
+  /// any other, a second library for one name stays a fault.
+  static std::vector<std::filesystem::path> default_folders();
   /// Why `dir` cannot be a folder a user names for plugins (`pdyn ...
   /// --plugin-path`, Python's plugin_path=): "'DIR' is no such folder
   /// (expected ...)", or "" if it is a folder. search_path() drops missing
@@ -69,6 +94,7 @@ class PluginRegistry {
 
   const std::vector<PluginRecord>& plugins() const noexcept { return plugins_; }
   const std::vector<PluginFault>& faults() const noexcept { return faults_; }
+  const std::vector<PluginShadow>& shadowed() const noexcept { return shadowed_; }
   const std::vector<std::filesystem::path>& searched() const noexcept { return searched_; }
   /// Sorted names of the plugins of one kind.
   std::vector<std::string> names(PluginKind kind) const;
@@ -88,8 +114,11 @@ class PluginRegistry {
   // The checks shared by load_library() and add(), then the listing.
   bool admit(const PluginDescriptor& d, const std::filesystem::path& file, const std::string& hint,
              std::shared_ptr<void> handle);
+  bool in_default_folder(const std::filesystem::path& library);
+  std::optional<std::vector<std::filesystem::path>> defaults_;  // default_folders(), once
   std::vector<PluginRecord> plugins_;
   std::vector<PluginFault> faults_;
+  std::vector<PluginShadow> shadowed_;
   std::vector<std::filesystem::path> searched_;
 };
 

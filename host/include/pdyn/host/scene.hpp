@@ -114,6 +114,10 @@ struct Scene {
   std::map<std::string, ForceTraits> force_traits;
   /// simulation.constraint_force: Witkin's feedback terms and CG settings.
   ConstraintFeedback constraint_feedback;
+  /// What the scene loaded but will not use, one line each, located
+  /// ("data.lmp:40:1: the file's Bonds (12 rows) are not read ..."): every
+  /// host shows them (pdyn validate and run on stderr, Python as warnings).
+  std::vector<std::string> warnings;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`

@@ -64,6 +64,10 @@ class Simulation {
   /// The time step, s. Changing it restarts the computed step times at the
   /// current time: later fixed steps end at t + k dt'.
   double dt() const noexcept { return scene_.dt; }
+  /// The thread count set at construction. OpenMP keeps it per calling
+  /// thread: a program that steps from another thread calls
+  /// pdyn::set_threads(threads()) there first (the Python module does).
+  int threads() const noexcept { return threads_; }
   void set_dt(double dt);
   /// Replaces the solver with a new object (add_plugin with PluginKind::Solver
   /// makes one); the step times restart at the current time, as for set_dt.
@@ -94,6 +98,7 @@ class Simulation {
   void restart_clock();
 
   Scene scene_;
+  int threads_ = 1;
   std::unique_ptr<Stepper> stepper_;
   std::int64_t steps_ = 0;
   // Fixed steps: step k ends at clock_time_ + (k - clock_step_) dt; (0, 0)
