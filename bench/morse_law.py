@@ -27,10 +27,11 @@ swap("""    const double r = std::sqrt(r2);
     // no force, the energy's maximum.
     return {eps * s * s, r > 0.0 ? 2.0 * eps * s / (rc * r) : 0.0};""",
      """    // Morse: U = D0 (e^2 - 2 e), e = exp(-alpha (r - r0)); -U'(r)/r =
-    // 2 alpha D0 (e^2 - e) / r, as LAMMPS's pair_style morse.
+    // 2 alpha D0 (e^2 - e) / r, as LAMMPS's pair_style morse. At r = 0 the
+    // force's direction is undefined: no force, as the template says.
     const double r = std::sqrt(r2);
     const double e = std::exp(-alpha * (r - r0));
-    return {d0 * (e * e - 2.0 * e), 2.0 * alpha * d0 * (e * e - e) / r};""")
+    return {d0 * (e * e - 2.0 * e), r > 0.0 ? 2.0 * alpha * d0 * (e * e - e) / r : 0.0};""")
 # Unshifted, as LAMMPS's: U(rc) is not 0, so the law declares nothing there.
 swap("""  bool continuous_at_cutoff() const { return true; }\n""", "")
 swap("""  d.description = "soft repulsion U = eps (1 - r/rc)^2 between particles closer than rc";""",
