@@ -8,6 +8,7 @@
 
 #include <cmath>
 
+#include "pdyn/error.hpp"
 #include "pdyn/params.hpp"
 
 namespace pdyn {
