@@ -433,7 +433,7 @@ CheckResult check_near_singular(ConstraintCase& c) {
   }
   return result(
       "constraint.finite_near_singular", bad == 0, static_cast<double>(bad), 0,
-      bad == 0 ? fmt::format("{} states: every particle on the origin and on each point the "
+      bad == 0 ? fmt::format("{} states: every particle at the origin and at each point the "
                              "parameters name, on each line through them along x, y, z and "
                              "each direction the parameters name, on one random point; each "
                              "again within {:g} m; made elsewhere and made there: every C, c_t, "
