@@ -38,9 +38,9 @@
 // where Jdot_x is J's change along the motion at fixed t: the position part
 // only (J's explicit time dependence is the middle term, which appears twice,
 // once from J and once from c_t). A constraint that does not move with time
-// has b = v^T (d2C/dx2) v, Witkin's Jdot v; one with a J that does not depend
-// on x either (a plane, a pin) has b = 0. Every partial derivative here is
-// taken at the state, with every other argument fixed.
+// has b = v^T (d2C/dx2) v, Witkin's Jdot v; a constant J with C linear in t
+// (a plane, a pin moving at constant velocity) gives b = 0. Every partial
+// derivative here is taken at the state, every other argument fixed.
 //
 // A minimal plugin: a bead held on a sphere of radius R about c,
 // C = |x - c| - R, J = n = (x - c)/|x - c|, b = (|v|^2 - (n.v)^2)/|x - c|
@@ -90,8 +90,8 @@ struct ConstraintValues {
   /// d2C_r/dt2, unit/s^2 (per row; the header's comment derives it)
   Eigen::VectorXd bias;
   /// 3 x entries, unit/m: column row_begin[r] + j is dC_r/dx of the row's
-  /// j-th particle, particle[row_begin[r] + j] (never column r, unless each
-  /// row has one particle; pdyn/particle_constraint.hpp does that case).
+  /// j-th particle, particle[row_begin[r] + j] (column r only when every row
+  /// before r has one particle; pdyn/particle_constraint.hpp's family).
   Matrix3X jacobian;
 };
 
