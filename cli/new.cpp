@@ -192,6 +192,18 @@ void write_project(const NewArgs& a, const fs::path& target,
   }
 }
 
+// What the "next:" line naming the project's test file says to do with it.
+// A constraint's test holds for any geometry but for its last test, the
+// bowl's exact orbit, which the author replaces with their own.
+std::string test_advice(const std::string& kind) {
+  if (kind == "constraint") {
+    return "your tests; keep the first three (any geometry), replace the bowl's orbit test "
+           "with your geometry's exact case (its TODO says what to assert)";
+  }
+  return "your tests; add your physics (exact solutions, conservation laws) beside the "
+         "conformance kit's";
+}
+
 int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
   if (!name_is_free(a, err)) return kBadInput;
   const fs::path target = a.dir.empty() ? fs::path(a.name) : fs::path(a.dir);
@@ -210,8 +222,10 @@ int cmd_new(const NewArgs& a, std::ostream& out, std::ostream& err) {
       "next:\n"
       "  cmake -S {0} -B {0}/build -DCMAKE_PREFIX_PATH=<pdyn install prefix>\n"
       "  cmake --build {0}/build\n"
-      "  ctest --test-dir {0}/build      # pdyn check {1} and the example scene\n",
-      target.string(), a.name);
+      "  ctest --test-dir {0}/build      # pdyn check {1}, the example scene and test_{1}\n"
+      "  {2}: {3}\n",
+      target.string(), a.name, (target / ("test_" + a.name + ".cpp")).string(),
+      test_advice(a.kind));
   return kOk;
 }
 

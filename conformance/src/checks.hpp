@@ -56,8 +56,9 @@ void writer_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
 
 /// constraints.cpp: construct.defaults and the constraint.* checks: a
 /// well-formed pattern, deterministic, read-only, finite when particles
-/// coincide, satisfied where made, and J, c_t and b against finite
-/// differences of C.
+/// coincide and near singular spots (the origin, axes, the parameters'
+/// points and directions), satisfied where made with the default
+/// parameters, and J, c_t and b against finite differences of C.
 void constraint_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out);
 
 // ---- checks of every kind ----

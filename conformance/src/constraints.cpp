@@ -1,10 +1,12 @@
 // The constraint checks (pdyn/constraint.hpp): what every Constraint plugin
 // must do (a well-formed pattern, deterministic, read-only on the state,
-// finite when particles coincide) and what its values claim, each against
-// finite differences of C itself: the Jacobian dC/dx, the rate c_t = dC/dt
-// at fixed positions, and the bias b = Cddot - J a along the straight motion
-// x(t) = x + v t (a = 0); and that it is satisfied where it was created, as
-// a constraint whose geometry is taken from the initial positions must be.
+// finite when particles coincide and at the spots where a row's geometry is
+// singular) and what its values claim, each against finite differences of C
+// itself: the Jacobian dC/dx, the rate c_t = dC/dt at fixed positions, and
+// the bias b = Cddot - J a along the straight motion x(t) = x + v t (a = 0);
+// and that it is satisfied where it was created with the parameters a scene
+// that gives only the required keys gets, as a constraint whose geometry is
+// taken from the initial positions must be.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 
 #include "checks.hpp"
 #include "pdyn/constraint.hpp"
+#include "pdyn/params.hpp"
 #include "sample.hpp"
 
 namespace pdyn::conformance::detail {
@@ -36,6 +39,10 @@ constexpr double kFirstBound = 1e-6;
 // length scale) and the bound on the error relative to 1 + |b_fd|max.
 constexpr double kSecondStep = 1e-4;
 constexpr double kSecondBound = 1e-4;
+// How far from a singular spot the "near" probes are, m: far enough that
+// the squares of the distance (1e-20 m^2) are normal numbers, near enough
+// that 1/distance (1e10 /m) dwarfs every other term.
+constexpr double kNearSingular = 1e-10;
 
 // ---- evaluating a constraint as the kernel does ----
 
@@ -153,16 +160,24 @@ bool same_pattern(const ConstraintPattern& a, const ConstraintPattern& b) {
   return a.row_begin == b.row_begin && a.particle == b.particle;
 }
 
+// A factory call: the object made with `params` at the state `at`.
+using Maker = std::function<std::shared_ptr<Constraint>(const Params&, const State&)>;
+
 // What each group of constraint checks gets: the plugin, the object made
-// with the sample parameters at the home state, its pattern, and the one
-// random sequence the groups draw from in turn.
+// with the sample parameters at the home state, its pattern, the one random
+// sequence the groups draw from in turn, and the two parameter sets
+// (conformance.hpp: sample_params, default_params).
 struct ConstraintCase {
   const PluginDescriptor& d;
   std::mt19937_64& rng;
   const State& home;
   const Constraint& c;
   const ConstraintPattern& pat;
-  std::function<std::shared_ptr<Constraint>(const State&)> make;  // same parameters
+  const Params& sample;
+  const Params& defaults;
+  Maker make_with;
+
+  std::shared_ptr<Constraint> make(const State& at) const { return make_with(sample, at); }
 };
 
 // The home state and kRandomStates random ones (random velocities and times).
@@ -188,29 +203,51 @@ CheckResult check_pattern(const ConstraintCase& c) {
                     : problem);
 }
 
-// Made at three states (the home state, two random ones) with the sample
-// parameters, whose geometry defaults to the initial positions: C = 0 there.
+// "length = 1, radius = 2": the parameters that took their defaults.
+std::string defaults_used(const PluginDescriptor& d, const Params& p) {
+  std::string list;
+  for (const auto& spec : d.params) {
+    if (!spec.fallback || !p.has(spec.name)) continue;
+    const auto it = p.values().find(spec.name);
+    list += (list.empty() ? "" : ", ") + spec.name + " = " + format_value(it->second);
+  }
+  return list;
+}
+
+// Made at three states (the home state, two random ones) with the default
+// parameters: a geometry that the scene leaves out comes from the initial
+// positions, so C = 0 there. The sample parameters would not do: a sample
+// of an optional length is for the other checks, a scene leaving it out
+// does not get it.
 CheckResult check_satisfied(ConstraintCase& c) {
   double worst = 0.0;
   for (int k = 0; k < 3; ++k) {
     const State s = k == 0 ? c.home : random_state(c.rng);
-    std::shared_ptr<Constraint> obj;
-    if (k > 0) obj = c.make(s);
-    const Constraint& con = k == 0 ? c.c : *obj;
-    const ConstraintPattern pat = k == 0 ? c.pat : con.pattern();
+    const std::shared_ptr<Constraint> con = c.make_with(c.defaults, s);
+    const ConstraintPattern pat = con->pattern();
     if (!pattern_problem(pat, s.size()).empty()) {
       return result("constraint.satisfied_at_creation", false, 1, 0,
                     "malformed pattern for an object made at another state");
     }
-    const Eigen::VectorXd value = value_at(con, pat, s);
+    const Eigen::VectorXd value = value_at(*con, pat, s);
     const double rel = value.allFinite() ? largest(value) / length_scale(s)
                                          : std::numeric_limits<double>::infinity();
     worst = std::max(worst, rel);
   }
-  return result("constraint.satisfied_at_creation", worst <= kSatisfiedBound, worst,
-                kSatisfiedBound,
-                "|C|max / max(1 m, |x|max) at the state the object was made at (3 states, "
-                "sample parameters, geometry from the initial positions)");
+  const bool pass = worst <= kSatisfiedBound;
+  std::string detail =
+      "|C|max / max(1 m, |x|max) at the state the object was made at (3 states; default "
+      "parameters: the required ones at their samples, the others at their defaults or left "
+      "out, so that a geometry left out comes from the initial positions)";
+  if (!pass) {
+    const std::string used = defaults_used(c.d, c.defaults);
+    detail = fmt::format(
+        "C != 0 where the object was made, with the default parameters{}: a geometry that a "
+        "scene leaves out must come from the initial positions (declare it with "
+        "param::optional, no default; docs/constraints.md)",
+        used.empty() ? "" : " (" + used + ")");
+  }
+  return result("constraint.satisfied_at_creation", pass, worst, kSatisfiedBound, detail);
 }
 
 CheckResult check_jacobian(ConstraintCase& c) {
@@ -270,6 +307,141 @@ CheckResult check_bias(ConstraintCase& c) {
                             kRandomStates + 1));
 }
 
+// ---- near-singular states ----
+//
+// A row's geometry is singular where a direction it divides by vanishes: a
+// bead on the axis of its wire or cylinder (1/rho), a particle at a
+// sphere's centre or at the origin (1/r), two particles of a row on one
+// point. A plugin must stay finite there, or refuse with a message: the kit
+// cannot know a plugin's axes, so it puts the particles on every point and
+// line the coordinate frame and the parameters name.
+
+// A point or a direction, with how the report names it.
+struct Landmark {
+  std::string name;
+  Vec3 at;
+};
+
+bool known(const std::vector<Landmark>& list, const Vec3& p) {
+  return std::any_of(list.begin(), list.end(), [&](const Landmark& l) { return l.at == p; });
+}
+
+// The points (the origin, every Vector parameter's value, every VectorList's
+// first) and the directions (x, y, z, every nonzero Vector parameter's) of
+// both parameter sets.
+void landmarks(const Params& params, std::vector<Landmark>& points,
+               std::vector<Landmark>& directions) {
+  for (const auto& [name, value] : params.values()) {
+    const Vec3* v = std::get_if<Vec3>(&value);
+    const auto* list = std::get_if<std::vector<Vec3>>(&value);
+    if (list && !list->empty()) v = &list->front();
+    if (!v || !v->allFinite()) continue;
+    if (!known(points, *v)) points.push_back({fmt::format("`{}` {}", name, format_value(*v)), *v});
+    if (v->norm() == 0.0) continue;
+    const Vec3 u = v->normalized();
+    if (!known(directions, u) && !known(directions, -u)) {
+      directions.push_back({fmt::format("`{}`", name), u});
+    }
+  }
+}
+
+// The labelled states: every particle on each point; on each line through
+// each point along each direction (at distinct distances, 0.2 .. 1 m either
+// side); every particle within 1e-10 m of particle 0; and each of these
+// again with every particle moved 1e-10 m off in a random direction.
+// Velocities and time are random.
+std::vector<std::pair<std::string, State>> near_singular_states(std::mt19937_64& rng,
+                                                                const Params& a, const Params& b) {
+  std::vector<Landmark> points{{"the origin", Vec3::Zero()}};
+  std::vector<Landmark> directions{
+      {"x", Vec3::UnitX()}, {"y", Vec3::UnitY()}, {"z", Vec3::UnitZ()}};
+  landmarks(a, points, directions);
+  landmarks(b, points, directions);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const State base = random_state(rng);
+  std::vector<std::pair<std::string, State>> exact;
+  for (const Landmark& p : points) {
+    State s = base;
+    s.x.colwise() = p.at;
+    exact.emplace_back("every particle at " + p.name, s);
+    for (const Landmark& d : directions) {
+      for (Index i = 0; i < s.size(); ++i) {
+        const double along = (i % 2 == 0 ? 1.0 : -1.0) * (0.2 + 0.8 * (i + 0.5 * (1.0 + u(rng))) /
+                                                                    static_cast<double>(s.size()));
+        s.x.col(i) = p.at + along * d.at;
+      }
+      exact.emplace_back(fmt::format("on the line through {} along {}", p.name, d.name), s);
+    }
+  }
+  State coincident = base;
+  coincident.x.colwise() = base.x.col(0);
+  exact.emplace_back("every particle at particle 0's point", coincident);
+  std::vector<std::pair<std::string, State>> out = exact;
+  for (auto [label, s] : exact) {
+    for (Index i = 0; i < s.size(); ++i) {
+      const Vec3 off(u(rng), u(rng), u(rng));
+      s.x.col(i) += kNearSingular * off.normalized();
+    }
+    out.emplace_back(fmt::format("within {:g} m of: {}", kNearSingular, label), s);
+  }
+  return out;
+}
+
+// "": `con` at `s` gives finite C, c_t, b and J, or refuses with a message
+// (counted in `refusals`); else what went wrong.
+std::string finite_or_refused(const Constraint& con, const ConstraintPattern& pat, const State& s,
+                              std::size_t& refusals) {
+  try {
+    if (all_finite(values_at(con, pat, s))) return {};
+    return "non-finite or unwritten values";
+  } catch (const std::exception& e) {
+    if (std::string(e.what()).empty()) return "an exception without a message";
+    ++refusals;
+    return {};
+  }
+}
+
+// Each state with the object made at the home state, and with objects made
+// at that state (sample and default parameters): a geometry taken from a
+// particle on an axis (a radius 0) is made there. Making may be refused with
+// a message too.
+CheckResult check_near_singular(ConstraintCase& c) {
+  const auto states = near_singular_states(c.rng, c.sample, c.defaults);
+  std::size_t bad = 0, refusals = 0;
+  std::string first;
+  auto note = [&](const std::string& problem, const std::string& where) {
+    if (problem.empty()) return;
+    if (first.empty()) first = fmt::format("{}, on: {}", problem, where);
+    ++bad;
+  };
+  for (const auto& [label, s] : states) {
+    note(finite_or_refused(c.c, c.pat, s, refusals), label + " (made at a random state)");
+    for (const Params* params : {&c.sample, &c.defaults}) {
+      std::shared_ptr<Constraint> made;
+      try {
+        made = c.make_with(*params, s);
+      } catch (const std::exception& e) {
+        note(std::string(e.what()).empty() ? "refused without a message" : "", label);
+        refusals += std::string(e.what()).empty() ? 0 : 1;
+        continue;
+      }
+      const ConstraintPattern pat = made->pattern();
+      const std::string problem = pattern_problem(pat, s.size());
+      note(problem.empty() ? finite_or_refused(*made, pat, s, refusals) : problem,
+           label + " (made there)");
+    }
+  }
+  return result(
+      "constraint.finite_near_singular", bad == 0, static_cast<double>(bad), 0,
+      bad == 0 ? fmt::format("{} states: every particle at the origin and at each point the "
+                             "parameters name, on each line through them along x, y, z and "
+                             "each direction the parameters name, on one random point; each "
+                             "again within {:g} m; made elsewhere and made there: every C, c_t, "
+                             "b, J finite or refused with a message ({} refusals)",
+                             states.size(), kNearSingular, refusals)
+               : first);
+}
+
 // Determinism, a read-only state, finite values.
 void constraint_basic_checks(ConstraintCase& c, std::vector<CheckResult>& out) {
   guarded(out, "constraint.deterministic", [&] {
@@ -307,9 +479,13 @@ void constraint_basic_checks(ConstraintCase& c, std::vector<CheckResult>& out) {
       ++bad;
     }
     return result("constraint.finite_on_degenerate", bad == 0, static_cast<double>(bad), 0,
-                  bad == 0 ? "coincident, at rest, far: every C, c_t, b, J written and finite"
+                  bad == 0 ? "every particle on one random point (random v, and at rest), every "
+                             "particle at rest, all moved 1e6 m out: every C, c_t, b, J "
+                             "written and finite"
                            : fmt::format("non-finite or unwritten values, first on: {}", where));
   });
+
+  guarded(out, "constraint.finite_near_singular", [&] { return check_near_singular(c); });
 }
 
 void constraint_derivative_checks(ConstraintCase& c, std::vector<CheckResult>& out) {
@@ -325,8 +501,9 @@ void constraint_checks(const PluginDescriptor& d, const Options& o, std::vector<
   std::mt19937_64 rng(o.seed);
   const State home = random_state(rng);
   const Params params = sample_params(d, kParticles);
-  auto make = [&](const State& at) {
-    std::shared_ptr<Constraint> c(d.create_constraint(params, context_of(at)));
+  const Params defaults = default_params(d, kParticles);
+  Maker make = [&](const Params& with, const State& at) {
+    std::shared_ptr<Constraint> c(d.create_constraint(with, context_of(at)));
     if (!c) throw std::runtime_error("factory returned null");
     return c;
   };
@@ -345,16 +522,17 @@ void constraint_checks(const PluginDescriptor& d, const Options& o, std::vector<
   bool well_formed = false;
   guarded(out, "constraint.pattern", [&] {
     pat = constraint->pattern();
-    CheckResult r = check_pattern({d, rng, home, *constraint, pat, make});
+    CheckResult r = check_pattern({d, rng, home, *constraint, pat, params, defaults, make});
     well_formed = r.verdict == Verdict::Pass;
     return r;
   });
-  ConstraintCase c{d, rng, home, *constraint, pat, make};
+  ConstraintCase c{d, rng, home, *constraint, pat, params, defaults, make};
   if (!well_formed) {
     // Evaluating through a malformed pattern could write out of bounds.
-    for (const char* name : {"constraint.deterministic", "constraint.read_only",
-                             "constraint.finite_on_degenerate", "constraint.satisfied_at_creation",
-                             "constraint.jacobian", "constraint.rate", "constraint.bias"}) {
+    for (const char* name :
+         {"constraint.deterministic", "constraint.read_only", "constraint.finite_on_degenerate",
+          "constraint.finite_near_singular", "constraint.satisfied_at_creation",
+          "constraint.jacobian", "constraint.rate", "constraint.bias"}) {
       out.push_back(skip(name, "the pattern is malformed (constraint.pattern)"));
     }
     return;

@@ -114,7 +114,52 @@ std::size_t non_finite(const Matrix3X& m) {
 // ---- the parameters the checks construct a plugin with ----
 //
 // Documented in pdyn/conformance.hpp. Every check of every kind, and
-// params.bad_rejected's baseline scene, constructs the plugin with these.
+// params.bad_rejected's baseline scene, constructs the plugin with
+// sample_params; constraint.satisfied_at_creation with default_params.
+
+namespace {
+
+// A typical value of a required parameter's type that declares no sample:
+// a number inside the declared range, preferring 1; particle lists over the
+// first, second and last of the `n` particles.
+ParamValue typical_value(const ParamSpec& s, Index n) {
+  double x = 1.0;
+  if (s.min && x <= *s.min) x = *s.min + 1.0;
+  if (s.max && x > *s.max) x = s.min ? 0.5 * (*s.min + *s.max) : *s.max - 1.0;
+  switch (s.type) {
+    case ParamType::Real:
+      return x;
+    case ParamType::Integer:
+      return static_cast<std::int64_t>(std::ceil(x));
+    case ParamType::Boolean:
+      return false;
+    case ParamType::String:
+      return std::string{};
+    case ParamType::Vector:
+      return Vec3(0.3, -0.2, 0.9);
+    case ParamType::RealList:
+      return std::vector<double>{x};
+    case ParamType::VectorList:
+      return std::vector<Vec3>{Vec3(0.3, -0.2, 0.9)};
+    case ParamType::IndexList:
+      return std::vector<Index>{0, 1, n - 1};
+    case ParamType::IndexPairs:
+      return std::vector<IndexPair>{{0, 1}, {1, 2}, {2, 3}, {0, n - 1}};
+    case ParamType::IndexTriples:
+      return std::vector<IndexTriple>{{0, 1, 2}, {1, 2, 3}};
+    case ParamType::IndexQuads:
+      return std::vector<IndexQuad>{{0, 1, 2, 3}, {1, 2, 3, 4}};
+    case ParamType::IntegerList:
+      return IntegerValues{static_cast<std::int64_t>(std::ceil(x))};
+    case ParamType::StringList:
+      return std::vector<std::string>{"1"};
+    case ParamType::NamedReals:
+      return NamedReals{{"a", x}};
+  }
+  return x;
+}
+
+}  // namespace
 
 // The given values are each parameter's `sample`, and for a required one
 // without a sample a typical value of its type; resolve() (the loader's own
@@ -126,57 +171,21 @@ Params sample_params(const PluginDescriptor& d, Index n) {
   for (const auto& s : d.params) {
     if (s.sample) {
       p.set(s.name, *s.sample);
-      continue;
+    } else if (s.required && !s.fallback) {
+      p.set(s.name, typical_value(s, n));
     }
-    if (s.fallback || !s.required) continue;
-    // A number inside the declared range, preferring 1.
-    double x = 1.0;
-    if (s.min && x <= *s.min) x = *s.min + 1.0;
-    if (s.max && x > *s.max) x = s.min ? 0.5 * (*s.min + *s.max) : *s.max - 1.0;
-    switch (s.type) {
-      case ParamType::Real:
-        p.set(s.name, x);
-        break;
-      case ParamType::Integer:
-        p.set(s.name, static_cast<std::int64_t>(std::ceil(x)));
-        break;
-      case ParamType::Boolean:
-        p.set(s.name, false);
-        break;
-      case ParamType::String:
-        p.set(s.name, std::string{});
-        break;
-      case ParamType::Vector:
-        p.set(s.name, Vec3(0.3, -0.2, 0.9));
-        break;
-      case ParamType::RealList:
-        p.set(s.name, std::vector<double>{x});
-        break;
-      case ParamType::VectorList:
-        p.set(s.name, std::vector<Vec3>{Vec3(0.3, -0.2, 0.9)});
-        break;
-      case ParamType::IndexList:
-        p.set(s.name, std::vector<Index>{0, 1, n - 1});
-        break;
-      case ParamType::IndexPairs:
-        p.set(s.name, std::vector<IndexPair>{{0, 1}, {1, 2}, {2, 3}, {0, n - 1}});
-        break;
-      case ParamType::IndexTriples:
-        p.set(s.name, std::vector<IndexTriple>{{0, 1, 2}, {1, 2, 3}});
-        break;
-      case ParamType::IndexQuads:
-        p.set(s.name, std::vector<IndexQuad>{{0, 1, 2, 3}, {1, 2, 3, 4}});
-        break;
-      case ParamType::IntegerList:
-        p.set(s.name, IntegerValues{static_cast<std::int64_t>(std::ceil(x))});
-        break;
-      case ParamType::StringList:
-        p.set(s.name, std::vector<std::string>{"1"});
-        break;
-      case ParamType::NamedReals:
-        p.set(s.name, NamedReals{{"a", x}});
-        break;
-    }
+  }
+  return resolve(d.params, p).params;
+}
+
+// Only the required parameters are given (their sample, or a typical
+// value); resolve() adds the defaults, and an optional parameter without a
+// default stays out even if it declares a sample.
+Params default_params(const PluginDescriptor& d, Index n) {
+  Params p;
+  for (const auto& s : d.params) {
+    if (!s.required || s.fallback) continue;
+    p.set(s.name, s.sample ? *s.sample : typical_value(s, n));
   }
   return resolve(d.params, p).params;
 }

@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <unordered_set>
+
 #include "pdyn/error.hpp"
 
 namespace pdyn {
@@ -232,6 +234,18 @@ std::string format_value(const ParamValue& value) {
     }
   };
   return std::visit(Visitor{}, value);
+}
+
+void require_distinct_ids(const Params& params, std::string_view key, std::string_view twice) {
+  const auto& ids = params.indices(key);
+  std::unordered_set<Index> seen;
+  for (std::size_t e = 0; e < ids.size(); ++e) {
+    if (!seen.insert(ids[e]).second) {
+      throw ParamError(std::string(key),
+                       fmt::format("particle {} {} (expected each id once)", ids[e], twice),
+                       static_cast<long>(e));
+    }
+  }
 }
 
 void require_distinct_particles(const Params& params, std::string_view key) {

@@ -4,7 +4,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <unordered_set>
 
 #include "pdyn/text.hpp"
 
@@ -55,14 +54,7 @@ Selection Selection::from_params(const Params& params, const SceneContext& ctx) 
                        "is empty (expected at least one particle index; leave 'ids' out "
                        "for every particle)");
     }
-    std::unordered_set<Index> seen;
-    for (std::size_t e = 0; e < ids.size(); ++e) {
-      if (!seen.insert(ids[e]).second) {
-        throw ParamError("ids",
-                         fmt::format("particle {} is listed twice (expected each id once)", ids[e]),
-                         static_cast<long>(e));
-      }
-    }
+    require_distinct_ids(params, "ids");
     s.all_ = false;
     s.ids_ = ids;
   }

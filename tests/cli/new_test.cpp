@@ -104,8 +104,38 @@ TEST(New, AKindsOwnTestFileReplacesTheCommonOne) {
   EXPECT_NE(constraint_test.find("TEST(bowl2, PassesTheConformanceKit)"), std::string::npos);
   EXPECT_NE(constraint_test.find("TEST(bowl2, ConstraintForceKeepsACircularOrbit)"),
             std::string::npos);
+  // Issue 42 (6g): a test for any geometry, and the bowl's own marked for
+  // replacing.
+  EXPECT_NE(constraint_test.find("TEST(bowl2, ParticlesStayOnTheConstraintUnderGravity)"),
+            std::string::npos);
+  EXPECT_NE(constraint_test.find("// TODO(bowl2): this test is the bowl's exact solution"),
+            std::string::npos);
   EXPECT_EQ(read(root / "f" / "test_tether2.cpp").find("Orbit"), std::string::npos);
   EXPECT_EQ(entries(root / "c"), 5u);
+}
+
+// Issue 42 (6g): the "next:" lines end with one naming the project's test
+// file and what to do with it.
+TEST(New, NextLinesNameTheTestFile) {
+  const fs::path root = test::temp_dir("new-next");
+  const auto c = test::pdyn({"new", "constraint", "helix", (root / "c").string()});
+  ASSERT_EQ(c.status, 0) << c.err;
+  const std::string constraint_line =
+      "  " + (root / "c" / "test_helix.cpp").string() +
+      ": your tests; keep the first three (any geometry), replace the bowl's orbit test with "
+      "your geometry's exact case (its TODO says what to assert)\n";
+  EXPECT_NE(c.out.find("  ctest --test-dir " + (root / "c").string() +
+                       "/build      # pdyn check helix, the example scene and test_helix\n" +
+                       constraint_line),
+            std::string::npos)
+      << c.out;
+  EXPECT_EQ(c.out.substr(c.out.size() - constraint_line.size()), constraint_line) << c.out;
+  const auto f = test::pdyn({"new", "force", "tether3", (root / "f").string()});
+  ASSERT_EQ(f.status, 0) << f.err;
+  const std::string force_line = "  " + (root / "f" / "test_tether3.cpp").string() +
+                                 ": your tests; add your physics (exact solutions, conservation "
+                                 "laws) beside the conformance kit's\n";
+  EXPECT_EQ(f.out.substr(f.out.size() - force_line.size()), force_line) << f.out;
 }
 
 TEST(New, DefaultFolderIsTheNameAndAnEmptyFolderIsFine) {

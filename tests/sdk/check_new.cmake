@@ -126,15 +126,19 @@ foreach(kind force solver collider pair bonded writer constraint)
   if(kind STREQUAL "constraint")  # the constraint checks ran on C, J, c_t and b, none skipped
     foreach(check constraint.pattern constraint.satisfied_at_creation constraint.jacobian
                   constraint.rate constraint.bias constraint.deterministic constraint.read_only
-                  constraint.finite_on_degenerate params.bad_rejected)
+                  constraint.finite_on_degenerate constraint.finite_near_singular
+                  params.bad_rejected)
       if(NOT last_output MATCHES "${check} +pass")
         message(FATAL_ERROR "pdyn check ${name}: ${check} did not pass:\n${last_output}")
       endif()
     endforeach()
-    # The scaffold's physics test (the constraint force keeps a circular orbit) ran too.
-    if(NOT last_ctest_output MATCHES "${name}.ConstraintForceKeepsACircularOrbit")
-      message(FATAL_ERROR "ctest in ${project} did not run the orbit test:\n${last_ctest_output}")
-    endif()
+    # The scaffold's physics tests ran too: the motion test that holds for
+    # any geometry and the bowl's exact orbit.
+    foreach(test ParticlesStayOnTheConstraintUnderGravity ConstraintForceKeepsACircularOrbit)
+      if(NOT last_ctest_output MATCHES "${name}.${test}")
+        message(FATAL_ERROR "ctest in ${project} did not run ${test}:\n${last_ctest_output}")
+      endif()
+    endforeach()
   endif()
   # Configured with no build type, as a newcomer does: still optimised.
   if(last_output MATCHES "without optimisation")

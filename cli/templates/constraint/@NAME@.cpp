@@ -12,85 +12,77 @@
 //   c_t = dC/dt at fixed x = 0                (the bowl does not move)
 //   b   = Cddot - J a                         (m/s^2)
 //
-// The bias, from differentiating C twice along the motion:
+// The bias, from differentiating C twice along the motion (Witkin's
+// Cddot = J a + Jdot v; pdyn/constraint.hpp gives it in full):
 //   Cdot  = J v + c_t = v_z - (x v_x + y v_y) / R
 //   Cddot = a_z - (x a_x + y a_y) / R - (v_x^2 + v_y^2) / R
-//         = J a + Jdot v,   Jdot v = -(v_x^2 + v_y^2) / R,
+//         = J a + Jdot v,   Jdot v = v^T (d2C/dx2) v = -(v_x^2 + v_y^2) / R,
 // so b = -(v_x^2 + v_y^2) / R: the horizontal speed bending into the bowl's
-// curvature. (A constraint whose J does not depend on x, a plane, has b = 0;
-// one that moves with time adds 2 (dJ/dt) v + d2C/dt2.) `pdyn check`
-// compares C's derivatives with each of J, c_t and b.
+// curvature. Jdot here is J's change along the motion at fixed t. A
+// constraint whose J does not depend on x (a plane) has b = 0; one that
+// moves with time adds 2 (dJ/dt) v + d2C/dt2, dJ/dt and d2C/dt2 taken at
+// fixed x. `pdyn check` compares C's derivatives with each of J, c_t and b.
+//
+// Every row here holds one particle, so the plugin is a law on
+// pdyn::ParticleConstraint (pdyn/particle_constraint.hpp), which makes the
+// pattern and puts each row's numbers where the kernel reads them. A row
+// over two or more particles (a bead kept between two others, a rod) does
+// not fit it: derive from pdyn::Constraint and write row r's j-th particle's
+// gradient to out.jacobian.col(pattern.row_begin[r] + j), which is column r
+// only when every row before it has one particle (pdyn/constraint.hpp;
+// plugins/constraints/distance writes a rod's two at 2 r and 2 r + 1).
 //
 // Physics to test against: on a horizontal circle in the bowl, gravity and
 // the normal force give v^2 / r = g r / R, so every circular orbit has the
 // same angular speed sqrt(g / R) whatever its radius (test_@NAME@.cpp).
-#include <fmt/format.h>
-
+#include <pdyn/particle_constraint.hpp>
 #include <pdyn/plugin.hpp>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
 namespace {
 
-using pdyn::Index;
+// One particle's row, at its position x, velocity v and the time t. Its
+// site is what it keeps of its own: here the height h_k of its bowl's
+// bottom. Writes C and J always (they start as NaN: a row left unwritten
+// fails `pdyn check`), c_t and b where they are not 0. Finite everywhere
+// (R > 0): no special case for the axis, coincident or far particles. A
+// geometry that divides by a distance (1 / |x - c|, 1 / rho) must give a
+// finite row where that distance is 0, or refuse the particle in the
+// factory; `pdyn check` puts particles there.
+struct BowlLaw {
+  static constexpr int rows = 1;
+  using Site = double;  // h_k, m
+  double r;             // R, m
 
-class Bowl final : public pdyn::Constraint {
- public:
-  Bowl(std::vector<Index> ids, double radius, std::vector<double> bottoms)
-      : ids_(std::move(ids)), r_(radius), h_(std::move(bottoms)) {}
-
-  // One row per particle, each involving that particle only. Fixed for the
-  // object's lifetime: the kernel sizes its matrices from it once.
-  pdyn::ConstraintPattern pattern() const override {
-    pdyn::ConstraintPattern p;
-    for (const Index i : ids_) p.add_row({i});
-    return p;
+  void operator()(const pdyn::ParticlePoint& p, const double& bottom,
+                  pdyn::ParticleRows<1>& out) const {
+    const double x = p.x.x(), y = p.x.y(), z = p.x.z();
+    const double vx = p.v.x(), vy = p.v.y();
+    out.value[0] = z - bottom - (x * x + y * y) / (2.0 * r);
+    out.jacobian[0] = pdyn::Vec3(-x / r, -y / r, 1.0);
+    out.rate[0] = 0.0;
+    out.bias[0] = -(vx * vx + vy * vy) / r;
   }
-
-  // Writes every member for every row: the kernel does not clear value and
-  // jacobian between calls. Finite everywhere (R > 0), so no special case
-  // for coincident or far particles.
-  void evaluate(const pdyn::ParticleView& p, pdyn::ConstraintValues& out) const override {
-    for (std::size_t k = 0; k < ids_.size(); ++k) {
-      const Index row = static_cast<Index>(k);
-      const double x = p.x(0, ids_[k]), y = p.x(1, ids_[k]), z = p.x(2, ids_[k]);
-      const double vx = p.v(0, ids_[k]), vy = p.v(1, ids_[k]);
-      out.value[row] = z - h_[k] - (x * x + y * y) / (2.0 * r_);
-      out.jacobian.col(row) = pdyn::Vec3(-x / r_, -y / r_, 1.0);
-      out.rate[row] = 0.0;
-      out.bias[row] = -(vx * vx + vy * vy) / r_;
-    }
-  }
-
- private:
-  std::vector<Index> ids_;
-  double r_;               // R, m
-  std::vector<double> h_;  // h_k, m
 };
 
-// A particle listed twice has two equal rows, and the kernel's system
-// J W J^T lambda = ... is then singular: each particle once.
-void require_distinct_ids(const std::vector<Index>& ids) {
-  std::unordered_set<Index> seen;
-  for (std::size_t e = 0; e < ids.size(); ++e) {
-    if (!seen.insert(ids[e]).second) {
-      throw pdyn::ParamError(
-          "ids", fmt::format("particle {} is listed twice (expected each id once)", ids[e]),
-          static_cast<long>(e));
-    }
-  }
-}
+using Bowl = pdyn::ParticleConstraint<BowlLaw>;
 
 // The loader has checked every declared bound (R > 0, ids within 0..N-1);
-// the factory checks what the descriptor cannot say. Without `bottom`, each
+// the factory checks what the descriptor cannot say: at least one particle,
+// each once (a particle listed twice has two equal rows, and the kernel's
+// system J W J^T lambda = ... is then singular). Without `bottom`, each
 // particle's bowl is the one through where it starts, so that C = 0 at the
 // start: a constraint violated at t = 0 would be pulled back by the
-// feedback terms (or not at all), not held.
+// feedback terms (or not at all), not held. `pdyn check`
+// (constraint.satisfied_at_creation) makes it with only the required keys
+// and asserts C = 0 there: a geometry that fixes where a particle must be
+// (a radius of a helix, a centre) needs no default but the initial
+// positions. `radius` may have one because `bottom` absorbs it.
 std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
   const auto& ids = p.indices("ids");
   if (ids.empty()) throw pdyn::ParamError("ids", "is empty (expected at least one particle)");
-  require_distinct_ids(ids);
+  pdyn::require_distinct_ids(p, "ids");
   const double r = p.real("radius");
   std::vector<double> bottoms(ids.size());
   for (std::size_t k = 0; k < ids.size(); ++k) {
@@ -98,7 +90,7 @@ std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::Scen
     bottoms[k] =
         p.has("bottom") ? p.real("bottom") : x.z() - (x.x() * x.x() + x.y() * x.y()) / (2.0 * r);
   }
-  return std::make_unique<Bowl>(ids, r, std::move(bottoms));
+  return std::make_unique<Bowl>(ids, std::move(bottoms), BowlLaw{r});
 }
 
 pdyn::PluginDescriptor describe() {

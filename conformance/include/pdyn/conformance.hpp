@@ -63,10 +63,22 @@ std::vector<CheckResult> run_checks(const PluginDescriptor& descriptor, const Op
 
 /// Parameters to construct the plugin with, for a system of `n` (>= 4)
 /// particles: a parameter's declared sample (ParamSpec::sample) if it has
-/// one, else its default, else for a required parameter a sample value
-/// (index lists: a few valid particle indices; numbers: a value inside the
-/// declared range). Optional parameters without either are left out.
+/// one, else its default, else for a required parameter a typical value of
+/// its type: a number 1 (or inside the declared range), a vector
+/// [0.3, -0.2, 0.9], an IndexList [0, 1, n - 1], IndexPairs [[0, 1], [1, 2],
+/// [2, 3], [0, n - 1]], IndexTriples [[0, 1, 2], [1, 2, 3]], IndexQuads
+/// [[0, 1, 2, 3], [1, 2, 3, 4]]. Optional parameters without either are
+/// left out. Every check builds the plugin with these, but one:
 Params sample_params(const PluginDescriptor& descriptor, Index n);
+
+/// What a scene that gives only the required keys gets, for `n` particles:
+/// each required parameter at its sample (else the typical value above),
+/// every other at its default, an optional one without a default left out
+/// (its sample unused). `constraint.satisfied_at_creation` builds the
+/// constraint with these: a geometry the scene leaves out (a rod's length, a
+/// radius) must come from the initial positions, whatever sample a check
+/// exercises it with.
+Params default_params(const PluginDescriptor& descriptor, Index n);
 
 /// True when no check failed (skipped checks do not count).
 bool all_passed(const std::vector<CheckResult>& results);

@@ -20,15 +20,32 @@
 //   value      C_r                                         (the row's unit, e.g. m)
 //   rate       c_t = dC_r/dt at fixed positions            (unit/s; 0 unless
 //                                                            C moves with time)
-//   bias       b_r = Cddot_r - J_r a = Jdot v + 2 (dJ/dt) v + d2C/dt2 at fixed x
-//                                                          (unit/s^2)
+//   bias       b_r = Cddot_r - J_r a                       (unit/s^2; below)
 //   jacobian   dC_r/dx_k for each particle k the row involves  (unit/m)
 // The conformance kit (pdyn check) checks each of them by finite differences
 // along the motion x(t) = x + v t.
 //
+// The bias, precisely. Witkin's notes differentiate C(x(t)) twice along a
+// motion: Cdot = J xdot, Cddot = J xddot + Jdot xdot, where Jdot is J's
+// change along the motion. With C(x, t) moving with time too, J = dC/dx and
+// c_t = dC/dt are functions of (x, t), and
+//   Cdot  = J v + c_t
+//   Cddot = J a + (dJ/dt)_total v + (dc_t/dt)_total
+//         = J a + [sum_k (dJ/dx_k) v_k] v + (dJ/dt) v  +  (dc_t/dx) v + d2C/dt2
+// and dc_t/dx = d2C/dxdt = dJ/dt, so
+//   b = Jdot_x v + 2 (dJ/dt) v + d2C/dt2,
+//   Jdot_x v = [sum_k (dJ/dx_k) v_k] v = v^T (d2C/dx2) v
+// where Jdot_x is J's change along the motion at fixed t: the position part
+// only (J's explicit time dependence is the middle term, which appears twice,
+// once from J and once from c_t). A constraint that does not move with time
+// has b = v^T (d2C/dx2) v, Witkin's Jdot v; a constant J with C linear in t
+// (a plane, a pin moving at constant velocity) gives b = 0. Every partial
+// derivative here is taken at the state, every other argument fixed.
+//
 // A minimal plugin: a bead held on a sphere of radius R about c,
 // C = |x - c| - R, J = n = (x - c)/|x - c|, b = (|v|^2 - (n.v)^2)/|x - c|
-// (plugins/constraints/on_sphere).
+// (plugins/constraints/on_sphere, on pdyn/particle_constraint.hpp: the base
+// class of constraints whose every row holds one particle).
 #pragma once
 
 #include <Eigen/Core>
@@ -44,6 +61,11 @@ namespace pdyn {
 /// Which particles each row of a constraint involves: the sparsity of its
 /// Jacobian, fixed for the object's lifetime. Row r's entries are
 /// [row_begin[r], row_begin[r + 1]), entry e differentiates by particle[e].
+/// Entries are numbered across all rows, not per row: the j-th particle of
+/// row r is entry row_begin[r] + j, which is r only when every row before it
+/// has exactly one particle. A rod over [i, j] as row r writes
+/// jacobian.col(row_begin[r]) = dC/dx_i and jacobian.col(row_begin[r] + 1) =
+/// dC/dx_j.
 struct ConstraintPattern {
   std::vector<Index> row_begin{0};  ///< rows + 1 offsets, starting at 0
   std::vector<Index> particle;      ///< per entry: the particle (0 .. N-1)
@@ -64,8 +86,13 @@ struct ConstraintPattern {
 struct ConstraintValues {
   Eigen::VectorXd value;  ///< C_r, per row (the row's unit)
   Eigen::VectorXd rate;   ///< c_t: dC_r/dt at fixed positions, unit/s (per row)
-  Eigen::VectorXd bias;   ///< b_r = Cddot_r - J_r a, unit/s^2 (per row)
-  Matrix3X jacobian;      ///< 3 x entries: dC_r/dx_k for entry (r, k), unit/m
+  /// b_r = Cddot_r - J_r a = v^T (d2C_r/dx2) v + 2 (d2C_r/dx dt) v +
+  /// d2C_r/dt2, unit/s^2 (per row; the header's comment derives it)
+  Eigen::VectorXd bias;
+  /// 3 x entries, unit/m: column row_begin[r] + j is dC_r/dx of the row's
+  /// j-th particle, particle[row_begin[r] + j] (column r only when every row
+  /// before r has one particle; pdyn/particle_constraint.hpp's family).
+  Matrix3X jacobian;
 };
 
 /// Every constraint row of a system gathered in the order of its constraint

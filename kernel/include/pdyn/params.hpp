@@ -150,6 +150,14 @@ class Params {
 /// triangle with a repeated corner): no geometry to act along.
 void require_distinct_particles(const Params& params, std::string_view key);
 
+/// Throws ParamError at the first element of the IndexList `key` that names
+/// a particle already listed: "particle 3 is listed twice (expected each id
+/// once)", `twice` saying how ("is pinned twice"). A per-particle constraint
+/// listing a particle twice has equal rows, and J W J^T is then singular; a
+/// selection that lists it twice would act on it twice.
+void require_distinct_ids(const Params& params, std::string_view key,
+                          std::string_view twice = "is listed twice");
+
 /// Rest values (lengths in m, angles in rad, areas in m^2) of `n` elements
 /// of a force: the RealList `key` with one value for all or one per element,
 /// or, when the scene leaves it out, initial(s) for each element s (the

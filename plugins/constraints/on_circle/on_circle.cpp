@@ -20,8 +20,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <pdyn/particle_constraint.hpp>
 #include <pdyn/plugin.hpp>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -30,68 +30,39 @@ namespace {
 using pdyn::Index;
 using pdyn::Vec3;
 
-class OnCircle final : public pdyn::Constraint {
- public:
-  OnCircle(std::vector<Index> ids, std::vector<Vec3> centers, Vec3 normal,
-           std::vector<double> radii)
-      : ids_(std::move(ids)),
-        centers_(std::move(centers)),
-        normal_(normal),
-        radii_(std::move(radii)) {}
-
-  pdyn::ConstraintPattern pattern() const override {
-    pdyn::ConstraintPattern p;
-    for (const Index i : ids_) {
-      p.add_row({i});  // in the plane
-      p.add_row({i});  // on the circle
-    }
-    return p;
-  }
-
-  void evaluate(const pdyn::ParticleView& p, pdyn::ConstraintValues& out) const override {
-    for (std::size_t k = 0; k < ids_.size(); ++k) {
-      const Index plane = 2 * static_cast<Index>(k), circle = plane + 1;
-      const Vec3 d = p.x.col(ids_[k]) - centers_[k];
-      const double h = normal_.dot(d);
-      out.value[plane] = h;
-      out.rate[plane] = 0.0;
-      out.bias[plane] = 0.0;
-      out.jacobian.col(plane) = normal_;
-      const Vec3 y = d - h * normal_;  // P (x - c)
-      const double rho = y.norm();
-      out.value[circle] = rho - radii_[k];
-      out.rate[circle] = 0.0;
-      // On the axis the radial direction is undefined: the row is zero
-      // (finite) there.
-      const Vec3 u = rho == 0.0 ? Vec3::Zero() : Vec3(y / rho);
-      const Vec3 v = p.v.col(ids_[k]);
-      const Vec3 pv = v - normal_.dot(v) * normal_;
-      out.jacobian.col(circle) = u;
-      // |P v|^2 - (u.P v)^2 as the squared norm of P v's part along the
-      // wire: the same number, never negative, without cancellation.
-      out.bias[circle] = rho == 0.0 ? 0.0 : (pv - u.dot(pv) * u).squaredNorm() / rho;
-    }
-  }
-
- private:
-  std::vector<Index> ids_;
-  std::vector<Vec3> centers_;  // c_k, m
-  Vec3 normal_;                // unit
-  std::vector<double> radii_;  // R_k, m
+// Each bead's own circle: its centre c_k and radius R_k.
+struct Circle {
+  Vec3 center;    // m
+  double radius;  // m
 };
 
-// A particle listed twice has two pairs of equal rows: J W J^T is singular.
-void require_distinct_ids(const std::vector<Index>& ids) {
-  std::unordered_set<Index> seen;
-  for (std::size_t e = 0; e < ids.size(); ++e) {
-    if (!seen.insert(ids[e]).second) {
-      throw pdyn::ParamError(
-          "ids",
-          fmt::format("particle {} is threaded on the wire twice (expected each id once)", ids[e]),
-          static_cast<long>(e));
-    }
+// One bead's two rows: row 0 keeps it in the plane, row 1 on the circle.
+struct OnCircleLaw {
+  static constexpr int rows = 2;
+  using Site = Circle;
+  Vec3 normal;  // unit
+
+  void operator()(const pdyn::ParticlePoint& p, const Circle& circle,
+                  pdyn::ParticleRows<2>& out) const {
+    const Vec3 d = p.x - circle.center;
+    const double h = normal.dot(d);
+    out.value[0] = h;
+    out.jacobian[0] = normal;
+    const Vec3 y = d - h * normal;  // P (x - c)
+    const double rho = y.norm();
+    out.value[1] = rho - circle.radius;
+    // On the axis the radial direction is undefined: the row is zero
+    // (finite) there.
+    const Vec3 u = rho == 0.0 ? Vec3::Zero() : Vec3(y / rho);
+    const Vec3 pv = p.v - normal.dot(p.v) * normal;
+    out.jacobian[1] = u;
+    // |P v|^2 - (u.P v)^2 as the squared norm of P v's part along the
+    // wire: the same number, never negative, without cancellation.
+    out.bias[1] = rho == 0.0 ? 0.0 : (pv - u.dot(pv) * u).squaredNorm() / rho;
   }
-}
+};
+
+using OnCircle = pdyn::ParticleConstraint<OnCircleLaw>;
 
 // Each bead's circle centre. Given `center`, the beads share its circle and
 // must start in its plane: a bead that starts off the plane would be jerked
@@ -155,12 +126,15 @@ std::vector<double> radii(const pdyn::Params& p, const pdyn::SceneContext& ctx,
 std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
   const auto& ids = p.indices("ids");
   if (ids.empty()) throw pdyn::ParamError("ids", "is empty (expected at least one particle)");
-  require_distinct_ids(ids);
+  // A particle listed twice has two pairs of equal rows: J W J^T is singular.
+  pdyn::require_distinct_ids(p, "ids", "is threaded on the wire twice");
   const Vec3 n = p.vec3("normal").normalized();  // not zero: the loader checks
   const auto c = centers(p, ids, ctx, n);
   require_in_plane(ids, ctx, c, n);
   auto r = radii(p, ctx, ids, c, n);
-  return std::make_unique<OnCircle>(ids, c, n, std::move(r));
+  std::vector<Circle> circles(ids.size());
+  for (std::size_t k = 0; k < ids.size(); ++k) circles[k] = Circle{c[k], r[k]};
+  return std::make_unique<OnCircle>(ids, std::move(circles), OnCircleLaw{n});
 }
 
 pdyn::PluginDescriptor describe() {

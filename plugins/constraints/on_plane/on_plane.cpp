@@ -11,57 +11,29 @@
 // A particle on a plane slides freely within it: unlike a collider's floor,
 // which only pushes, the constraint also pulls a particle that would leave
 // the plane on the other side.
-#include <fmt/format.h>
-
+#include <pdyn/particle_constraint.hpp>
 #include <pdyn/plugin.hpp>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
 namespace {
 
-using pdyn::Index;
 using pdyn::Vec3;
 
-class OnPlane final : public pdyn::Constraint {
- public:
-  OnPlane(std::vector<Index> ids, Vec3 normal, std::vector<double> offsets)
-      : ids_(std::move(ids)), normal_(normal), offsets_(std::move(offsets)) {}
+// One particle's row; its site is its plane's offset d_k, m.
+struct OnPlaneLaw {
+  static constexpr int rows = 1;
+  using Site = double;
+  Vec3 normal;  // unit
 
-  pdyn::ConstraintPattern pattern() const override {
-    pdyn::ConstraintPattern p;
-    for (const Index i : ids_) p.add_row({i});
-    return p;
+  void operator()(const pdyn::ParticlePoint& p, const double& offset,
+                  pdyn::ParticleRows<1>& out) const {
+    out.value[0] = normal.dot(p.x) - offset;
+    out.jacobian[0] = normal;
   }
-
-  void evaluate(const pdyn::ParticleView& p, pdyn::ConstraintValues& out) const override {
-    for (std::size_t k = 0; k < ids_.size(); ++k) {
-      const Index row = static_cast<Index>(k);
-      out.value[row] = normal_.dot(p.x.col(ids_[k])) - offsets_[k];
-      out.rate[row] = 0.0;
-      out.bias[row] = 0.0;
-      out.jacobian.col(row) = normal_;
-    }
-  }
-
- private:
-  std::vector<Index> ids_;
-  Vec3 normal_;                  // unit
-  std::vector<double> offsets_;  // d_k, m
 };
 
-// A particle listed twice has two equal rows: J W J^T is singular. Each
-// particle once.
-void require_distinct_ids(const std::vector<Index>& ids) {
-  std::unordered_set<Index> seen;
-  for (std::size_t e = 0; e < ids.size(); ++e) {
-    if (!seen.insert(ids[e]).second) {
-      throw pdyn::ParamError(
-          "ids", fmt::format("particle {} is listed twice (expected each id once)", ids[e]),
-          static_cast<long>(e));
-    }
-  }
-}
+using OnPlane = pdyn::ParticleConstraint<OnPlaneLaw>;
 
 // The offset: given (one plane for all), or each particle's own n.x at the
 // start, so that every particle stays on the plane through where it starts
@@ -69,13 +41,14 @@ void require_distinct_ids(const std::vector<Index>& ids) {
 std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
   const auto& ids = p.indices("ids");
   if (ids.empty()) throw pdyn::ParamError("ids", "is empty (expected at least one particle)");
-  require_distinct_ids(ids);
+  // A particle listed twice has two equal rows: J W J^T is singular.
+  pdyn::require_distinct_ids(p, "ids");
   const Vec3 n = p.vec3("normal").normalized();  // not zero: the loader checks
   std::vector<double> offsets(ids.size());
   for (std::size_t k = 0; k < ids.size(); ++k) {
     offsets[k] = p.has("offset") ? p.real("offset") : n.dot(ctx.particles.x.col(ids[k]));
   }
-  return std::make_unique<OnPlane>(ids, n, std::move(offsets));
+  return std::make_unique<OnPlane>(ids, std::move(offsets), OnPlaneLaw{n});
 }
 
 pdyn::PluginDescriptor describe() {

@@ -14,8 +14,8 @@
 // a spherical pendulum of length R about c.
 #include <fmt/format.h>
 
+#include <pdyn/particle_constraint.hpp>
 #include <pdyn/plugin.hpp>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -24,52 +24,28 @@ namespace {
 using pdyn::Index;
 using pdyn::Vec3;
 
-class OnSphere final : public pdyn::Constraint {
- public:
-  OnSphere(std::vector<Index> ids, Vec3 center, std::vector<double> radii)
-      : ids_(std::move(ids)), center_(center), radii_(std::move(radii)) {}
+// One particle's row; its site is its sphere's radius R_k, m.
+struct OnSphereLaw {
+  static constexpr int rows = 1;
+  using Site = double;
+  Vec3 center;  // m
 
-  pdyn::ConstraintPattern pattern() const override {
-    pdyn::ConstraintPattern p;
-    for (const Index i : ids_) p.add_row({i});
-    return p;
+  void operator()(const pdyn::ParticlePoint& p, const double& radius,
+                  pdyn::ParticleRows<1>& out) const {
+    const Vec3 d = p.x - center;
+    const double r = d.norm();
+    out.value[0] = r - radius;
+    // At the centre the radial direction is undefined: the row is zero
+    // (finite) there.
+    const Vec3 u = r == 0.0 ? Vec3::Zero() : Vec3(d / r);
+    out.jacobian[0] = u;
+    // |v|^2 - (u.v)^2 as the squared norm of v's tangential part: the
+    // same number, never negative, without cancellation.
+    out.bias[0] = r == 0.0 ? 0.0 : (p.v - u.dot(p.v) * u).squaredNorm() / r;
   }
-
-  void evaluate(const pdyn::ParticleView& p, pdyn::ConstraintValues& out) const override {
-    for (std::size_t k = 0; k < ids_.size(); ++k) {
-      const Index row = static_cast<Index>(k);
-      const Vec3 d = p.x.col(ids_[k]) - center_;
-      const double r = d.norm();
-      out.value[row] = r - radii_[k];
-      out.rate[row] = 0.0;
-      // At the centre the radial direction is undefined: the row is zero
-      // (finite) there.
-      const Vec3 u = r == 0.0 ? Vec3::Zero() : Vec3(d / r);
-      const Vec3 v = p.v.col(ids_[k]);
-      out.jacobian.col(row) = u;
-      // |v|^2 - (u.v)^2 as the squared norm of v's tangential part: the
-      // same number, never negative, without cancellation.
-      out.bias[row] = r == 0.0 ? 0.0 : (v - u.dot(v) * u).squaredNorm() / r;
-    }
-  }
-
- private:
-  std::vector<Index> ids_;
-  Vec3 center_;                // m
-  std::vector<double> radii_;  // R_k, m
 };
 
-// A particle listed twice has two equal rows: J W J^T is singular.
-void require_distinct_ids(const std::vector<Index>& ids) {
-  std::unordered_set<Index> seen;
-  for (std::size_t e = 0; e < ids.size(); ++e) {
-    if (!seen.insert(ids[e]).second) {
-      throw pdyn::ParamError(
-          "ids", fmt::format("particle {} is listed twice (expected each id once)", ids[e]),
-          static_cast<long>(e));
-    }
-  }
-}
+using OnSphere = pdyn::ParticleConstraint<OnSphereLaw>;
 
 // The radius: given (one for all), or each particle's initial distance from
 // the centre, so that C = 0 where it starts. A particle at the centre would
@@ -98,10 +74,11 @@ std::vector<double> radii(const pdyn::Params& p, const pdyn::SceneContext& ctx,
 std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
   const auto& ids = p.indices("ids");
   if (ids.empty()) throw pdyn::ParamError("ids", "is empty (expected at least one particle)");
-  require_distinct_ids(ids);
+  // A particle listed twice has two equal rows: J W J^T is singular.
+  pdyn::require_distinct_ids(p, "ids");
   const Vec3 c = p.vec3("center");
   auto r = radii(p, ctx, ids, c);
-  return std::make_unique<OnSphere>(ids, c, std::move(r));
+  return std::make_unique<OnSphere>(ids, std::move(r), OnSphereLaw{c});
 }
 
 pdyn::PluginDescriptor describe() {

@@ -17,62 +17,35 @@
 // out of the dynamics altogether; a pin can move.
 #include <fmt/format.h>
 
+#include <pdyn/particle_constraint.hpp>
 #include <pdyn/plugin.hpp>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
 namespace {
 
-using pdyn::Index;
 using pdyn::Vec3;
 
-class Pin final : public pdyn::Constraint {
- public:
-  Pin(std::vector<Index> ids, std::vector<Vec3> points, Vec3 velocity, double t0)
-      : ids_(std::move(ids)), points_(std::move(points)), velocity_(velocity), t0_(t0) {}
+// One particle's three rows; its site is its point p_k at t0, m.
+struct PinLaw {
+  static constexpr int rows = 3;
+  using Site = Vec3;
+  Vec3 velocity;  // u, m/s
+  double t0;      // s
 
-  pdyn::ConstraintPattern pattern() const override {
-    pdyn::ConstraintPattern p;
-    for (const Index i : ids_) {
-      for (int c = 0; c < 3; ++c) p.add_row({i});
-    }
-    return p;
-  }
-
-  void evaluate(const pdyn::ParticleView& p, pdyn::ConstraintValues& out) const override {
-    const Vec3 moved = velocity_ * (p.t - t0_);
-    for (std::size_t k = 0; k < ids_.size(); ++k) {
-      const Vec3 c = p.x.col(ids_[k]) - (points_[k] + moved);
-      for (int axis = 0; axis < 3; ++axis) {
-        const Index row = 3 * static_cast<Index>(k) + axis;
-        out.value[row] = c[axis];
-        out.rate[row] = -velocity_[axis];
-        out.bias[row] = 0.0;
-        out.jacobian.col(row) = Vec3::Unit(axis);
-      }
+  void operator()(const pdyn::ParticlePoint& p, const Vec3& point,
+                  pdyn::ParticleRows<3>& out) const {
+    const Vec3 moved = velocity * (p.t - t0);
+    const Vec3 c = p.x - (point + moved);
+    for (int axis = 0; axis < 3; ++axis) {
+      out.value[axis] = c[axis];
+      out.rate[axis] = -velocity[axis];
+      out.jacobian[axis] = Vec3::Unit(axis);
     }
   }
-
- private:
-  std::vector<Index> ids_;
-  std::vector<Vec3> points_;  // p_k at t0, m
-  Vec3 velocity_;             // u, m/s
-  double t0_;                 // s
 };
 
-// Two pins of one particle give six rows for its three coordinates: J W J^T
-// is singular. Each particle once.
-void require_distinct_ids(const std::vector<Index>& ids) {
-  std::unordered_set<Index> seen;
-  for (std::size_t e = 0; e < ids.size(); ++e) {
-    if (!seen.insert(ids[e]).second) {
-      throw pdyn::ParamError(
-          "ids", fmt::format("particle {} is pinned twice (expected each id once)", ids[e]),
-          static_cast<long>(e));
-    }
-  }
-}
+using Pin = pdyn::ParticleConstraint<PinLaw>;
 
 // The points at t0: given (one for all, or one per id), or where the
 // particles are when the pin is made, so that C = 0 there. t0 is the time
@@ -82,7 +55,9 @@ void require_distinct_ids(const std::vector<Index>& ids) {
 std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
   const auto& ids = p.indices("ids");
   if (ids.empty()) throw pdyn::ParamError("ids", "is empty (expected at least one particle)");
-  require_distinct_ids(ids);
+  // Two pins of one particle give six rows for its three coordinates: J W J^T
+  // is singular. Each particle once.
+  pdyn::require_distinct_ids(p, "ids", "is pinned twice");
   std::vector<Vec3> points(ids.size());
   if (p.has("points")) {
     const auto& given = p.vec3s("points");
@@ -95,7 +70,7 @@ std::unique_ptr<pdyn::Constraint> create(const pdyn::Params& p, const pdyn::Scen
   } else {
     for (std::size_t k = 0; k < ids.size(); ++k) points[k] = ctx.particles.x.col(ids[k]);
   }
-  return std::make_unique<Pin>(ids, std::move(points), p.vec3("velocity"), ctx.particles.t);
+  return std::make_unique<Pin>(ids, std::move(points), PinLaw{p.vec3("velocity"), ctx.particles.t});
 }
 
 pdyn::PluginDescriptor describe() {
