@@ -29,7 +29,7 @@ rm -rf "$out"
 mkdir -p "$out"
 cp "$scene"/{make_reference.lmp,dimer.mol,dimers.yaml} "$out/"
 if command -v lmp >/dev/null; then
-  echo "LAMMPS: $(lmp -h | awk '/^Large-scale/{getline; print; exit}' | xargs)"
+  echo "LAMMPS: $(lmp -h | grep -m1 -o "[0-9]\+ [A-Z][a-z]\+ [0-9]\{4\}.*")"
   (cd "$out" && lmp -in make_reference.lmp -log none -echo none |
     python3 ../../tests/scenes/thermo/extract_thermo.py >reference.thermo)
   if ((write)); then

@@ -170,6 +170,35 @@ TEST(ThermoConstraints, TheDimerLiquidsTemperatureAndPressureAgreeWithLammps) {
   }
 }
 
+TEST(ThermoConstraints, ANoseHooverChainHoldsTheDimerLiquidAtItsKtCountedWithTheRods) {
+  // The chain drives 2 K towards N_f kT (dxi_1/dt = (2 K - N_f kT) / Q_1),
+  // so over a run <2 K> / N_f is its kT only if the chain's N_f is the
+  // writer's, 3 N - 3 - 256 = 1277. With 3 N - 3 = 1533 the writer's kT would
+  // settle 1533 / 1277 = 1.20 times too hot.
+  const fs::path dir = test::temp_dir("thermo-dimers-nh");
+  fs::copy_file(test::source_path("tests/scenes/dimers/dimers.yaml"), dir / "dimers.yaml");
+  fs::copy_file(test::source_path("tests/scenes/dimers/dimers_start.data"),
+                dir / "dimers_start.data");
+  const auto run = test::pdyn_in(
+      dir, {"run", "dimers.yaml", "-q", "--set", "simulation.steps=3000", "--set",
+            "simulation.solver={ type: nose_hoover, kT: 1.0, tdamp: 0.25 }", "--set",
+            "output=[{ type: energy, path: e.csv, every: 10, columns: [step, kT, dof] }]"});
+  ASSERT_EQ(run.status, 0) << run.err;
+  auto e = csv_columns(dir / "e.csv");
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t k = 0; k < e["step"].size(); ++k) {
+    EXPECT_EQ(e["dof"][k], 1277.0);
+    if (e["step"][k] < 1000) continue;
+    sum += e["kT"][k];
+    ++n;
+  }
+  const double mean = sum / n;
+  EXPECT_NEAR(mean, 1.0, 0.03);
+  std::cout << "thermo constraints: Nose-Hoover at kT 1 on the dimers: mean kT " << mean
+            << " over steps 1000-3000\n";
+}
+
 TEST(ThermoConstraints, RedundantRowsCountOnce) {
   // A rigid triangle of rods, one rod given twice (two distance entries): 4
   // rows of rank 3, N_f = 9 - 3 - 3 = 3 (its rotations).

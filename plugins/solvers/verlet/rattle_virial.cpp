@@ -10,6 +10,7 @@
 #include <pdyn/constraint.hpp>
 #include <pdyn/error.hpp>
 #include <pdyn/thermo.hpp>
+#include <utility>
 #include <vector>
 
 namespace pdyn_verlet {
@@ -55,108 +56,139 @@ struct Trial {
   }
 };
 
-}  // namespace
-
-double rattle_virial(const pdyn::System& sys, double h, double tolerance) {
-  const Index m = sys.constraint_rows();
-  if (m == 0) return 0.0;
-  // J0 and the pattern at the state itself (copied: the trial evaluations
-  // below do not touch the System's gathered rows, but a copy is plain).
-  const pdyn::ConstraintRows rows0 = sys.evaluate_constraint_rows();
-  const Eigen::VectorXd& w = sys.inverse_masses();
-  const auto& rb = rows0.row_begin;
-  const auto& particle = rows0.particle;
-  // Rows on fixed particles only cannot act (identity rows, as in rattle.cpp).
-  std::vector<char> active(static_cast<std::size_t>(m), 0);
-  for (Index r = 0; r < m; ++r) {
-    double d = 0.0;
-    for (Index e = rb[r]; e < rb[r + 1]; ++e)
-      d += w(particle[e]) * rows0.jacobian.col(e).squaredNorm();
-    active[r] = d > 0.0 ? 1 : 0;
-  }
-  // The unconstrained drift of velocity Verlet from this state.
-  const pdyn::ParticleView p = sys.view();
-  pdyn::Matrix3X x_pred = p.x + h * p.v;
-  const pdyn::Matrix3X& f = sys.forces();
-  for (Index k = 0; k < x_pred.cols(); ++k) x_pred.col(k) += (0.5 * h * h * w(k)) * f.col(k);
-
-  Eigen::VectorXd mu = Eigen::VectorXd::Zero(m);
-  pdyn::Matrix3X x = x_pred;
-  Trial trial;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-  std::vector<Eigen::Triplet<double>> triplets;
-  // Pairs of entries on one particle couple their rows (J(x) W J0^T).
-  std::vector<std::pair<Index, Index>> by_particle;
-  for (Index r = 0; r < m; ++r) {
-    for (Index e = rb[r]; e < rb[r + 1]; ++e) by_particle.emplace_back(particle[e], e);
-  }
-  std::sort(by_particle.begin(), by_particle.end());
-  std::vector<Index> row_of(particle.size());
-  for (Index r = 0; r < m; ++r) {
-    for (Index e = rb[r]; e < rb[r + 1]; ++e) row_of[e] = r;
-  }
-  double previous = std::numeric_limits<double>::infinity(), error = 0.0;
-  constexpr int kMaxIterations = 50;
-  for (int it = 0;; ++it) {
-    trial.evaluate(sys, x, p.t + h);
-    error = 0.0;
-    Eigen::VectorXd rhs(m);
+// RATTLE's position stage from the state of `sys`, solved apart from it.
+class PositionStage {
+ public:
+  PositionStage(const pdyn::System& sys, double h)
+      : sys_(sys), h_(h), rows0_(sys.evaluate_constraint_rows()), w_(sys.inverse_masses()) {
+    const Index m = rows0_.rows();
+    const auto& rb = rows0_.row_begin;
+    // Rows on fixed particles only cannot act (identity rows, as in rattle.cpp).
+    active_.assign(static_cast<std::size_t>(m), 0);
+    row_of_.resize(rows0_.particle.size());
     for (Index r = 0; r < m; ++r) {
-      rhs(r) = active[r] != 0 ? trial.c(r) : 0.0;
-      error = std::max(error, std::abs(rhs(r)));
+      double d = 0.0;
+      for (Index e = rb[r]; e < rb[r + 1]; ++e) {
+        row_of_[e] = r;
+        d += w_(rows0_.particle[e]) * rows0_.jacobian.col(e).squaredNorm();
+        by_particle_.emplace_back(rows0_.particle[e], e);
+      }
+      active_[r] = d > 0.0 ? 1 : 0;
     }
-    // Newton converges quadratically down to rounding; stop where it no
-    // longer halves the error.
-    if (error == 0.0 || error > 0.5 * previous || it == kMaxIterations) break;
-    previous = error;
-    triplets.clear();
-    for (std::size_t i = 0; i < by_particle.size();) {
+    // Pairs of entries on one particle couple their rows in J(x) W J0^T.
+    std::sort(by_particle_.begin(), by_particle_.end());
+    // The unconstrained drift of velocity Verlet: x + h v + h^2/2 W f.
+    const pdyn::ParticleView p = sys.view();
+    const pdyn::Matrix3X& f = sys.forces();
+    x_pred_ = p.x + h * p.v;
+    for (Index k = 0; k < x_pred_.cols(); ++k) x_pred_.col(k) += (0.5 * h * h * w_(k)) * f.col(k);
+    x_ = x_pred_;
+    mu_ = Eigen::VectorXd::Zero(m);
+  }
+
+  // Newton's iteration until |C| no longer halves (rounding); the largest
+  // |C| left.
+  double solve() {
+    constexpr int kMaxIterations = 50;
+    double previous = std::numeric_limits<double>::infinity();
+    for (int it = 0;; ++it) {
+      const double error = residual();
+      if (error == 0.0 || error > 0.5 * previous || it == kMaxIterations) return error;
+      previous = error;
+      newton_step();
+    }
+  }
+
+  // Lambda = -2 mu / h^2, the multipliers as forces along J0.
+  double virial() const {
+    const Eigen::VectorXd lambda = (-2.0 / (h_ * h_)) * mu_;
+    return pdyn::constraint_force_virial(sys_.view(), rows0_, lambda);
+  }
+
+ private:
+  double residual() {
+    trial_.evaluate(sys_, x_, sys_.time() + h_);
+    const Index m = rows0_.rows();
+    rhs_.resize(m);
+    double error = 0.0;
+    for (Index r = 0; r < m; ++r) {
+      rhs_(r) = active_[r] != 0 ? trial_.c(r) : 0.0;
+      error = std::max(error, std::abs(rhs_(r)));
+    }
+    return error;
+  }
+
+  // (J(x) W J0^T) dmu = C(x), then x = x_pred - W J0^T mu.
+  void newton_step() {
+    const Index m = rows0_.rows();
+    triplets_.clear();
+    for (std::size_t i = 0; i < by_particle_.size();) {
       std::size_t j = i;
-      while (j < by_particle.size() && by_particle[j].first == by_particle[i].first) ++j;
-      const double wk = w(by_particle[i].first);
+      while (j < by_particle_.size() && by_particle_[j].first == by_particle_[i].first) ++j;
+      const double wk = w_(by_particle_[i].first);
       for (std::size_t a = i; a < j && wk > 0.0; ++a) {
         for (std::size_t b = i; b < j; ++b) {
-          const Index ea = by_particle[a].second, eb = by_particle[b].second;
-          if (active[row_of[ea]] == 0 || active[row_of[eb]] == 0) continue;
-          triplets.emplace_back(row_of[ea], row_of[eb],
-                                wk * trial.jacobian.col(ea).dot(rows0.jacobian.col(eb)));
+          const Index ea = by_particle_[a].second, eb = by_particle_[b].second;
+          if (active_[row_of_[ea]] == 0 || active_[row_of_[eb]] == 0) continue;
+          triplets_.emplace_back(row_of_[ea], row_of_[eb],
+                                 wk * trial_.jacobian.col(ea).dot(rows0_.jacobian.col(eb)));
         }
       }
       i = j;
     }
     for (Index r = 0; r < m; ++r) {
-      if (active[r] == 0) triplets.emplace_back(r, r, 1.0);
+      if (active_[r] == 0) triplets_.emplace_back(r, r, 1.0);
     }
     Eigen::SparseMatrix<double> a(m, m);
-    a.setFromTriplets(triplets.begin(), triplets.end());
+    a.setFromTriplets(triplets_.begin(), triplets_.end());
     a.makeCompressed();
-    lu.compute(a);
-    if (lu.info() != Eigen::Success) {
+    lu_.compute(a);
+    if (lu_.info() != Eigen::Success) {
       throw pdyn::Error(
           "verlet (RATTLE): the constraint virial's J(x) W J0^T could not be factorised "
           "(expected independent constraints)");
     }
-    const Eigen::VectorXd dmu = lu.solve(rhs);
+    const Eigen::VectorXd dmu = lu_.solve(rhs_);
     if (!dmu.allFinite()) {
       throw pdyn::Error("verlet (RATTLE): the constraint virial's multipliers are not finite");
     }
-    mu += dmu;
-    x = x_pred;
+    mu_ += dmu;
+    x_ = x_pred_;
     for (Index r = 0; r < m; ++r) {
-      for (Index e = rb[r]; e < rb[r + 1]; ++e) {
-        const Index k = particle[e];
-        x.col(k) -= (w(k) * mu(r)) * rows0.jacobian.col(e);
+      for (Index e = rows0_.row_begin[r]; e < rows0_.row_begin[r + 1]; ++e) {
+        const Index k = rows0_.particle[e];
+        x_.col(k) -= (w_(k) * mu_(r)) * rows0_.jacobian.col(e);
       }
     }
   }
+
+  const pdyn::System& sys_;
+  double h_;
+  const pdyn::ConstraintRows rows0_;                  // J0 and the pattern at the state (a copy)
+  const Eigen::VectorXd& w_;                          // inverse masses
+  std::vector<char> active_;                          // per row
+  std::vector<Index> row_of_;                         // per entry
+  std::vector<std::pair<Index, Index>> by_particle_;  // (particle, entry), sorted
+  pdyn::Matrix3X x_pred_, x_;
+  Eigen::VectorXd mu_, rhs_;
+  Trial trial_;
+  std::vector<Eigen::Triplet<double>> triplets_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
+};
+
+}  // namespace
+
+double rattle_virial(const pdyn::System& sys, double h, double tolerance) {
+  if (sys.constraint_rows() == 0) return 0.0;
+  PositionStage stage(sys, h);
+  const double error = stage.solve();
   if (!(error <= tolerance)) {
     throw pdyn::Error(fmt::format(
         "verlet (RATTLE): the constraint virial's position stage stopped with a constraint off "
         "by {:.3g} (expected at most rattle_tolerance = {:.3g})",
         error, tolerance));
   }
-  const Eigen::VectorXd lambda = (-2.0 / (h * h)) * mu;
-  return pdyn::constraint_force_virial(p, rows0, lambda);
+  return stage.virial();
 }
 
 }  // namespace pdyn_verlet
