@@ -8,6 +8,7 @@
 #include <Eigen/SparseQR>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 
@@ -93,10 +94,12 @@ double group_rank(const std::vector<std::vector<Entry>>& rows, Index columns) {
   std::vector<Eigen::Triplet<double>> triplets;
   for (Index r = 0; r < m; ++r) {
     for (const Entry& e : rows[r]) {
-      for (int d = 0; d < 3; ++d) triplets.emplace_back(3 * e.column + d, r, e.gradient(d));
+      for (int d = 0; d < 3; ++d) triplets.emplace_back(r, 3 * e.column + d, e.gradient(d));
     }
   }
-  Eigen::SparseMatrix<double> a(3 * columns, m);
+  // J itself (rows x coordinates): a cloth has more rods than coordinates,
+  // and sparse QR's cost grows with the columns it eliminates.
+  Eigen::SparseMatrix<double> a(m, 3 * columns);
   a.setFromTriplets(triplets.begin(), triplets.end());
   a.makeCompressed();
   Eigen::SparseQR<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> qr;
@@ -105,10 +108,38 @@ double group_rank(const std::vector<std::vector<Entry>>& rows, Index columns) {
   return static_cast<double>(qr.rank());
 }
 
+// The large groups' ranks cost a sparse QR (seconds for a 5,000-rod cloth):
+// they are counted once per structure (the System, its constraint objects,
+// rows and fixed particles) and kept, per thread, for the frames after.
+struct LargeGroupCache {
+  std::uint64_t key = 0;
+  double rank = -1.0;
+};
+
+std::uint64_t structure_key(const System& sys) {
+  // FNV-1a over what decides the rows' pattern and which particles are free.
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&](std::uint64_t v) {
+    h ^= v;
+    h *= 1099511628211ull;
+  };
+  mix(reinterpret_cast<std::uintptr_t>(&sys));
+  mix(static_cast<std::uint64_t>(sys.size()));
+  mix(static_cast<std::uint64_t>(sys.constraint_rows()));
+  for (const auto& c : sys.constraint_objects()) {
+    mix(reinterpret_cast<std::uintptr_t>(c.constraint.get()));
+  }
+  for (const auto f : sys.fixed()) mix(f);
+  return h;
+}
+
 }  // namespace
 
 double constraint_dof(const System& sys) {
   if (sys.constraint_rows() == 0) return 0.0;
+  thread_local LargeGroupCache cache;
+  const std::uint64_t key = structure_key(sys);
+  const bool cached = cache.key == key && cache.rank >= 0.0;
   const ConstraintRows& rows = sys.evaluate_constraint_rows();
   const auto& fixed = sys.fixed();
   const Index m = rows.rows();
@@ -144,13 +175,14 @@ double constraint_dof(const System& sys) {
   for (Index r = 0; r < m; ++r) {
     if (!free[r].empty()) groups[root(free[r][0].column)].push_back(r);
   }
-  double removed = 0.0;
+  double removed = 0.0, large = 0.0;
   std::vector<Index> column(static_cast<std::size_t>(sys.size()), -1);
   for (const auto& group : groups) {
     if (group.size() <= 1) {
       removed += static_cast<double>(group.size());  // one nonzero row: rank 1
       continue;
     }
+    if (static_cast<Index>(group.size()) > kDenseRows && cached) continue;
     std::vector<std::vector<Entry>> local;
     Index columns = 0;
     for (const Index r : group) {
@@ -160,9 +192,12 @@ double constraint_dof(const System& sys) {
         e.column = column[e.column];
       }
     }
-    removed += group_rank(local, columns);
+    const double rank = group_rank(local, columns);
+    removed += rank;
+    if (static_cast<Index>(group.size()) > kDenseRows) large += rank;
   }
-  return removed;
+  if (!cached) cache = {key, large};
+  return removed + (cached ? cache.rank : 0.0);
 }
 
 double constraint_force_virial(const ParticleView& p, const ConstraintRows& rows,
