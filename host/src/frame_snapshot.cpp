@@ -12,7 +12,7 @@
 namespace pdyn {
 
 void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_t frame_step,
-                            bool with_force, bool with_energy) {
+                            bool with_force, bool with_energy, double h) {
   const ParticleView p = sys.view();
   step = frame_step;
   t = p.t;
@@ -31,11 +31,13 @@ void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_
   virial = 0.0;
   virial_missing.clear();
   reservoir_energy = 0.0;
+  constraint_dof = 0.0;
   if (with_energy) {
-    VirialSum w = total_virial(sys);
+    VirialSum w = total_virial(sys, solver, h);
     virial = w.value;
     virial_missing = std::move(w.missing);
     reservoir_energy = total_reservoir_energy(sys, solver);
+    constraint_dof = pdyn::constraint_dof(sys);
   }
 }
 
@@ -54,6 +56,7 @@ Frame FrameSnapshot::frame(bool with_force, bool with_energy) const {
     f.virial = virial;
     f.virial_missing = virial_missing;
     f.reservoir_energy = reservoir_energy;
+    f.constraint_dof = constraint_dof;
   }
   return f;
 }
@@ -65,8 +68,10 @@ namespace {
 // radius, u64 n + i32[n] type, u64 n + i32[3n] images, u8 has_force,
 // f64[3N] force if has_force, f64 kinetic, f64 potential.
 // Version 2 (pdyn 0.8.0) appends f64 virial, f64 reservoir energy, u64 n +
-// char[n] virial_missing. Version 1 is still read (a 0.7 checkpoint's).
-constexpr std::uint32_t kVersion = 2;
+// char[n] virial_missing. Version 3 (pdyn 0.10.0) appends f64
+// constraint_dof. Versions 1 and 2 are still read (0.7's and 0.8's to 0.9's
+// checkpoints; they had no constraint count: 0).
+constexpr std::uint32_t kVersion = 3;
 
 struct Out {
   std::vector<std::uint8_t> bytes;
@@ -146,6 +151,7 @@ std::vector<std::uint8_t> FrameSnapshot::encode() const {
   o.pod(virial);
   o.pod(reservoir_energy);
   o.array(virial_missing.data(), virial_missing.size());
+  o.pod(constraint_dof);
   return std::move(o.bytes);
 }
 
@@ -153,7 +159,7 @@ FrameSnapshot FrameSnapshot::decode(std::span<const std::uint8_t> data) {
   In in{data};
   FrameSnapshot s;
   const auto version = in.pod<std::uint32_t>();
-  if (version != 1 && version != kVersion) {
+  if (version < 1 || version > kVersion) {
     throw Error(
         fmt::format("a pending output frame has version {} (expected 1 to {})", version, kVersion));
   }
@@ -192,6 +198,7 @@ FrameSnapshot FrameSnapshot::decode(std::span<const std::uint8_t> data) {
     s.virial = std::numeric_limits<double>::quiet_NaN();
     s.virial_missing = "(a frame from pdyn 0.7)";
   }
+  if (version >= 3) s.constraint_dof = in.pod<double>();
   if (in.at != data.size()) {
     throw Error(fmt::format("a pending output frame has {} unexpected bytes at its end",
                             data.size() - in.at));

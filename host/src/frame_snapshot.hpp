@@ -34,13 +34,17 @@ struct FrameSnapshot {
   double virial = 0.0;            ///< J, when asked for (NaN: virial_missing has none)
   std::string virial_missing;     ///< the first force without a virial
   double reservoir_energy = 0.0;  ///< J, when asked for
+  double constraint_dof = 0.0;    ///< Frame::constraint_dof, when asked for
 
   /// Copies the System's current state as the frame of `step`, with its total
   /// forces (the caller has computed them) and energies, virial and the
   /// thermostats' energy (`solver`'s included, if not null) when asked for.
-  /// Once the buffers have their size, it allocates nothing.
+  /// With constraints, the virial includes their forces' for a next step of
+  /// `h` (pdyn/thermo.hpp; the caller has evaluated the forces at this
+  /// state) and constraint_dof is counted. Once the buffers have their size,
+  /// it allocates nothing (without constraints).
   void capture(const System& sys, const Solver* solver, std::int64_t step, bool with_force,
-               bool with_energy);
+               bool with_energy, double h = 0.0);
   /// The frame a writer is handed, viewing this snapshot: the forces and
   /// energies only where `force` / `energy` (what the writer asked for).
   Frame frame(bool force, bool energy) const;

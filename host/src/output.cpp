@@ -226,9 +226,14 @@ void Output::dispatch(std::int64_t step, bool current, bool extra,
   }
   if (!any) return;
   finish_frames();  // the snapshot is free, and failures so far are known
-  if (force) scene_.system->compute_accelerations();
+  // The constraint forces' virial needs the applied forces at this state
+  // (pdyn/thermo.hpp: total_virial(sys, solver, h)); an evaluation between
+  // steps changes no bit of the run (pdyn/force_reuse.hpp).
+  if (force || (energy && scene_.system->constraint_rows() > 0)) {
+    scene_.system->compute_accelerations();
+  }
   const auto t0 = Clock::now();
-  snapshot_.capture(sys_, scene_.solver.get(), step, force, energy);
+  snapshot_.capture(sys_, scene_.solver.get(), step, force, energy, scene_.dt);
   stalled_seconds_ += seconds_since(t0);
   bool queued = false;
   for (auto& s : slots_) {

@@ -41,6 +41,8 @@ class ConstraintForce {
   /// does not reach the tolerance.
   void add_force(const ParticleView& p, const Eigen::VectorXd& w, const ConstraintFeedback& fb,
                  Eigen::Ref<Matrix3X> f);
+  /// lambda of the last add_force() (empty before the first).
+  const Eigen::VectorXd& multipliers() const noexcept { return lambda_; }
 
  private:
   // Jacobian-free products with J W J^T over the involved particles only.

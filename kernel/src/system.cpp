@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 #include <utility>
 
@@ -14,6 +15,7 @@
 #include "pdyn/local_force.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/periodic_invariant.hpp"
+#include "pdyn/thermo.hpp"
 
 namespace pdyn {
 
@@ -283,6 +285,15 @@ double System::constraint_error() const {
   if (!constraint_force_ || constraint_force_->rows() == 0) return 0.0;
   evaluate_constraints();
   return constraint_force_->max_error();
+}
+
+double System::constraint_force_virial() const {
+  if (constraint_rows() == 0) return 0.0;
+  const Eigen::VectorXd& lambda = constraint_force_->multipliers();
+  if (!constraint_force_on_ || lambda.size() != constraint_rows()) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  return pdyn::constraint_force_virial(view(), constraint_force_->gathered(), lambda);
 }
 
 const ConstraintRows& System::evaluate_constraint_rows() const {

@@ -289,11 +289,13 @@ class Simulation:
     def energies(self, extra_dof=3):
         """{"kinetic": K, "potential": {label: U}, "total": K + sum U}, J.
         Forces without a potential (drag) are not listed. Also, as the energy
-        writer's columns: "dof" (3 N_free - extra_dof; 3 removes the total
-        momentum, as LAMMPS), "kT" (2 K / dof, J), "temperature" (K),
-        "pressure" (the virial pressure, Pa; None in open space or when a
-        force reports no virial), "reservoir" (energy thermostats took out,
-        J) and "conserved" (total + reservoir)."""
+        writer's columns: "dof" (3 N_free - extra_dof - the independent
+        constraint rows; 3 removes the total momentum, as LAMMPS), "kT"
+        (2 K / dof, J), "temperature" (K), "pressure" (the virial pressure,
+        Pa, with the constraint forces' virial; None in open space or when a
+        force or the solver reports no virial), "reservoir" (energy
+        thermostats took out, J) and "conserved" (total + reservoir). With
+        constraints it evaluates the forces at the current state first."""
         e = self._core.energies(float(extra_dof))
         e["total"] = e["kinetic"] + sum(e["potential"].values())
         e["conserved"] = e["total"] + e["reservoir"]

@@ -305,7 +305,10 @@ class PySimulation {
     return sys().constraint_error();
   }
 
-  py::dict energies(double extra_dof) const {
+  py::dict energies(double extra_dof) {
+    // The constraint forces' virial needs the applied forces at this state
+    // (pdyn/thermo.hpp), as the energy writer's frames evaluate them.
+    if (sys().constraint_rows() > 0) evaluate_forces();
     const System& s = sim_.system();
     py::dict potential;
     const ParticleView p = s.view();
@@ -317,8 +320,9 @@ class PySimulation {
     out["potential"] = potential;
     // Temperature and pressure as the energy writer's columns (pdyn/thermo.hpp);
     // the pressure is None in open space or when a force reports no virial.
-    const VirialSum w = total_virial(s);
-    const Thermo th = thermo(p, w.value, extra_dof);
+    // With constraints: N_f less the independent rows, W with their forces'.
+    const VirialSum w = total_virial(s, sim_.scene().solver.get(), sim_.scene().dt);
+    const Thermo th = thermo(p, w.value, extra_dof + constraint_dof(s));
     out["dof"] = th.dof;
     out["kT"] = th.kT;
     out["temperature"] = th.temperature;

@@ -170,6 +170,13 @@ class System {
   /// stays valid, and its values unchanged, until the next evaluation.
   /// Throws PluginRuntimeError naming the object whose output is wrong.
   const ConstraintRows& evaluate_constraint_rows() const;
+  /// Since 0.10.0: the virial (J) of Witkin's constraint force J^T lambda of
+  /// the last derivative evaluation, with J and lambda of that evaluation
+  /// and the current positions (pdyn/thermo.hpp, constraint_force_virial):
+  /// the constraint part of the pressure when the kernel enforces the
+  /// constraints. 0 without constraint rows; NaN before the first
+  /// evaluation with the constraint force on.
+  double constraint_force_virial() const;
 
  private:
   // ---- assembly and the step's bookkeeping: the host's, not a plugin's ----

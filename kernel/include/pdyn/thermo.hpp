@@ -13,13 +13,25 @@
 // forces (gravity, drag, a field, a thermostat) contribute none, as LAMMPS's
 // fixes contribute none unless asked.
 //
+// With constraints (pdyn/constraint.hpp; docs/constraints.md, "Temperature
+// and pressure"), since 0.10.0: each independent constraint row removes one
+// degree of freedom, N_f = 3 N_free - extra - rank J (redundant rows counted
+// once: constraint_dof()), as LAMMPS's fix shake/rattle removes one per bond
+// (its compute temp's dof); and W includes the constraint forces' virial
+// (total_virial(sys, solver, h)): the constraint force J^T lambda is a force
+// between the particles like any other, so the virial theorem needs it (Allen
+// & Tildesley, 2nd ed., sec. 2.4 and 3.4: the pressure of a molecular system
+// from atomic forces includes the constraint forces).
+//
 // Units: SI. Scenes in reduced (Lennard-Jones) units read as SI give
 // k_B T in "J" that is LAMMPS's T* (its k_B is 1), and P in "Pa" that is P*.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
+#include "pdyn/constraint.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/particles.hpp"
 
@@ -78,13 +90,66 @@ struct VirialSum {
 VirialSum total_virial(const System& sys);
 
 class Solver;
+
+/// Since 0.10.0: the degrees of freedom `sys`'s constraints remove at its
+/// current state: the rank of J restricted to the free particles'
+/// coordinates, so that redundant rows (a rod given twice, a triangle of rods
+/// between pinned particles) count once and a row that acts on fixed
+/// particles only counts none. Rows are grouped by the free particles they
+/// share; a group of one row counts 1 (0 if its gradient vanishes), a larger
+/// group the rank of its rows, each scaled to unit length, by column-pivoted
+/// QR with the relative threshold 1e-10 (sparse QR of J above 200 rows, a
+/// cloth: counted once per structure, the System, its constraint objects
+/// and fixed particles, and kept per thread for later calls). 0
+/// without constraints. Evaluates the constraints (System::
+/// evaluate_constraint_rows). The rank is that of the state: at a singular
+/// configuration (a straight line of rods with its "bend" rods) it is lower
+/// than elsewhere.
+double constraint_dof(const System& sys);
+
+/// Since 0.10.0: the virial of constraint forces J^T Lambda at the state `p`:
+/// sum over rows r of Lambda_r sum_e (x_k(e) - x_k(first)) . J_e, the row's
+/// entries e measured from its first particle to the nearest image (the
+/// convention of VirialSource for a term over several particles; a row over
+/// one particle, a pin, contributes 0, as external forces do). `rows` gives
+/// the pattern and J, `multipliers` Lambda (N per row unit), one per row.
+double constraint_force_virial(const ParticleView& p, const ConstraintRows& rows,
+                               const Eigen::VectorXd& multipliers);
+
+/// Since 0.10.0: optional interface of a solver that keeps constraints itself
+/// (pdyn/constraint_solver.hpp): the virial (J) of its constraint forces at
+/// the current state, for a step of `h` (s) starting there. Found with
+/// dynamic_cast on the Solver. RATTLE (plugins/solvers/verlet) gives the
+/// virial of the position stage's constraint forces of the step that starts
+/// at this state, LAMMPS's convention for fix shake and fix rattle. A
+/// solver that enforces constraints without it makes the pressure unknown.
+class ConstraintVirialSource {
+ public:
+  virtual ~ConstraintVirialSource();  // defined in the kernel: one type_info for every library
+  /// Called between steps, with the forces of an evaluation at the current
+  /// state in sys.forces(). Throws pdyn::Error if it cannot be computed.
+  virtual double constraint_virial(const System& sys, double h) const = 0;
+};
+
+/// Since 0.10.0: every force's virial (total_virial(sys)) plus, when `sys`
+/// has constraint rows, the constraint forces': the solver's
+/// (ConstraintVirialSource) if it enforces the constraints, else Witkin's
+/// J^T lambda of the last evaluation (System::constraint_force_virial).
+/// Expects sys.forces() to be an evaluation at the current state (the host
+/// evaluates before a frame). `h` is the step the solver takes next (s).
+/// NaN when a part is unknown, with `missing` the force's label, or "solver"
+/// for a solver that keeps the constraints without ConstraintVirialSource
+/// (xpbd).
+VirialSum total_virial(const System& sys, const Solver* solver, double h);
+
 /// The energy every EnergyReservoir among `sys`'s forces and `solver` (if
 /// not null) has taken out of the particles, J.
 double total_reservoir_energy(const System& sys, const Solver* solver);
 
 /// Temperature and pressure of a state.
 struct Thermo {
-  double dof = 0.0;          ///< degrees of freedom N_f = 3 N_free - extra (>= 0)
+  double dof = 0.0;          ///< degrees of freedom N_f = 3 N_free - extra (>= 0); with
+                             ///< constraints, extra includes constraint_dof()
   double kinetic = 0.0;      ///< K over the free particles, J
   double kT = 0.0;           ///< k_B T = 2 K / N_f, J (0 when N_f = 0)
   double temperature = 0.0;  ///< T = kT / k_B, K
@@ -95,7 +160,9 @@ struct Thermo {
 
 /// Temperature and pressure of the state `p` with the virial `virial` (J; NaN
 /// when unknown), removing `extra_dof` degrees of freedom (3: the momentum).
-/// Sums in particle order: the same bits for any thread count.
+/// Sums in particle order: the same bits for any thread count. With
+/// constraints, pass extra_dof + constraint_dof(sys) and the virial of
+/// total_virial(sys, solver, h).
 Thermo thermo(const ParticleView& p, double virial, double extra_dof = 3.0);
 
 }  // namespace pdyn

@@ -88,6 +88,13 @@ struct Frame {
   /// (pdyn/thermo.hpp: EnergyReservoir): kinetic + potential + this is
   /// conserved by a Nose-Hoover chain.
   double reservoir_energy = 0.0;
+
+  // Since pdyn 0.10.0, appended likewise.
+  /// The degrees of freedom the constraints remove (pdyn/thermo.hpp:
+  /// constraint_dof, the independent rows), 0 without constraints: the
+  /// temperature's N_f is 3 N_free - extra - constraint_dof. `virial` then
+  /// includes the constraint forces' (total_virial(sys, solver, h)).
+  double constraint_dof = 0.0;
 };
 
 /// What a writer tells the host before it is created.

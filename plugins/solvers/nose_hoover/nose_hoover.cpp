@@ -8,8 +8,9 @@
 //   dxi_1/dt = (2K - N_f kT) / Q_1 - xi_1 xi_2,
 //   dxi_j/dt = (Q_{j-1} xi_{j-1}^2 - kT) / Q_j - xi_j xi_{j+1}   (j >= 2, xi_{M+1} = 0),
 //
-// with K the free particles' kinetic energy, N_f = 3 N_free - extra_dof
-// (as the energy writer counts them, pdyn/thermo.hpp), Q_1 = N_f kT tau^2
+// with K the free particles' kinetic energy, N_f = 3 N_free - extra_dof -
+// the independent constraint rows (as the energy writer counts them,
+// pdyn/thermo.hpp: constraint_dof, since 0.10.0), Q_1 = N_f kT tau^2
 // and Q_j = kT tau^2: each thermostat's natural period is about 2 pi tau.
 // The extended energy
 //
@@ -231,11 +232,16 @@ class NoseHoover final : public pdyn::Solver,
            std::all_of(c.xi.begin(), c.xi.end(), [](double y) { return std::isfinite(y); });
   }
 
-  // N_f = 3 N_free - extra_dof, at least 0 (pdyn::thermo's count).
+  // N_f = 3 N_free - extra_dof - rank J, at least 0 (pdyn::thermo's count):
+  // each independent constraint row takes one degree of freedom, whose
+  // kinetic energy the constraint keeps at 0, so the chain must not ask for
+  // kT / 2 in it (Martyna, Klein & Tuckerman 1992 count the constrained
+  // system's degrees of freedom).
   double degrees_of_freedom(const pdyn::System& sys) const {
     const auto& fixed = sys.fixed();
     const auto nailed = std::count_if(fixed.begin(), fixed.end(), [](auto f) { return f != 0; });
-    return std::max(0.0, 3.0 * static_cast<double>(sys.size() - nailed) - extra_dof_);
+    const double removed = sys.constraint_rows() > 0 ? pdyn::constraint_dof(sys) : 0.0;
+    return std::max(0.0, 3.0 * static_cast<double>(sys.size() - nailed) - extra_dof_ - removed);
   }
 
   // Q_1 = N_f kT tau^2, Q_j = kT tau^2.

@@ -41,7 +41,10 @@
 //   after the drift and the velocities onto Cdot = 0 after the kick, to
 //   `rattle_tolerance`, and the kernel adds no constraint force
 //   (pdyn/constraint_solver.hpp). `constraints: force` keeps Witkin's
-//   constraint force instead, as every other solver has it.
+//   constraint force instead, as every other solver has it. For the
+//   pressure, the virial of RATTLE's constraint forces is that of the
+//   position stage of the step starting at the frame's state, as LAMMPS's
+//   fix rattle tallies it (rattle_virial.hpp).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -52,8 +55,10 @@
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
+#include <pdyn/thermo.hpp>
 
 #include "rattle.hpp"
+#include "rattle_virial.hpp"
 
 namespace {
 
@@ -61,12 +66,21 @@ using pdyn::Index;
 
 class Verlet final : public pdyn::Solver,
                      public pdyn::ForceReuseHolder,
-                     public pdyn::ConstraintSolver {
+                     public pdyn::ConstraintSolver,
+                     public pdyn::ConstraintVirialSource {
  public:
   Verlet(bool promise, bool rattle, double tolerance, Index max_iterations)
-      : promise_(promise), rattle_on_(rattle), rattle_(tolerance, max_iterations) {}
+      : promise_(promise),
+        rattle_on_(rattle),
+        tolerance_(tolerance),
+        rattle_(tolerance, max_iterations) {}
 
   bool enforces_constraints() const noexcept override { return rattle_on_; }
+
+  // Only asked while RATTLE keeps the constraints (pdyn::total_virial).
+  double constraint_virial(const pdyn::System& sys, double h) const override {
+    return pdyn_verlet::rattle_virial(sys, h, tolerance_);
+  }
 
   // A checkpoint carries the kept a1 (pdyn/force_reuse.hpp).
   const pdyn::Matrix3X* kept_accelerations(const pdyn::System& sys) const override {
@@ -196,6 +210,7 @@ class Verlet final : public pdyn::Solver,
 
   bool promise_;
   bool rattle_on_;
+  double tolerance_;  // rattle_tolerance
   pdyn_verlet::Rattle rattle_;
   Promised promised_;
   pdyn::Matrix3X half_;     // v_half for velocity-dependent forces, sized on first use

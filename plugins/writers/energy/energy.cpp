@@ -5,7 +5,9 @@
 // pdyn's energy log before writers were plugins (`output: { energy: FILE }`).
 //
 // Temperature and pressure are pdyn/thermo.hpp's: k_B T = 2 K / N_f with
-// N_f = 3 N_free - extra_dof, P = (2 K + W) / (3 V) with the forces' virial W.
+// N_f = 3 N_free - extra_dof - the independent constraint rows
+// (Frame::constraint_dof), P = (2 K + W) / (3 V) with the virial W of the
+// forces and of the constraint forces (Frame::virial).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -50,9 +52,9 @@ constexpr std::array<ColumnInfo, 13> kColumns = {{
     {"kT", Column::KT, "k_B T = 2 K / N_f, J (reduced units: T*)"},
     {"temperature", Column::Temperature, "T, K"},
     {"pressure", Column::Pressure, "virial pressure (2 K + W) / (3 V), Pa (needs a box)"},
-    {"virial", Column::Virial, "W = sum r . f, J"},
+    {"virial", Column::Virial, "W = sum r . f, J (constraint forces included)"},
     {"volume", Column::Volume, "box volume V, m^3 (needs a box)"},
-    {"dof", Column::Dof, "degrees of freedom N_f"},
+    {"dof", Column::Dof, "degrees of freedom N_f (less one per independent constraint row)"},
     {"reservoir", Column::Reservoir, "energy taken out by thermostats, J"},
     {"conserved", Column::Conserved, "K + U + reservoir, J"},
 }};
@@ -98,7 +100,8 @@ class Energy final : public pdyn::Writer {
     const double k = frame.kinetic_energy, u = frame.potential_energy;
     std::optional<pdyn::Thermo> thermo;
     auto state = [&]() -> const pdyn::Thermo& {
-      if (!thermo) thermo = pdyn::thermo(frame.particles, frame.virial, extra_dof_);
+      if (!thermo)
+        thermo = pdyn::thermo(frame.particles, frame.virial, extra_dof_ + frame.constraint_dof);
       return *thermo;
     };
     std::string row;
@@ -110,6 +113,14 @@ class Energy final : public pdyn::Writer {
           continue;
         case Column::Pressure:
         case Column::Virial:
+          if (std::isnan(frame.virial) && frame.virial_missing == "solver") {
+            throw pdyn::Error(fmt::format(
+                "{}: the pressure needs the constraint forces' virial, and the solver keeps the "
+                "constraints without reporting it (expected a solver that does, "
+                "pdyn::ConstraintVirialSource in pdyn/thermo.hpp: verlet's RATTLE, or Witkin's "
+                "constraint force with any other; xpbd reports none)",
+                file_.path().string()));
+          }
           if (std::isnan(frame.virial)) {
             throw pdyn::Error(fmt::format(
                 "{}: the pressure needs every force's virial, and {} reports none (expected "
@@ -175,7 +186,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Writer;
   d.name = "energy";
-  d.version = "1.1.0";
+  d.version = "1.2.0";
   d.description =
       "energy log: a row per frame of t,kinetic,potential,total (J), or the columns asked for "
       "(temperature, pressure, ...), 17 significant digits";
@@ -189,7 +200,7 @@ pdyn::PluginDescriptor describe() {
       std::move(columns),
       pdyn::param::real("extra_dof", 3.0, "",
                         "degrees of freedom removed from 3 N_free for the temperature (3: the "
-                        "total momentum, as LAMMPS)")
+                        "total momentum, as LAMMPS), besides one per independent constraint row")
           .at_least(0),
   };
   d.writer_traits.energy = true;

@@ -1,0 +1,267 @@
+// Temperature and pressure with constraints (pdyn/thermo.hpp; docs/
+// constraints.md, "Temperature and pressure"), against numbers worked by
+// hand: each independent constraint row removes one degree of freedom,
+// redundant rows once (constraint_dof, dense and sparse QR); a rod's
+// constraint force adds Lambda times its length to the virial, with
+// Lambda Witkin's multiplier (the centripetal tension -2 m u^2 / d of a
+// spinning dimer, whose pressure is then exactly 0) or RATTLE's position
+// stage of the step starting at the state (the same tension over a step of
+// h: Lambda = (sqrt(d^2 - 4 u^2 h^2) - d) m / h^2); the energy writer's dof,
+// kT, virial and pressure columns show them.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "host/resume_support.hpp"
+#include "pdyn/system.hpp"
+#include "pdyn/thermo.hpp"
+#include "support/physics_support.hpp"
+#include "support/test_support.hpp"
+
+namespace pdyn {
+namespace constrained_thermo {  // named: the tests' unity build shares translation units
+
+namespace fs = std::filesystem;
+
+constexpr double kMass = 2.0, kSpeed = 0.3, kLength = 1.0, kStep = 0.01;
+
+// Two particles of kMass, kLength apart along x in a periodic 10 m box, the
+// rod between them spinning about z: velocities +-kSpeed along y. `how` is
+// verlet's `constraints:` (rattle or force).
+std::string spinning_dimer(const std::string& how, const std::string& output = "") {
+  return "simulation: { dt: 0.01, steps: 1, solver: { type: verlet, constraints: " + how +
+         " }, box: { min: [0, 0, 0], max: [10, 10, 10], periodic: [true, true, true] } }\n"
+         "particles:\n"
+         "  - { position: [9.75, 5, 5], velocity: [0, 0.3, 0], mass: 2 }\n"
+         "  - { position: [0.75, 5, 5], velocity: [0, -0.3, 0], mass: 2 }\n"
+         "constraints:\n"
+         "  - { type: distance, pairs: [[0, 1]] }\n" +
+         output;
+}
+
+TEST(ThermoConstraints, ARigidDimerHasTwoDegreesOfFreedom) {
+  // 3 N - 3 - 1 = 2: the rod's two rotations (the momentum is removed).
+  Scene scene = test::load_text(spinning_dimer("rattle"));
+  EXPECT_EQ(constraint_dof(*scene.system), 1.0);
+  const Thermo th = thermo(scene.system->view(), 0.0, 3.0 + constraint_dof(*scene.system));
+  EXPECT_EQ(th.dof, 2.0);
+  EXPECT_NEAR(th.kT, kMass * kSpeed * kSpeed, 1e-16);  // K = m u^2, kT = 2 K / 2
+}
+
+TEST(ThermoConstraints, WitkinsRodTensionBalancesTheKineticPressureOfASpinningDimer) {
+  // The rod, across the periodic face x = 0, holds the two ends on their
+  // circle: Lambda = -2 m u^2 / d (a tension), W = Lambda d = -2 K, so that
+  // P = (2 K + W) / (3 V) = 0: a lone spinning molecule exerts no pressure.
+  Scene scene = test::load_text(spinning_dimer("force"));
+  System& sys = *scene.system;
+  sys.compute_accelerations();
+  const VirialSum w = total_virial(sys, scene.solver.get(), scene.dt);
+  const double expected = -2.0 * kMass * kSpeed * kSpeed;
+  EXPECT_EQ(w.missing, "");
+  EXPECT_NEAR(w.value, expected, 1e-15);
+  EXPECT_NEAR(sys.constraint_force_virial(), expected, 1e-15);
+  const Thermo th = thermo(sys.view(), w.value, 3.0 + constraint_dof(sys));
+  EXPECT_NEAR(th.pressure, 0.0, 1e-17);
+  std::cout << "thermo constraints: Witkin's rod virial " << w.value << " J (by hand " << expected
+            << "), pressure " << th.pressure << " Pa\n";
+}
+
+TEST(ThermoConstraints, RattlesRodVirialIsItsPositionStagesTensionTimesTheLength) {
+  // The drift of a step of h moves the ends apart to a separation (d, 2 u h);
+  // RATTLE's position stage pulls them back along the rod at the start,
+  // (d + h^2 (2/m) Lambda)^2 + (2 u h)^2 = d^2 (m/2 the reduced mass), so
+  // Lambda = (sqrt(d^2 - 4 u^2 h^2) - d) m / (2 h^2) ... times 2 for the two
+  // ends' share: Lambda = m (sqrt(d^2 - 4 u^2 h^2) - d) / h^2, and W =
+  // Lambda d, which tends to Witkin's -2 m u^2 as h -> 0.
+  Scene scene = test::load_text(spinning_dimer("rattle"));
+  System& sys = *scene.system;
+  sys.compute_accelerations();
+  const VirialSum w = total_virial(sys, scene.solver.get(), kStep);
+  const double a = 4.0 * kSpeed * kSpeed * kStep * kStep;
+  const double lambda = kMass * (-a / (std::sqrt(kLength * kLength - a) + kLength)) /
+                        (kStep * kStep);  // sqrt(d^2 - a) - d without cancellation
+  const double expected = lambda * kLength;
+  EXPECT_EQ(w.missing, "");
+  // To rounding: positions near 10 m carry 1.8e-15 m, which the stage's
+  // Lambda magnifies by m / h^2 = 2e4 (8.7e-11 relative measured).
+  EXPECT_NEAR(w.value, expected, 1e-9 * std::abs(expected));
+  EXPECT_NEAR(w.value, -2.0 * kMass * kSpeed * kSpeed, 1e-4);  // O(u^2 h^2 / d^2) from Witkin's
+  std::cout << "thermo constraints: RATTLE's rod virial " << test::Num(w.value) << " J (by hand "
+            << test::Num(expected) << ")\n";
+}
+
+TEST(ThermoConstraints, TheEnergyWritersColumnsCountTheRodAndItsVirial) {
+  const fs::path dir = test::temp_dir("thermo-constraints-writer");
+  for (const std::string how : {"rattle", "force"}) {
+    test::write_file(dir / "s.yaml",
+                     spinning_dimer(how,
+                                    "output:\n  - { type: energy, path: e.csv, every: 1, columns: "
+                                    "[step, dof, kT, virial, pressure] }\n"));
+    const auto r = test::pdyn_in(dir, {"run", "s.yaml", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto lines = test::split_lines(test::read_bytes(dir / "e.csv"));
+    ASSERT_GE(lines.size(), 2u);
+    EXPECT_EQ(lines[0], "step,dof,kT,virial,pressure");
+    std::stringstream row(lines[1]);
+    std::vector<double> v;
+    for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 5u);
+    EXPECT_EQ(v[1], 2.0) << how;
+    EXPECT_NEAR(v[2], kMass * kSpeed * kSpeed, 1e-15) << how;
+    EXPECT_NEAR(v[3], -2.0 * kMass * kSpeed * kSpeed, how == "force" ? 1e-15 : 1e-4) << how;
+    EXPECT_NEAR(v[4], 0.0, how == "force" ? 1e-17 : 1e-7) << how;
+  }
+}
+
+// A CSV of numbers with a header row, as column -> values.
+std::map<std::string, std::vector<double>> csv_columns(const fs::path& file) {
+  std::map<std::string, std::vector<double>> out;
+  const auto lines = test::split_lines(test::read_bytes(file));
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    if (lines[k].empty()) continue;
+    std::stringstream row(lines[k]);
+    std::string cell;
+    for (std::size_t c = 0; std::getline(row, cell, ','); ++c) {
+      if (k == 0) {
+        names.push_back(cell);
+      } else {
+        out[names.at(c)].push_back(std::stod(cell));
+      }
+    }
+  }
+  return out;
+}
+
+TEST(ThermoConstraints, TheDimerLiquidsTemperatureAndPressureAgreeWithLammps) {
+  // tests/scenes/dimers: 256 rigid Lennard-Jones dimers, LAMMPS's fix
+  // rattle state at step 0 continued by verlet's RATTLE; LAMMPS's temp and
+  // press at steps 0, 100 and 200 (reference.thermo, written by
+  // bench/dimers_vs_lammps.sh --write-reference) against pdyn's kT and
+  // pressure. Without the constraints' degrees of freedom kT was 17 % low
+  // (3 N - 3 = 1533 against 1277), without their virial the pressure was off
+  // by several times.
+  const fs::path dir = test::temp_dir("thermo-dimers");
+  for (const char* f : {"dimers.yaml", "dimers_start.data"}) {
+    fs::copy_file(test::source_path(std::string("tests/scenes/dimers/") + f), dir / f);
+  }
+  const auto run = test::pdyn_in(dir, {"run", "dimers.yaml", "-q"});
+  ASSERT_EQ(run.status, 0) << run.err;
+  auto pdyn = csv_columns(dir / "out/dimers-energy.csv");
+  auto lammps = csv_columns(test::source_path("tests/scenes/dimers/reference.thermo"));
+  ASSERT_EQ(lammps["step"], (std::vector<double>{0, 100, 200}));
+  ASSERT_EQ(pdyn["step"], lammps["step"]);
+  for (const double dof : pdyn["dof"]) EXPECT_EQ(dof, 3.0 * 512 - 3 - 256);
+  for (const auto& [ours, theirs] :
+       {std::pair<std::string, std::string>{"kT", "temp"}, {"pressure", "press"}}) {
+    double worst = 0.0;
+    for (std::size_t k = 0; k < lammps["step"].size(); ++k) {
+      const double a = pdyn.at(ours).at(k), b = lammps.at(theirs).at(k);
+      worst = std::max(worst, std::abs(a - b) / std::abs(b));
+      EXPECT_LE(std::abs(a - b), 1e-8 * std::abs(b))
+          << ours << " at step " << lammps["step"][k] << ": " << test::Num(a)
+          << " against LAMMPS's " << test::Num(b);
+    }
+    std::cout << "thermo constraints: dimers' " << ours << " vs LAMMPS " << theirs
+              << ": worst relative difference " << worst << " at steps 0, 100, 200\n";
+  }
+}
+
+TEST(ThermoConstraints, ANoseHooverChainHoldsTheDimerLiquidAtItsKtCountedWithTheRods) {
+  // The chain drives 2 K towards N_f kT (dxi_1/dt = (2 K - N_f kT) / Q_1),
+  // so over a run <2 K> / N_f is its kT only if the chain's N_f is the
+  // writer's, 3 N - 3 - 256 = 1277. With 3 N - 3 = 1533 the writer's kT would
+  // settle 1533 / 1277 = 1.20 times too hot.
+  const fs::path dir = test::temp_dir("thermo-dimers-nh");
+  fs::copy_file(test::source_path("tests/scenes/dimers/dimers.yaml"), dir / "dimers.yaml");
+  fs::copy_file(test::source_path("tests/scenes/dimers/dimers_start.data"),
+                dir / "dimers_start.data");
+  const auto run = test::pdyn_in(
+      dir, {"run", "dimers.yaml", "-q", "--set", "simulation.steps=3000", "--set",
+            "simulation.solver={ type: nose_hoover, kT: 1.0, tdamp: 0.25 }", "--set",
+            "output=[{ type: energy, path: e.csv, every: 10, columns: [step, kT, dof] }]"});
+  ASSERT_EQ(run.status, 0) << run.err;
+  auto e = csv_columns(dir / "e.csv");
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t k = 0; k < e["step"].size(); ++k) {
+    EXPECT_EQ(e["dof"][k], 1277.0);
+    if (e["step"][k] < 1000) continue;
+    sum += e["kT"][k];
+    ++n;
+  }
+  const double mean = sum / n;
+  EXPECT_NEAR(mean, 1.0, 0.03);
+  std::cout << "thermo constraints: Nose-Hoover at kT 1 on the dimers: mean kT " << mean
+            << " over steps 1000-3000\n";
+}
+
+TEST(ThermoConstraints, RedundantRowsCountOnce) {
+  // A rigid triangle of rods, one rod given twice (two distance entries): 4
+  // rows of rank 3, N_f = 9 - 3 - 3 = 3 (its rotations).
+  Scene triangle = test::load_text(
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - { position: [0, 0, 0], mass: 1 }\n"
+      "  - { position: [1, 0, 0], mass: 1 }\n"
+      "  - { position: [0.3, 0.8, 0.1], mass: 1 }\n"
+      "constraints:\n"
+      "  - { type: distance, pairs: [[0, 1], [1, 2], [2, 0]] }\n"
+      "  - { type: distance, pairs: [[1, 0]] }\n");
+  EXPECT_EQ(triangle.system->constraint_rows(), 4);
+  EXPECT_EQ(constraint_dof(*triangle.system), 3.0);
+  // Two corners nailed: the rod between them acts on nothing; the other two
+  // leave the third corner its circle about the axis: 3 - 2 = 1.
+  Scene hinged = test::load_text(
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
+      "  - { position: [1, 0, 0], mass: 1, fixed: true }\n"
+      "  - { position: [0.3, 0.8, 0.1], mass: 1 }\n"
+      "constraints:\n"
+      "  - { type: distance, pairs: [[0, 1], [1, 2], [2, 0]] }\n");
+  EXPECT_EQ(constraint_dof(*hinged.system), 2.0);
+  EXPECT_EQ(thermo(hinged.system->view(), 0.0, constraint_dof(*hinged.system)).dof, 1.0);
+  // A pin's three rows on a particle that a rod also ties to a nailed one:
+  // the rod adds nothing (rank 3 of 4 rows).
+  Scene pinned = test::load_text(
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - { position: [0, 0, 0], mass: 1, fixed: true }\n"
+      "  - { position: [1, 0.5, 0], mass: 1 }\n"
+      "constraints:\n"
+      "  - { type: pin, ids: [1] }\n"
+      "  - { type: distance, pairs: [[0, 1]] }\n");
+  EXPECT_EQ(constraint_dof(*pinned.system), 3.0);
+}
+
+TEST(ThermoConstraints, ALongChainGivenTwiceCountsItsRodsOnceBySparseQr) {
+  // 301 particles, 300 rods, every rod given twice: one group of 600 rows,
+  // above the dense QR's 200, of rank 300.
+  std::string pairs;
+  for (int k = 0; k < 300; ++k)
+    pairs += (k ? ", [" : "[") + std::to_string(k) + ", " + std::to_string(k + 1) + "]";
+  std::string yaml =
+      "simulation: { dt: 0.01, steps: 1 }\n"
+      "particles:\n"
+      "  - chain: { from: [0, 0, 0], to: [30, 0, 3], n: 301, mass: 0.1 }\n"
+      "constraints:\n"
+      "  - { type: distance, pairs: [" +
+      pairs +
+      "] }\n"
+      "  - { type: distance, pairs: [" +
+      pairs + "] }\n";
+  Scene chain = test::load_text(yaml);
+  EXPECT_EQ(chain.system->constraint_rows(), 600);
+  EXPECT_EQ(constraint_dof(*chain.system), 300.0);
+}
+
+}  // namespace constrained_thermo
+}  // namespace pdyn
