@@ -70,6 +70,10 @@ class Rattle {
     time_ = sys.time();
   }
 
+  /// The multipliers of the last solve (the velocity stage's after a step),
+  /// one per row: minimum-norm when rows are redundant.
+  const Eigen::VectorXd& multipliers() const noexcept { return mu_; }
+
   /// Iterations of the last position stage.
   Index iterations() const noexcept { return iterations_; }
   /// Position stages so far that projected along the current gradients
