@@ -32,7 +32,7 @@ bool FullLength() { return std::getenv("PDYN_RATTLE_CLOTH_FULL") != nullptr; }
 // Steps `scene` `steps` times; the largest |C| after any step.
 double LargestErrorOver(Scene& scene, std::int64_t steps, const char* what) {
   System& sys = *scene.system;
-  double worst = 0.0, lowest = 0.0;
+  double worst = 0.0, lowest = sys.positions().row(2).minCoeff();
   test::StepThrough(scene, steps, [&](std::int64_t) {
     worst = std::max(worst, sys.constraint_error());
     lowest = std::min(lowest, sys.positions().row(2).minCoeff());
@@ -85,7 +85,8 @@ particles:
   - { position: [1, 0, 0], velocity: [-0.5, 0.4, 0], mass: 1 }
   - { position: [0.5, 0.8660254037844386, 0], velocity: [0.1, 0.7, -0.2], mass: 1 }
 constraints:
-  - { type: distance, pairs: [[0, 1], [1, 2], [2, 0], [0, 1]] }
+  - { type: distance, pairs: [[0, 1], [1, 2], [2, 0]] }
+  - { type: distance, pairs: [[0, 1]] }
 )",
                                 "triangle.yaml", test::shipped_plugins());
   System& sys = *scene.system;
@@ -116,7 +117,7 @@ constraints:
   EXPECT_NEAR(mu(2), triangle(2), 1e-12);
   // and the velocities keep every rod's length: J v = 0
   const Eigen::VectorXd v1 = Eigen::Map<const Eigen::VectorXd>(sys.velocities().data(), 9);
-  EXPECT_LE((j * v1).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LE((j * v1).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 // One particle pinned to two points: no motion keeps both.
