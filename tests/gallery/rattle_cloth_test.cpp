@@ -6,7 +6,7 @@
 // two corners, which used to stop at step 1 (redundant rows: a singular
 // J W J^T). Every rod keeps its length to 1e-10 m at every step. The suite
 // runs the corner cloth past where it stopped and the plate for 0.1 s;
-// ctest -L long (rattle_cloth.full) runs both for their whole 2 s. Then the
+// ctest -L long (rattle_cloth.full.*) runs both for their whole 2 s. Then the
 // multipliers of a redundant system (a triangle of rods and a duplicate of
 // one) against the pseudo-inverse, and conflicting rows refused with their
 // message, by RATTLE and by Witkin's constraint force.
@@ -61,13 +61,13 @@ TEST(RattleCloth, ThePinnedPlateOfRedundantRodsKeepsEveryRod) {
 }
 
 TEST(GalleryRattleCloth, TheCornerHungClothForTwoSeconds) {
-  if (!FullLength()) GTEST_SKIP() << "the whole 2 s: ctest -L long (rattle_cloth.full)";
+  if (!FullLength()) GTEST_SKIP() << "the whole 2 s: ctest -L long (rattle_cloth.full.*)";
   Scene scene = LoadRattleScene("cloth_corner.yaml");
   EXPECT_LE(LargestErrorOver(scene, scene.steps, "corner cloth, 2 s"), 1e-10);
 }
 
 TEST(GalleryRattleCloth, ThePinnedPlateForTwoSeconds) {
-  if (!FullLength()) GTEST_SKIP() << "the whole 2 s: ctest -L long (rattle_cloth.full)";
+  if (!FullLength()) GTEST_SKIP() << "the whole 2 s: ctest -L long (rattle_cloth.full.*)";
   Scene scene = LoadRattleScene("cloth_plate.yaml");
   EXPECT_LE(LargestErrorOver(scene, scene.steps, "plate, 2 s"), 1e-10);
 }
