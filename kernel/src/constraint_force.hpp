@@ -4,6 +4,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,7 +38,9 @@ class ConstraintForce {
   double max_error() const;
 
   /// Adds J^T lambda to `f`, lambda solving J W J^T lambda = -b - J W f -
-  /// ks C - kd (J v + c_t) by Jacobi-preconditioned conjugate gradients.
+  /// ks C - kd (J v + c_t) by conjugate gradients preconditioned by J W J^T's
+  /// sparse LDL^T (regularised when rows are redundant: the minimum-norm
+  /// lambda).
   /// `w` holds the inverse masses (0 for fixed particles). Throws Error if CG
   /// does not reach the tolerance.
   void add_force(const ParticleView& p, const Eigen::VectorXd& w, const ConstraintFeedback& fb,
@@ -47,6 +51,13 @@ class ConstraintForce {
  private:
   // Jacobian-free products with J W J^T over the involved particles only.
   void apply(const Eigen::VectorXd& lambda, Eigen::VectorXd& out);
+  // Assembles A = J W J^T (diagonal 1 on rows that cannot act) on its
+  // pattern, analysed when the rows change, and factorises it.
+  void factorise();
+  void analyse();
+  // z ~ A^+ r: the factor's solve, or for a singular A
+  // (A + s I)^-1 A (A + s I)^-1, which keeps CG in A's range.
+  void precondition(const Eigen::VectorXd& r, Eigen::VectorXd& z);
 
   struct Block {  // one object's rows within the gathered ones
     Index first_row = 0, first_entry = 0;
@@ -59,7 +70,13 @@ class ConstraintForce {
   std::vector<Index> slot_of_;   // per particle seen so far: its slot, or -1
   Index max_particle_ = -1;
   // CG work space, kept to avoid allocating per evaluation.
-  Eigen::VectorXd w_slot_, diag_, rhs_, lambda_, r_, z_, d_, q_;
+  Eigen::VectorXd w_slot_, diag_, rhs_, lambda_, r_, z_, d_, q_, t_;
+  // J W J^T and its factor: per pair of entries on one particle, the slot of
+  // A's values it adds to; the pattern analysed once per set of rows.
+  std::vector<Index> pair_first_, pair_second_, pair_slot_, diagonal_slot_;
+  Eigen::SparseMatrix<double> a_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
+  bool analysed_ = false, singular_ = false;
   Matrix3X u_;  // 3 x involved: W J^T lambda
 };
 

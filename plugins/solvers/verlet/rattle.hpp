@@ -15,18 +15,24 @@
 // one takes simplified Newton steps on all rows at once,
 //   (J0 W J0^T) dmu = C(x),  x <- x - W J0^T dmu,
 // with J0 W J0^T factorised once per step (sparse LDL^T; its symbolic
-// analysis once per run). Its convergence factor is about |J(x) - J0| / |J0|
-// = O(h |v| / L) times the condition of J0 W J0^T, so a few iterations reach
-// 1e-12 on a chain; where that condition is large (a cloth hanging in
-// straight lines of rods) and an iteration gains less than a factor 4, the
-// iteration switches to Newton's steps, (J(x) W J0^T) dmu = C(x), by sparse
-// LU. The velocity stage is linear: one solve with J1 W J1^T.
+// analysis once per run). The velocity stage is linear: one solve with
+// J1 W J1^T.
+//
+// Redundant rows (a cloth of structural, shear and bend rods; a taut edge
+// between two pins) make J W J^T singular; its rank is then revealed by the
+// factorisation's pivots and the solves give the minimum-norm multipliers
+// (solve_min_norm in rattle.cpp). Near a singular configuration (a square of
+// rods sheared flat, its four rods parallel) the position stage can have no
+// solution along J(x0) at all: the simplified iteration then stalls at a
+// nonzero |C|, and that step projects along the current gradients instead
+// (Gauss-Newton on C(x) = 0, x <- x - W J(x)^T dmu: the mass-weighted
+// projection onto C = 0 of Hairer, Lubich & Wanner IV.4), which is still
+// second order but not symplectic on that step.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 #include <cstdint>
 #include <pdyn/constraint.hpp>
 #include <pdyn/system.hpp>
@@ -64,17 +70,29 @@ class Rattle {
     time_ = sys.time();
   }
 
-  /// Simplified Newton iterations of the last position stage.
+  /// The multipliers of the last solve (the velocity stage's after a step),
+  /// one per row: minimum-norm when rows are redundant.
+  const Eigen::VectorXd& multipliers() const noexcept { return mu_; }
+
+  /// Iterations of the last position stage.
   Index iterations() const noexcept { return iterations_; }
+  /// Position stages so far that projected along the current gradients
+  /// because RATTLE's equations had no solution along J(x0).
+  std::int64_t projected_steps() const noexcept { return projected_steps_; }
 
  private:
   // Copies J and c_t of the rows just evaluated, assembles J W J^T over
   // them and factorises it.
   void factorise(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
-  void fill_products(const pdyn::System& sys, const pdyn::Matrix3X& left,
-                     Eigen::SparseMatrix<double>& target) const;
-  // Newton's matrix J(x) W J0^T at the rows just evaluated, factorised.
-  void factorise_newton(const pdyn::System& sys, const pdyn::ConstraintRows& rows);
+  void fill_products(const pdyn::System& sys);
+  // mu_ = the minimum-norm least-squares solution of A mu = rhs_ (A = the
+  // last factorised J W J^T): the factor's solve when A is nonsingular,
+  // conjugate gradients preconditioned by the regularised factor when rows
+  // are redundant. Refines until |rhs - A mu| <= goal or nothing more can be
+  // gained (a part of rhs outside A's range).
+  void solve_min_norm(double goal);
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;   // y = A x
+  void precondition(const Eigen::VectorXd& r, Eigen::VectorXd& z);  // z ~ A^+ r
   // Throws if the last solve gave a non-finite multiplier.
   void require_finite_multipliers(const char* stage) const;
   // Calls add(k, -W_k J0_e^T mu_r) for each entry e of each active row r
@@ -98,6 +116,7 @@ class Rattle {
   double tolerance_;
   Index max_iterations_;
   Index iterations_ = 0;
+  std::int64_t projected_steps_ = 0;
   std::uint64_t version_ = ~std::uint64_t{0};  // state_version() at the last end()
   double time_ = 0.0;
 
@@ -112,12 +131,12 @@ class Rattle {
   Eigen::SparseMatrix<double> a_;     // J W J^T
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt_;
   bool analysed_ = false;
-  // Newton's steps, when the simplified ones converge slowly (an
-  // ill-conditioned J W J^T: a cloth's straight lines of rods).
-  Eigen::SparseMatrix<double> newton_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu_;
-  bool lu_analysed_ = false;
+  // A's pivots showed it singular (redundant rows): ldlt_ then holds
+  // A + shift_ I, and solves refine towards the minimum-norm multipliers.
+  bool singular_ = false;
+  double shift_ = 0.0;
   Eigen::VectorXd rhs_, mu_;
+  Eigen::VectorXd cg_r_, cg_z_, cg_d_, cg_q_, cg_t_;  // solve_min_norm's work space
 };
 
 }  // namespace pdyn_verlet
