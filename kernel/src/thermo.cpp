@@ -223,7 +223,14 @@ VirialSum total_virial(const System& sys, const Solver* solver, double h) {
   double w = std::numeric_limits<double>::quiet_NaN();
   if (keeper != nullptr && keeper->enforces_constraints()) {
     if (const auto* source = dynamic_cast<const ConstraintVirialSource*>(solver)) {
-      w = source->constraint_virial(sys, h);
+      // A state where the solver cannot compute it (one about to blow up,
+      // rows it cannot factorise) must not stop a run that never writes a
+      // pressure: the value is unknown, and a writer that needs it says why.
+      try {
+        w = source->constraint_virial(sys, h);
+      } catch (const Error& e) {
+        if (sum.missing.empty()) sum.missing = std::string(kSolverFailed) + e.what();
+      }
     } else if (sum.missing.empty()) {
       sum.missing = "solver";
     }

@@ -137,10 +137,14 @@ class ConstraintVirialSource {
 /// J^T lambda of the last evaluation (System::constraint_force_virial).
 /// Expects sys.forces() to be an evaluation at the current state (the host
 /// evaluates before a frame). `h` is the step the solver takes next (s).
-/// NaN when a part is unknown, with `missing` the force's label, or "solver"
+/// NaN when a part is unknown, with `missing` the force's label, "solver"
 /// for a solver that keeps the constraints without ConstraintVirialSource
-/// (xpbd).
+/// (xpbd), or kSolverFailed followed by the solver's message when its
+/// constraint_virial threw at this state.
 VirialSum total_virial(const System& sys, const Solver* solver, double h);
+/// VirialSum::missing's start when the solver could not compute the
+/// constraint virial at the state (total_virial above).
+inline constexpr const char* kSolverFailed = "solver failed: ";
 
 /// The energy every EnergyReservoir among `sys`'s forces and `solver` (if
 /// not null) has taken out of the particles, J.

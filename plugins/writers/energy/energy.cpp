@@ -18,6 +18,8 @@
 #include <pdyn/output_file.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/thermo.hpp>
+#include <string>
+#include <string_view>
 
 namespace {
 
@@ -120,6 +122,13 @@ class Energy final : public pdyn::Writer {
                 "pdyn::ConstraintVirialSource in pdyn/thermo.hpp: verlet's RATTLE, or Witkin's "
                 "constraint force with any other; xpbd reports none)",
                 file_.path().string()));
+          }
+          if (std::isnan(frame.virial) && frame.virial_missing.starts_with(pdyn::kSolverFailed)) {
+            throw pdyn::Error(fmt::format(
+                "{}: the pressure needs the constraint forces' virial, which the solver could not "
+                "compute at step {}: {} (expected a state its constraints can be solved at)",
+                file_.path().string(), frame.step,
+                frame.virial_missing.substr(std::string_view(pdyn::kSolverFailed).size())));
           }
           if (std::isnan(frame.virial)) {
             throw pdyn::Error(fmt::format(
