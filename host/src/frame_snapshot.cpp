@@ -12,7 +12,8 @@
 namespace pdyn {
 
 void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_t frame_step,
-                            bool with_force, bool with_energy, double h) {
+                            bool with_force, bool with_energy, double h,
+                            bool with_constraint_virial) {
   const ParticleView p = sys.view();
   step = frame_step;
   t = p.t;
@@ -33,7 +34,11 @@ void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_
   reservoir_energy = 0.0;
   constraint_dof = 0.0;
   if (with_energy) {
-    VirialSum w = total_virial(sys, solver, h);
+    VirialSum w = with_constraint_virial ? total_virial(sys, solver, h) : total_virial(sys);
+    if (!with_constraint_virial && sys.constraint_rows() > 0) {
+      w.value = std::numeric_limits<double>::quiet_NaN();
+      w.missing = "the constraint forces (no writer asked for the pressure)";
+    }
     virial = w.value;
     virial_missing = std::move(w.missing);
     reservoir_energy = total_reservoir_energy(sys, solver);

@@ -42,9 +42,12 @@ struct FrameSnapshot {
   /// With constraints, the virial includes their forces' for a next step of
   /// `h` (pdyn/thermo.hpp; the caller has evaluated the forces at this
   /// state) and constraint_dof is counted. Once the buffers have their size,
-  /// it allocates nothing (without constraints).
+  /// it allocates nothing (without constraints). Without
+  /// `with_constraint_virial` (no writer reads the pressure) the constraint
+  /// forces' part is not computed: a RATTLE solve per frame saved, and the
+  /// virial is NaN with virial_missing saying so.
   void capture(const System& sys, const Solver* solver, std::int64_t step, bool with_force,
-               bool with_energy, double h = 0.0);
+               bool with_energy, double h = 0.0, bool with_constraint_virial = true);
   /// The frame a writer is handed, viewing this snapshot: the forces and
   /// energies only where `force` / `energy` (what the writer asked for).
   Frame frame(bool force, bool energy) const;

@@ -25,6 +25,17 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+// Whether a writer with energies reads the virial (Output::Slot). The
+// shipped energy writer does only for its pressure and virial columns; any
+// other writer may read Frame::virial, so it always gets it.
+bool reads_virial(const WriterSpec& spec) {
+  if (spec.record.descriptor->name != "energy" || !spec.params.has("columns")) return true;
+  const auto& columns = spec.params.strings("columns");
+  return std::find_if(columns.begin(), columns.end(), [](const std::string& c) {
+           return c == "pressure" || c == "virial";
+         }) != columns.end();
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------
@@ -116,6 +127,7 @@ Output::Output(const Scene& scene, const Checkpoint* resume)
     const auto& fields = spec.fields;
     slot.force = std::find(fields.begin(), fields.end(), field::kForce) != fields.end();
     slot.energy = spec.record.descriptor->writer_traits.energy;
+    slot.constraint_virial = slot.energy && reads_virial(spec);
     try {
       const crash::CallScope call(spec.label, "create");
       slot.writer = create_writer(spec.record, spec.params, ctx);
@@ -217,23 +229,24 @@ void Output::finish_frames() {
 
 void Output::dispatch(std::int64_t step, bool current, bool extra,
                       const std::function<bool(const Slot&)>& pick) {
-  bool any = false, force = false, energy = false;
+  bool any = false, force = false, energy = false, virial = false;
   for (const auto& s : slots_) {
     if (!pick(s)) continue;
     any = true;
     force = force || s.force;
     energy = energy || s.energy;
+    virial = virial || s.constraint_virial;
   }
   if (!any) return;
   finish_frames();  // the snapshot is free, and failures so far are known
   // The constraint forces' virial needs the applied forces at this state
   // (pdyn/thermo.hpp: total_virial(sys, solver, h)); an evaluation between
   // steps changes no bit of the run (pdyn/force_reuse.hpp).
-  if (force || (energy && scene_.system->constraint_rows() > 0)) {
+  if (force || (virial && scene_.system->constraint_rows() > 0)) {
     scene_.system->compute_accelerations();
   }
   const auto t0 = Clock::now();
-  snapshot_.capture(sys_, scene_.solver.get(), step, force, energy, scene_.dt);
+  snapshot_.capture(sys_, scene_.solver.get(), step, force, energy, scene_.dt, virial);
   stalled_seconds_ += seconds_since(t0);
   bool queued = false;
   for (auto& s : slots_) {

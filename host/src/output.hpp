@@ -117,8 +117,12 @@ class Output {
     const WriterSpec* spec = nullptr;
     std::shared_ptr<Writer> writer;
     bool force = false, energy = false;  // the frames need forces, energies
-    bool current = false;                // has written (or keeps pending) the current state
-    bool failed = false;                 // a write threw: no more frames, no commit
+    // The frames need the constraint forces' virial: a writer with energies
+    // that is not the shipped energy writer, or that one with a pressure or
+    // virial column (a RATTLE solve per frame otherwise spent for nothing).
+    bool constraint_virial = false;
+    bool current = false;  // has written (or keeps pending) the current state
+    bool failed = false;   // a write threw: no more frames, no commit
     std::optional<std::vector<std::uint8_t>> held;  // mark before an extra frame
     // Frames it did not write after it failed, encoded for the checkpoint.
     std::vector<std::vector<std::uint8_t>> pending;
