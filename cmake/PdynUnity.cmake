@@ -2,7 +2,7 @@
 # unity build). Each of pdyn's libraries includes the same heavy headers in
 # every source file (yaml-cpp, fmt, Eigen, CLI11, pybind11): parsed and
 # instantiated once per batch instead of once per file, the libraries took
-# about half the compile time on the 2-core machine (docs/performance.md,
+# about half the compile time on the 2-core machine (docs/building.md,
 # "Build time"), most of the quick start's build. So a name at file scope,
 # even in an anonymous namespace, must be unique within its library: give
 # a file's helpers specific names, or share them through a header.
