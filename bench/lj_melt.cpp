@@ -1,4 +1,4 @@
-// The Lennard-Jones melt of LAMMPS's own benchmark (bench/in.lj: fcc at
+// The Lennard-Jones melt of LAMMPS's own benchmark (bench/lammps/in.lj: fcc at
 // reduced density 0.8442, 32,000 atoms, T = 1.44, lj/cut 2.5 unshifted,
 // skin 0.3, dt 0.005, velocity Verlet), run by pdyn from the exact state
 // LAMMPS starts from: its write_dump of step 0 (scripts/lammps_compare.sh

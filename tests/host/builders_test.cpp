@@ -1,5 +1,5 @@
 // The particle builders chain, lattice, cloud, ring and polygon
-// (kernel/src/scene_builders.cpp, docs/scenes.md): particle counts and
+// (host/src/scene_builders.cpp, docs/scenes.md): particle counts and
 // numbering, the springs each makes (read back from the real spring objects
 // through their Jacobians: every pair (i, j) contributes one df_i/dx_j
 // block with i < j), rest lengths equal to the initial distances (zero

@@ -1,4 +1,4 @@
-// CSV side files (kernel/src/side_files.cpp): particles and spring pairs
+// CSV side files (host/src/side_files.cpp): particles and spring pairs
 // read from files a scene names, with exact located messages for bad rows.
 #include "pdyn/host/side_files.hpp"
 

@@ -223,8 +223,8 @@ class System {
   /// periodic-invariant (pdyn/periodic_invariant.hpp): forces evaluated
   /// before the wrap then stay valid, to rounding.
   bool wrap_positions();
-  /// Runs every collider's collision response; the kernel's runner calls it
-  /// after each accepted step of length `h`.
+  /// Runs every collider's collision response; the host's Stepper calls it
+  /// (through pdyn::SystemAssembly) after each accepted step of length `h`.
   void respond_to_collisions(double h);
   /// Adds a constraint object; `label` names it in messages. Throws Error if
   /// its pattern names a particle outside 0 .. N-1 or is malformed.
