@@ -40,6 +40,7 @@ exactly the three missing ones are reported for them (the check of the
 check).
 """
 import argparse
+import fnmatch
 import os
 import re
 import subprocess
@@ -163,12 +164,21 @@ class Checker:
         self.problems.append(f"{self.rel(path)}:{line}: names {name}, which does not exist")
 
     def ignored(self, name):
-        """True if the repository ignores `name` (.gitignore): build or install output."""
-        try:
-            return subprocess.run(["git", "-C", self.src, "check-ignore", "-q", "--no-index", name],
-                                  capture_output=True).returncode == 0
-        except OSError:
-            return False
+        """True if the root's .gitignore ignores `name` or a folder of it: build
+        or install output (its patterns: NAME anywhere, /NAME from the root)."""
+        if not hasattr(self, "_ignore"):
+            self._ignore = []
+            gitignore = os.path.join(self.src, ".gitignore")
+            if os.path.isfile(gitignore):
+                with open(gitignore, encoding="utf-8") as f:
+                    self._ignore = [p.strip() for p in f if p.strip() and not p.startswith(("#", "!"))]
+        parts = name.strip("/").split("/")
+        for pattern in self._ignore:
+            anchored, pattern = pattern.startswith("/"), pattern.strip("/")
+            for k in range(1, len(parts) + 1):
+                if fnmatch.fnmatchcase("/".join(parts[:k]) if anchored else parts[k - 1], pattern):
+                    return True
+        return False
 
     def exists(self, path, name):
         """`name` from the root, or from a folder that holds `path`."""
