@@ -21,7 +21,8 @@
 //                                            size: each ratio's median and
 //                                            interquartile range
 //
-// scripts/bench.sh runs all three and writes docs/performance.md's numbers.
+// scripts/bench.sh runs all three (docs/performance.md; its dated figures:
+// docs/log/performance.md).
 #include <benchmark/benchmark.h>
 #include <fmt/format.h>
 #include <sys/resource.h>

@@ -13,7 +13,8 @@
 #   load.jsonl      scene load times
 #   performance.png the plot (scripts/plot_performance.py, needs matplotlib
 #                   or gnuplot; skipped with a note if neither is installed)
-# and prints the Markdown table of docs/performance.md.
+# and prints the Markdown table of docs/performance.md's "Wall time" (its
+# dated figures: docs/log/performance.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}

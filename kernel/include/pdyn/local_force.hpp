@@ -78,7 +78,7 @@ inline void apply_linear_law(const LinearLocalLaw& law, double m, const double* 
 /// then evaluates the law itself inside its gather loop, one pass for every
 /// such force and f/m together, instead of calling add_forces_range (the
 /// plugin boundary cost the 1000 x 1000 cloth about 10% of its step;
-/// docs/performance.md). The law must give add_forces' bits: `pdyn check`
+/// docs/log/performance.md). The law must give add_forces' bits: `pdyn check`
 /// compares them (force.linear_law).
 class LinearLocalForce {
  public:
