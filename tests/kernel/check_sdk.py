@@ -11,6 +11,12 @@ Two checks, each failing with one line per offender:
    something those headers declare (a class, function or variable of the
    SDK), so nothing host-only is compiled into the library every plugin
    loads.
+3. The exported list: the library is compiled with hidden visibility
+   (pdyn/export.hpp), so what it exports is what the headers mark PDYN_API.
+   Its exported pdyn symbols (mangled) must be exactly those of
+   tests/kernel/kernel_exports.txt: one lost breaks every plugin binary
+   that calls it (a missing PDYN_API, or an ABI bump that says so), one new
+   is added to the list on purpose (--write-exports).
 
 The one exception is what the kernel offers hosts only, in its own folder
 kernel/host_include/pdyn/kernel/ (the crash record: the kernel marks the
@@ -19,10 +25,12 @@ exported, and are listed.
 
     check_sdk.py --source DIR --kernel-lib libpdyn_kernel.so
                  [--pretend-header NAME ...] [--pretend-symbol SYMBOL ...]
-                 [--expect-pretended]
+                 [--pretend-lost MANGLED ...] [--expect-pretended] [--allow-new]
+    check_sdk.py --source DIR --kernel-lib libpdyn_kernel.so --write-exports
 
 --pretend-header and --pretend-symbol add a header no plugin includes or an
-exported symbol (demangled) no header declares; with --expect-pretended the
+exported symbol (demangled) no header declares, --pretend-lost removes a
+listed symbol from what the library exports; with --expect-pretended the
 check passes only if exactly those are reported (the check of the check).
 """
 import argparse
@@ -75,6 +83,57 @@ def exported_names(lib):
             yield parts[2]
 
 
+# A pdyn function or variable (_ZN4pdyn..., _ZNK4pdyn...), a pdyn class's
+# vtable, type information or its name (_ZTV, _ZTI, _ZTS) or a thunk into
+# one (_ZThn): what a plugin binary can have linked against. Not the
+# standard library's templates instantiated for pdyn's types, which the
+# compiler emits or inlines as its optimisation level decides.
+PDYN_SYMBOL = re.compile(r"^_Z(?:T[VIS]|Th-?\d+_)?NK?4pdyn")
+
+
+def exported_mangled(lib):
+    """The library's exported symbols of namespace pdyn, mangled."""
+    out = subprocess.run(["nm", "-D", "--defined-only", str(lib)], check=True,
+                         capture_output=True, text=True).stdout
+    return {parts[2] for parts in (line.split(" ", 2) for line in out.splitlines())
+            if len(parts) == 3 and parts[1] in "TtWwVvDdBbRru" and PDYN_SYMBOL.match(parts[2])}
+
+
+def demangle(symbols):
+    out = subprocess.run(["c++filt"], input="\n".join(symbols), check=True,
+                         capture_output=True, text=True).stdout
+    return dict(zip(symbols, out.splitlines()))
+
+
+def check_exports(source, lib, pretend_lost, allow_new):
+    """Problems with the exported list (check 3), and the pretended ones."""
+    listing = source / "tests" / "kernel" / "kernel_exports.txt"
+    listed = {row for row in listing.read_text().splitlines() if row and not row.startswith("#")}
+    exported = exported_mangled(lib) - set(pretend_lost)
+    lost, new = sorted(listed - exported), sorted(exported - listed)
+    names = demangle(lost + new)
+    problems, pretended = [], []
+    for sym in lost:
+        (pretended if sym in pretend_lost else problems).append(
+            f"{lib.name}: no longer exports {names[sym]} ({sym}), which {listing.name} lists "
+            "(expected PDYN_API on its declaration; a plugin binary linked against it would "
+            "not load, so losing it needs an ABI bump, CHANGELOG.md)")
+    for sym in [] if allow_new else new:
+        problems.append(f"{lib.name}: exports {names[sym]} ({sym}), which {listing.name} does "
+                        "not list (expected the list to name every export: --write-exports)")
+    return problems, pretended
+
+
+def write_exports(source, lib):
+    listing = source / "tests" / "kernel" / "kernel_exports.txt"
+    head = [row for row in listing.read_text().splitlines() if row.startswith("#")] \
+        if listing.exists() else []
+    tmp = listing.with_suffix(".tmp")
+    tmp.write_text("\n".join(head + sorted(exported_mangled(lib))) + "\n")
+    tmp.replace(listing)
+    print(f"check_sdk: wrote {listing}")
+
+
 def owner(symbol):
     """The first name after `pdyn::` (and its sub-namespaces) that a header
     must declare: `pdyn::System::derivative(...)` -> System,
@@ -108,8 +167,16 @@ def main():
     ap.add_argument("--kernel-lib", required=True, type=pathlib.Path)
     ap.add_argument("--pretend-header", action="append", default=[])
     ap.add_argument("--pretend-symbol", action="append", default=[])
+    ap.add_argument("--pretend-lost", action="append", default=[])
     ap.add_argument("--expect-pretended", action="store_true")
+    ap.add_argument("--write-exports", action="store_true")
+    ap.add_argument("--allow-new", action="store_true",
+                    help="report only lost exports: a sanitizer build (-O1) emits out of line "
+                         "some template instantiations that -O2 inlines away")
     a = ap.parse_args()
+    if a.write_exports:
+        write_exports(a.source, a.kernel_lib)
+        return 0
     inc = a.source / "kernel" / "include"
     kernel_headers = {str(p.relative_to(inc)): p for p in sorted((inc / "pdyn").rglob("*.hpp"))}
     problems, pretended = [], []
@@ -138,13 +205,18 @@ def main():
                             f"plugin uses declares ('{name}'; expected host-only code in "
                             "libpdyn_host)")
 
+    lost_problems, lost_pretended = check_exports(a.source, a.kernel_lib, a.pretend_lost,
+                                                  a.allow_new)
+    problems += lost_problems
+    pretended += lost_pretended
+
     for p in problems + pretended:
         print(p)
     print(f"check_sdk: {len(kernel_headers)} kernel headers, {len(used)} used by plugins; "
           f"{len(names)} exported pdyn symbols, for hosts only: {', '.join(sorted(hosts_only))}; "
           f"{len(problems) + len(pretended)} problems")
     if a.expect_pretended:
-        want = len(a.pretend_header) + len(a.pretend_symbol)
+        want = len(a.pretend_header) + len(a.pretend_symbol) + len(a.pretend_lost)
         if problems or len(pretended) != want:
             print(f"check_sdk: expected exactly the {want} pretended problems")
             return 1

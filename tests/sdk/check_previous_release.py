@@ -67,6 +67,60 @@ def git(source, *args, binary=False):
                           text=not binary).stdout
 
 
+def release_soname(source, commit):
+    """The kernel's soname at `commit`: libpdyn_kernel.so.0 until it followed
+    the ABI (libpdyn_kernel.so.<ABI> since pdyn 0.10)."""
+    cmake = git(source, "show", f"{commit}:kernel/CMakeLists.txt")
+    if "SOVERSION ${PDYN_ABI_VERSION}" in cmake:
+        abi = re.search(r"#define PDYN_ABI_VERSION (\d+)",
+                        git(source, "show", f"{commit}:kernel/include/pdyn/version.hpp")).group(1)
+        return f"libpdyn_kernel.so.{abi}"
+    return "libpdyn_kernel.so.0"
+
+
+def make_stub_kernel(a, soname):
+    """An empty library named as the release's kernel was: a plugin linked
+    against it records that soname, as the release's own binaries do, and
+    finds its symbols at load time in whatever library carries that name."""
+    stub_dir = a.work / "stub"
+    stub_dir.mkdir(parents=True, exist_ok=True)
+    source = stub_dir / "stub.cpp"
+    source.write_text("// the release's kernel library, by name only\n")
+    subprocess.run([a.cxx, "-shared", "-fPIC", str(source), f"-Wl,-soname,{soname}", "-o",
+                    str(stub_dir / "libpdyn_kernel.so")], check=True)
+    return stub_dir
+
+
+def build_old_plugin(a, src, name, stub):
+    """Compiles `src` against the release's headers (a.work/old), then links
+    it twice: against this build's kernel with no undefined symbol allowed
+    (every symbol the release's plugin calls is still exported), and as the
+    release linked it (the binary `pdyn check` loads). (library, problem)."""
+    obj = a.work / f"pdyn_old_{name}.o"
+    lib = a.work / f"pdyn_old_{name}.so"
+    compiled = subprocess.run(
+        [a.cxx, *shlex.split(a.cxx_flags), "-std=c++20", "-O2", "-fPIC", "-fopenmp",
+         "-DEIGEN_MPL2_ONLY", "-DFMT_SHARED", "-I", str(a.work / "old" / "kernel" / "include"),
+         "-isystem", "/usr/include/eigen3", "-c", str(src), "-o", str(obj)],
+        capture_output=True, text=True)
+    if compiled.returncode != 0:
+        return lib, f"does not build against its own headers:\n{compiled.stderr[-2000:]}"
+    link = [a.cxx, *shlex.split(a.cxx_flags), "-shared", "-fopenmp", str(obj), "-lfmt"]
+    checked = subprocess.run(link + ["-o", str(lib), "-Wl,--no-undefined", "-L",
+                                     str(a.kernel_lib_dir), "-lpdyn_kernel"],
+                             capture_output=True, text=True)
+    if checked.returncode != 0:
+        return lib, (f"calls what this build's kernel no longer exports (expected every "
+                     f"symbol of the release's SDK exported, tests/kernel/kernel_exports.txt):"
+                     f"\n{checked.stderr[-2000:]}")
+    linked = subprocess.run(link + ["-o", str(lib), "-L", str(stub), "-lpdyn_kernel",
+                                    f"-Wl,-rpath,{a.kernel_lib_dir}"],
+                            capture_output=True, text=True)
+    if linked.returncode != 0:
+        return lib, f"does not link as its release did:\n{linked.stderr[-2000:]}"
+    return lib, None
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--source", required=True, type=pathlib.Path)
@@ -116,25 +170,19 @@ def main():
         header.write_text(text.replace(anchor, anchor + " virtual void abi_probe_() {}", 1))
         plugins = PLUGINS[:2]
 
-    eigen = "/usr/include/eigen3"
+    soname = release_soname(a.source, commit)
+    stub = make_stub_kernel(a, soname)
     failures = []
     refused = 0
     for src in plugins:
         name = pathlib.Path(src).stem
-        lib = a.work / f"pdyn_old_{name}.so"
-        cmd = [a.cxx, *shlex.split(a.cxx_flags), "-std=c++20", "-O2", "-fPIC", "-shared",
-               "-fopenmp", "-DEIGEN_MPL2_ONLY",
-               "-DFMT_SHARED", "-I", str(old / "kernel" / "include"), "-isystem", eigen,
-               str(old / src), "-o", str(lib), "-L", str(a.kernel_lib_dir),
-               f"-Wl,-rpath,{a.kernel_lib_dir}", "-lpdyn_kernel", "-lfmt"]
-        built = subprocess.run(cmd, capture_output=True, text=True)
-        if built.returncode != 0:
-            failures.append(f"{src} at {version} ({commit}) does not build against its own "
-                            f"headers:\n{built.stderr[-2000:]}")
+        lib, problem = build_old_plugin(a, old / src, name, stub)
+        if problem:
+            failures.append(f"{src} at {version} ({commit}): {problem}")
             continue
         checked = subprocess.run([str(a.pdyn), "check", str(lib)], capture_output=True, text=True)
         summary = (checked.stdout.strip().splitlines() or [""])[-1]
-        print(f"{name} built against {version}'s SDK ({commit}): pdyn check exit "
+        print(f"{name} built against {version}'s SDK ({commit}), linked as {soname}: pdyn check exit "
               f"{checked.returncode}: {summary}")
         refused += checked.returncode != 0
         if checked.returncode != 0 and not a.perturb_vtable:

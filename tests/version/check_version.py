@@ -4,9 +4,10 @@ version says the same (CHANGELOG.md, "Versions and the ABI" in
 docs/plugins.md):
 
 - the project version in CMakeLists.txt, `pdyn --version`, the CMake package
-  (pdynConfigVersion.cmake), the shared libraries' file names, and the
-  Python module's pdyn.__version__;
-- PDYN_ABI_VERSION in <pdyn/version.hpp>, `pdyn --version`, pdyn.abi_version;
+  (pdynConfigVersion.cmake), and the Python module's pdyn.__version__;
+- PDYN_ABI_VERSION in <pdyn/version.hpp>, `pdyn --version`, pdyn.abi_version,
+  and the shared libraries' sonames (libpdyn_kernel.so.ABI; their files
+  libpdyn_kernel.so.ABI.MINOR.PATCH);
 - CHANGELOG.md's newest entry ("## X.Y.Z — DATE — ABI N") names both;
 - docs/plugins.md's ABI table ends at this ABI, at this release or an
   earlier one of the same ABI (then the text says "X.Y.Z keeps ABI N").
@@ -68,10 +69,20 @@ def main():
     if not package or package.group(1) != version:
         problems.append(f"{config} says {package.group(1) if package else 'nothing'} (expected {version})")
 
+    # The libraries are named for the ABI (docs/plugins.md): the soname
+    # libpdyn_kernel.so.ABI, the file libpdyn_kernel.so.ABI.MINOR.PATCH.
+    minor_patch = version.split(".", 1)[1]
     for lib in ("libpdyn_kernel.so", "libpdyn_host.so"):
-        path = os.path.join(a.build_dir, "lib", f"{lib}.{version}")
+        path = os.path.join(a.build_dir, "lib", f"{lib}.{abi}.{minor_patch}")
         if not os.path.exists(path):
-            problems.append(f"{path} does not exist (the library's VERSION is not {version})")
+            problems.append(f"{path} does not exist (the library's VERSION is not "
+                            f"{abi}.{minor_patch}, ABI.MINOR.PATCH)")
+            continue
+        dynamic = subprocess.run(["objdump", "-p", path], capture_output=True, text=True).stdout
+        soname = re.search(r"^\s*SONAME\s+(\S+)", dynamic, re.M)
+        if not soname or soname.group(1) != f"{lib}.{abi}":
+            problems.append(f"{path}'s soname is {soname.group(1) if soname else 'missing'} "
+                            f"(expected {lib}.{abi}, the plugin ABI)")
 
     if a.python == "on":
         env = dict(os.environ, PYTHONPATH=os.path.join(a.build_dir, "python"))

@@ -114,6 +114,7 @@
 #include <vector>
 
 #include "pdyn/error.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/params.hpp"
@@ -267,7 +268,7 @@ class Harmonic {
 /// conformance kit (`pdyn check`, the bonded.* checks). BondedForce<Law>
 /// implements it; found by dynamic_cast on the Force, so a force without it
 /// keeps its vtable (no ABI bump).
-class BondedReference {
+class PDYN_API BondedReference {
  public:
   virtual ~BondedReference();
   /// Particles per term: 2, 3 or 4.
@@ -299,11 +300,12 @@ struct BondedInput {
 /// parameters, each one value for all types or one per type) give: the
 /// longest list's length. Throws ParamError on a list whose length is
 /// neither 1 nor that.
-std::int32_t bonded_type_count(const Params& params, std::initializer_list<std::string_view> keys);
+PDYN_API std::int32_t bonded_type_count(const Params& params,
+                                        std::initializer_list<std::string_view> keys);
 
 /// Type t's value of the coefficient list `key` (its only value if it has
 /// one).
-double bonded_coefficient(const Params& params, std::string_view key, std::int32_t t);
+PDYN_API double bonded_coefficient(const Params& params, std::string_view key, std::int32_t t);
 
 /// Reads the parameters every bonded plugin shares, in one place: the term
 /// list `terms_key` (IndexPairs, IndexTriples or IndexQuads for N = 2, 3,
@@ -369,18 +371,20 @@ BondedInput<N> read_bonded(const Params& params, const SceneContext& ctx,
 
 /// Harmonic's coefficients of each term type 0..n_types-1 from the
 /// coefficient lists `k` and `kd` (one value for all types or one per type).
-std::vector<HarmonicCoefficients> harmonic_coefficients(const Params& params, std::int32_t n_types,
-                                                        std::string_view k, std::string_view kd);
+PDYN_API std::vector<HarmonicCoefficients> harmonic_coefficients(const Params& params,
+                                                                 std::int32_t n_types,
+                                                                 std::string_view k,
+                                                                 std::string_view kd);
 
 /// The `types` parameter every bonded plugin declares (see read_bonded).
-ParamSpec bonded_types_param();
+PDYN_API ParamSpec bonded_types_param();
 
 /// The parameters of a Harmonic force after its term list: `types`, then
 /// `k` (default 1, in `k_unit`) and `kd` (default 0, in `kd_unit`), each one
 /// value for all term types or one per type; `what` names the stiffness
 /// ("bending stiffness").
-std::vector<ParamSpec> harmonic_params(const std::string& what, const std::string& k_unit,
-                                       const std::string& kd_unit);
+PDYN_API std::vector<ParamSpec> harmonic_params(const std::string& what, const std::string& k_unit,
+                                                const std::string& kd_unit);
 
 /// A force made of bonded terms with law `Law` (see the top of this file).
 template <class Law>

@@ -6,12 +6,13 @@
 // the obstacle. A collider implements both hooks.
 #pragma once
 
+#include "pdyn/export.hpp"
 #include "pdyn/particles.hpp"
 #include "pdyn/plugin_object.hpp"
 
 namespace pdyn {
 
-class Collider : public PluginObject {
+class PDYN_API Collider : public PluginObject {
  public:
   /// Contact forces, during every derivative evaluation after all force
   /// objects have run: for particles in resting contact, removes the part of

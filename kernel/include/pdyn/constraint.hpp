@@ -52,6 +52,7 @@
 #include <initializer_list>
 #include <vector>
 
+#include "pdyn/export.hpp"
 #include "pdyn/particles.hpp"
 #include "pdyn/plugin_object.hpp"
 #include "pdyn/types.hpp"
@@ -100,7 +101,7 @@ struct ConstraintValues {
 /// reads (System::evaluate_constraint_rows; RATTLE in plugins/solvers/verlet,
 /// plugins/solvers/xpbd). Entry e of row r, for e in
 /// [row_begin[r], row_begin[r + 1]), is dC_r/dx of particle[e].
-struct ConstraintRows {
+struct PDYN_API ConstraintRows {
   std::vector<Index> row_begin{0};  ///< rows + 1 offsets
   std::vector<Index> particle;      ///< per entry: the particle (0 .. N-1)
   Eigen::VectorXd value;            ///< C_r (the row's unit)
@@ -113,7 +114,7 @@ struct ConstraintRows {
   Index rows() const noexcept { return static_cast<Index>(value.size()); }
 };
 
-class Constraint : public PluginObject {
+class PDYN_API Constraint : public PluginObject {
  public:
   /// The rows and the particles each involves. Called once, when the object
   /// is added to a system; the kernel checks the indices.

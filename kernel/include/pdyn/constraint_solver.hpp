@@ -13,9 +13,11 @@
 //   class Xpbd final : public pdyn::Solver, public pdyn::ConstraintSolver { ... };
 #pragma once
 
+#include "pdyn/export.hpp"
+
 namespace pdyn {
 
-class ConstraintSolver {
+class PDYN_API ConstraintSolver {
  public:
   virtual ~ConstraintSolver();  // defined in the kernel: one type_info for every library
 

@@ -42,13 +42,14 @@
 #include <vector>
 
 #include "pdyn/collider.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
 /// The material of a contact: the parameters of Witkin's rules.
-struct ContactModel {
+struct PDYN_API ContactModel {
   double restitution = 0.5;  ///< coefficient of restitution kr, in [0, 1]; 1 elastic, 0 inelastic
   double friction = 0.0;     ///< Coulomb friction coefficient mu, >= 0 (0.3 ~ wood on wood)
   double epsilon = 1e-4;     ///< contact tolerance, m on the distance and m/s on speeds
@@ -62,10 +63,10 @@ struct ContactModel {
 /// above, after the collider's own `specs`:
 ///   d.params = pdyn::with_contact_params({pdyn::param::vec3("point", ...), ...});
 /// and ContactModel::from_params(p) in create_collider.
-std::vector<ParamSpec> with_contact_params(std::vector<ParamSpec> specs);
+PDYN_API std::vector<ParamSpec> with_contact_params(std::vector<ParamSpec> specs);
 
 /// The obstacle's surface as seen from one point X.
-struct SurfacePoint {
+struct PDYN_API SurfacePoint {
   /// Signed distance from X to the surface, m: > 0 on the free side, < 0
   /// inside the obstacle. Its magnitude must be exact near the surface
   /// (|d| < a step's travel): put-back moves X by -d N.
@@ -77,7 +78,7 @@ struct SurfacePoint {
 /// What one contact-force evaluation saw: the load that the collision
 /// response's sticking rule needs (the response only sees forces after the
 /// contact force has cancelled F_N).
-struct ContactLoad {
+struct PDYN_API ContactLoad {
   double normal = 0.0;      ///< |F_N| cancelled by the contact force, N; 0: not in contact
   double tangential = 0.0;  ///< |F_T| of the applied force (before friction), N
 };
@@ -85,22 +86,23 @@ struct ContactLoad {
 /// Contact force on one free particle with velocity `v` (m/s), during a
 /// derivative evaluation: modifies the total force `f` (N) as described
 /// above and returns the load it found (zero when not in contact).
-ContactLoad apply_contact_force(const ContactModel& model, const SurfacePoint& s, const Vec3& v,
-                                Vec3& f);
+PDYN_API ContactLoad apply_contact_force(const ContactModel& model, const SurfacePoint& s,
+                                         const Vec3& v, Vec3& f);
 
 /// Collision response for one free particle of mass `mass` (kg) after an
 /// accepted step of `h` (s): updates position `x` (m) and velocity `v`
 /// (m/s). `f` (N) is the particle's force from the step's last derivative
 /// evaluation and `load` what apply_contact_force returned in it.
-void respond_to_contact(const ContactModel& model, const SurfacePoint& s, double mass,
-                        const Vec3& f, const ContactLoad& load, double h, Vec3& x, Vec3& v);
+PDYN_API void respond_to_contact(const ContactModel& model, const SurfacePoint& s, double mass,
+                                 const Vec3& f, const ContactLoad& load, double h, Vec3& x,
+                                 Vec3& v);
 
 /// A collider whose obstacle is described by one or more surfaces (e.g. the
 /// six walls of a box seen from inside), each a signed distance function.
 /// Implements both Collider hooks with the rules above; the subclass
 /// supplies only the geometry. A particle is outside the obstacle when it is
 /// on the free side of every surface. Fixed particles are ignored.
-class SurfaceCollider : public Collider {
+class PDYN_API SurfaceCollider : public Collider {
  public:
   explicit SurfaceCollider(const ContactModel& model) : model_(model) {}
 

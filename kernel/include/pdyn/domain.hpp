@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -20,7 +21,7 @@ namespace pdyn {
 /// re-enters at min, and distances are measured to the nearest image. Along
 /// any other axis space is open and min / max are not used by the neighbor
 /// list. The default Domain (nothing periodic) is unbounded open space.
-struct Domain {
+struct PDYN_API Domain {
   Vec3 min = Vec3::Zero();         ///< lower corner, m
   Vec3 max = Vec3::Zero();         ///< upper corner, m (> min along periodic axes)
   std::array<bool, 3> periodic{};  ///< per axis x, y, z: periodic or open

@@ -4,11 +4,13 @@
 #include <stdexcept>
 #include <string>
 
+#include "pdyn/export.hpp"
+
 namespace pdyn {
 
 /// Base of every error pdyn reports. The message is one line, already
 /// readable by a user ("what is wrong (what was expected)").
-class Error : public std::runtime_error {
+class PDYN_API Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
@@ -17,7 +19,7 @@ class Error : public std::runtime_error {
 /// generic checks is still unacceptable (e.g. a spring joining a particle to
 /// itself). The scene loader turns it into `FILE:LINE:COLUMN: ...` pointing at
 /// the parameter, or at element `element` of a list parameter when >= 0.
-class ParamError : public Error {
+class PDYN_API ParamError : public Error {
  public:
   ParamError(std::string param, const std::string& message, long element = -1)
       : Error(message), param_(std::move(param)), element_(element) {}
@@ -33,14 +35,14 @@ class ParamError : public Error {
 
 /// A plugin library could not be used: exit status 3. The message names the
 /// library path and, where known, the plugin.
-class PluginError : public Error {
+class PDYN_API PluginError : public Error {
  public:
   using Error::Error;
 };
 
 /// A plugin object threw while the simulation ran: exit status 3. `label`
 /// names the plugin and its place in the scene.
-class PluginRuntimeError : public PluginError {
+class PDYN_API PluginRuntimeError : public PluginError {
  public:
   PluginRuntimeError(std::string label, const std::string& what)
       : PluginError(label + ": " + what), label_(std::move(label)) {}

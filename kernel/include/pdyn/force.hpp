@@ -9,6 +9,7 @@
 
 #include <optional>
 
+#include "pdyn/export.hpp"
 #include "pdyn/particles.hpp"
 #include "pdyn/plugin_object.hpp"
 
@@ -16,7 +17,7 @@ namespace pdyn {
 
 /// Receives the 3 x 3 blocks of a force's Jacobians, for implicit solvers
 /// (Baraff & Witkin 1998, "Large Steps in Cloth Simulation", section 4).
-class JacobianSink {
+class PDYN_API JacobianSink {
  public:
   virtual ~JacobianSink() = default;
   /// Adds `block` to df_i/dx_j, N/m.
@@ -35,7 +36,7 @@ struct StateDependence {
   bool time = true;      ///< f changes with the time (driven or time-varying forces)
 };
 
-class Force : public PluginObject {
+class PDYN_API Force : public PluginObject {
  public:
   /// Adds this object's forces (N) into `f` (3 x N), for every particle it
   /// influences. Called once per derivative evaluation, after the kernel has

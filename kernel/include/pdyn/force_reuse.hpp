@@ -54,6 +54,7 @@
 
 #include <cstdint>
 
+#include "pdyn/export.hpp"
 #include "pdyn/system.hpp"
 #include "pdyn/types.hpp"
 
@@ -143,7 +144,7 @@ class ForceReuse {
 /// (verlet, nose_hoover): the host carries the kept accelerations through
 /// checkpoints (see the top of this file). Found with dynamic_cast on the
 /// Solver; a solver without it resumes with a fresh a0.
-class ForceReuseHolder {
+class PDYN_API ForceReuseHolder {
  public:
   virtual ~ForceReuseHolder();  // defined in the kernel: one type_info for every library
   /// The accelerations (m/s^2) the next step on `sys` would reuse, or nullptr

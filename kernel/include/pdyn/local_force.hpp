@@ -18,12 +18,13 @@
 // the two (force.local_range).
 #pragma once
 
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
-class LocalForce {
+class PDYN_API LocalForce {
  public:
   virtual ~LocalForce();  // defined in the kernel: one type_info for every library
 
@@ -50,7 +51,7 @@ inline LocalForce* local_force(Force& force) { return dynamic_cast<LocalForce*>(
 ///
 /// each product and sum in double precision as written, component by
 /// component, with no fused multiply-add.
-struct LinearLocalLaw {
+struct PDYN_API LinearLocalLaw {
   bool has_acceleration = false;
   Vec3 acceleration = Vec3::Zero();  ///< m/s^2
   bool has_damping = false;
@@ -80,7 +81,7 @@ inline void apply_linear_law(const LinearLocalLaw& law, double m, const double* 
 /// plugin boundary cost the 1000 x 1000 cloth about 10% of its step;
 /// docs/log/performance.md). The law must give add_forces' bits: `pdyn check`
 /// compares them (force.linear_law).
-class LinearLocalForce {
+class PDYN_API LinearLocalForce {
  public:
   virtual ~LinearLocalForce();  // defined in the kernel: one type_info for every library
 

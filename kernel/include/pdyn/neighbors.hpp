@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "pdyn/domain.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -62,7 +63,7 @@ namespace pdyn {
 /// up) are never listed and have no neighbors. Not thread-safe: one list per
 /// force, updated from the thread that evaluates the force (its builds are
 /// themselves parallel).
-class NeighborList {
+class PDYN_API NeighborList {
  public:
   /// How pairs are stored.
   enum class Kind {
@@ -255,7 +256,7 @@ class NeighborList {
 /// within its cutoff, in ascending order of the partner, whatever else the
 /// list holds. Forces evaluated on different particle arrays (two systems,
 /// a copy of the state) never share. Thread-safe across systems.
-class SharedNeighborList {
+class PDYN_API SharedNeighborList {
  public:
   /// As NeighborList's constructor (same errors); what this force needs.
   SharedNeighborList(double cutoff, double skin,

@@ -28,23 +28,24 @@
 #include <vector>
 
 #include "pdyn/error.hpp"
+#include "pdyn/export.hpp"
 
 namespace pdyn {
 
 /// CRC-32 (IEEE 802.3, reflected polynomial 0xEDB88320; the checksum of zip,
 /// PNG and boost::crc_32_type). `crc` continues an earlier checksum: start
 /// with 0.
-std::uint32_t crc32(const void* data, std::size_t n, std::uint32_t crc = 0);
+PDYN_API std::uint32_t crc32(const void* data, std::size_t n, std::uint32_t crc = 0);
 
 /// A resumed output cannot be continued: the file the checkpoint recorded is
 /// gone or differs. The host reports it as a checkpoint problem (exit 2).
-class ResumeError : public Error {
+class PDYN_API ResumeError : public Error {
  public:
   using Error::Error;
 };
 
 /// How much of a file belonged to a run at a checkpoint.
-struct FileMark {
+struct PDYN_API FileMark {
   std::uint64_t bytes = 0;  ///< length written, bytes
   std::uint32_t crc = 0;    ///< CRC-32 of those bytes
 
@@ -55,7 +56,7 @@ struct FileMark {
   static FileMark decode(std::span<const std::uint8_t> data);
 };
 
-class OutputFile {
+class PDYN_API OutputFile {
  public:
   /// Starts `path` (creating its folder), or, with `resume`, continues the
   /// file a checkpoint recorded: its first resume->bytes bytes are copied
@@ -124,17 +125,17 @@ class OutputFile {
 
 /// `path` with ".tmp-PID" appended: the temporary name OutputFile and
 /// write_file_atomically use.
-std::filesystem::path temporary_name(const std::filesystem::path& path);
+PDYN_API std::filesystem::path temporary_name(const std::filesystem::path& path);
 
 /// Writes `data` to `path` in one go: to temporary_name(path), fsync, then
 /// rename. Throws pdyn::Error "PATH: cannot write output file (WHY)", after
 /// removing the temporary file.
-void write_file_atomically(const std::filesystem::path& path, std::span<const char> data);
+PDYN_API void write_file_atomically(const std::filesystem::path& path, std::span<const char> data);
 
 /// The files `PATH.tmp-*` that runs which were killed outright left beside
 /// `path` (not this process's own).
-std::vector<std::filesystem::path> leftover_temporaries(const std::filesystem::path& path);
+PDYN_API std::vector<std::filesystem::path> leftover_temporaries(const std::filesystem::path& path);
 /// Removes them: a resumed output, once committed, has taken their place.
-void remove_leftovers(const std::filesystem::path& path);
+PDYN_API void remove_leftovers(const std::filesystem::path& path);
 
 }  // namespace pdyn

@@ -95,6 +95,7 @@
 #include <vector>
 
 #include "pdyn/error.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/neighbors.hpp"
 #include "pdyn/parallel.hpp"
@@ -127,7 +128,7 @@ struct PairVector {
 /// meets at most one image of another). Call it from a pair force's factory
 /// with SceneContext::particles.domain, so that the scene error points at
 /// the force's cutoff.
-void check_cutoff_fits(const Domain& domain, double cutoff, double skin);
+PDYN_API void check_cutoff_fits(const Domain& domain, double cutoff, double skin);
 
 /// The optional checking hook of a pair force: what the conformance kit
 /// (`pdyn check`, the pair.* checks) compares the force's fast path with.
@@ -135,7 +136,7 @@ void check_cutoff_fits(const Domain& domain, double cutoff, double skin);
 /// kit finds it with dynamic_cast<const PairReference*> on the Force, so it
 /// is a separate interface, not a new virtual of Force: forces built against
 /// an earlier SDK keep their vtable (no ABI bump).
-class PairReference {
+class PDYN_API PairReference {
  public:
   virtual ~PairReference();
   /// The cutoff rc, m: pairs at r >= rc do not interact.
@@ -161,7 +162,7 @@ class PairReference {
 /// `evaluate_beyond_cutoff` would make it faster. Found with dynamic_cast,
 /// so a force built against an SDK without it keeps its vtable and the kit
 /// says nothing of its loop.
-class PairLoop {
+class PDYN_API PairLoop {
  public:
   virtual ~PairLoop();
   /// True for a central law (U of the distance and the types): one that may

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 #ifdef _OPENMP
@@ -35,7 +36,7 @@ inline constexpr Index kParallelMinElements = 4096;
 /// Number of threads parallel loops use: the process's OpenMP default team
 /// size, as the host set it (answered by the kernel, so it is right even
 /// in code built without OpenMP).
-int max_threads() noexcept;
+PDYN_API int max_threads() noexcept;
 
 /// Calls body(begin, end) on contiguous, disjoint ranges that cover [0, n),
 /// one per thread (one range, on the calling thread, when n is small, when

@@ -14,6 +14,7 @@
 #include <variant>
 #include <vector>
 
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -43,7 +44,7 @@ using NamedReals = std::map<std::string, double, std::less<>>;
 /// The value of an IntegerList parameter. A type of its own, not
 /// std::vector<std::int64_t>: that is IndexList's std::vector<Index>, and
 /// ParamValue's alternatives must differ.
-struct IntegerValues : std::vector<std::int64_t> {
+struct PDYN_API IntegerValues : std::vector<std::int64_t> {
   using std::vector<std::int64_t>::vector;
 };
 
@@ -53,7 +54,7 @@ using ParamValue = std::variant<double, std::int64_t, bool, std::string, Vec3, s
                                 std::vector<IndexQuad>, IntegerValues>;
 
 /// How one parameter is spelled, typed, bounded and documented.
-struct ParamSpec {
+struct PDYN_API ParamSpec {
   /// YAML key: a letter or '_', then letters, digits or '_' ([A-Za-z_][A-Za-z0-9_]*,
   /// e.g. `G`, `k_spring`), never `type`, which names the plugin. The registry
   /// refuses a library that declares another name, and says why.
@@ -100,21 +101,21 @@ struct ParamSpec {
 /// made with `required_*` must be given; `optional_*` has no default and the
 /// plugin asks Params::has().
 namespace param {
-ParamSpec real(std::string name, double fallback, std::string unit, std::string doc);
-ParamSpec required_real(std::string name, std::string unit, std::string doc);
-ParamSpec integer(std::string name, std::int64_t fallback, std::string doc);
+PDYN_API ParamSpec real(std::string name, double fallback, std::string unit, std::string doc);
+PDYN_API ParamSpec required_real(std::string name, std::string unit, std::string doc);
+PDYN_API ParamSpec integer(std::string name, std::int64_t fallback, std::string doc);
 /// A RealList whose default is the one-element list [fallback] (since 0.7.0).
-ParamSpec real_list(std::string name, double fallback, std::string unit, std::string doc);
-ParamSpec boolean(std::string name, bool fallback, std::string doc);
-ParamSpec string(std::string name, std::string fallback, std::string doc);
-ParamSpec vec3(std::string name, Vec3 fallback, std::string unit, std::string doc);
-ParamSpec required_vec3(std::string name, std::string unit, std::string doc);
-ParamSpec optional(std::string name, ParamType type, std::string unit, std::string doc);
-ParamSpec required(std::string name, ParamType type, std::string unit, std::string doc);
+PDYN_API ParamSpec real_list(std::string name, double fallback, std::string unit, std::string doc);
+PDYN_API ParamSpec boolean(std::string name, bool fallback, std::string doc);
+PDYN_API ParamSpec string(std::string name, std::string fallback, std::string doc);
+PDYN_API ParamSpec vec3(std::string name, Vec3 fallback, std::string unit, std::string doc);
+PDYN_API ParamSpec required_vec3(std::string name, std::string unit, std::string doc);
+PDYN_API ParamSpec optional(std::string name, ParamType type, std::string unit, std::string doc);
+PDYN_API ParamSpec required(std::string name, ParamType type, std::string unit, std::string doc);
 }  // namespace param
 
 /// The checked values of one plugin instance's parameters.
-class Params {
+class PDYN_API Params {
  public:
   bool has(std::string_view name) const;
   double real(std::string_view name) const;
@@ -148,30 +149,30 @@ class Params {
 /// Throws ParamError at the first element of the pair, triple or quad list `key`
 /// that names one particle twice (a spring from a particle to itself, a
 /// triangle with a repeated corner): no geometry to act along.
-void require_distinct_particles(const Params& params, std::string_view key);
+PDYN_API void require_distinct_particles(const Params& params, std::string_view key);
 
 /// Throws ParamError at the first element of the IndexList `key` that names
 /// a particle already listed: "particle 3 is listed twice (expected each id
 /// once)", `twice` saying how ("is pinned twice"). A per-particle constraint
 /// listing a particle twice has equal rows, and J W J^T is then singular; a
 /// selection that lists it twice would act on it twice.
-void require_distinct_ids(const Params& params, std::string_view key,
-                          std::string_view twice = "is listed twice");
+PDYN_API void require_distinct_ids(const Params& params, std::string_view key,
+                                   std::string_view twice = "is listed twice");
 
 /// Rest values (lengths in m, angles in rad, areas in m^2) of `n` elements
 /// of a force: the RealList `key` with one value for all or one per element,
 /// or, when the scene leaves it out, initial(s) for each element s (the
 /// configuration the scene starts in is at rest). `elements` names them in
 /// the message ("pairs", "triples") when the count fits neither.
-std::vector<double> rest_values(const Params& params, std::string_view key, std::size_t n,
-                                std::string_view elements,
-                                const std::function<double(std::size_t)>& initial);
+PDYN_API std::vector<double> rest_values(const Params& params, std::string_view key, std::size_t n,
+                                         std::string_view elements,
+                                         const std::function<double(std::size_t)>& initial);
 
 /// "a number", "[x, y, z]", ... — how a scene spells a value of this type.
-const char* describe(ParamType type);
+PDYN_API const char* describe(ParamType type);
 /// "real", "vec3", ... — the type's short name in listings and schemas.
-const char* type_name(ParamType type);
+PDYN_API const char* type_name(ParamType type);
 /// A value as YAML flow text ("[0, 0, -9.81]"), for listings and docs.
-std::string format_value(const ParamValue& value);
+PDYN_API std::string format_value(const ParamValue& value);
 
 }  // namespace pdyn

@@ -11,6 +11,7 @@
 #include <span>
 
 #include "pdyn/domain.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -18,7 +19,7 @@ namespace pdyn {
 /// Read-only view of the phase-space state, given to forces and to colliders'
 /// contact-force hook. Forces read it; they only ever write the force matrix
 /// they are handed.
-struct ParticleView {
+struct PDYN_API ParticleView {
   double t;                                ///< simulated time, s
   Eigen::Map<const Matrix3X> x;            ///< positions, m (3 x N)
   Eigen::Map<const Matrix3X> v;            ///< velocities, m/s (3 x N)
@@ -35,7 +36,7 @@ struct ParticleView {
 
 /// Writable view given to a collider's collision response after an accepted
 /// step: it may change positions and velocities of free particles.
-struct MutableParticleView {
+struct PDYN_API MutableParticleView {
   double t;                                ///< simulated time at the end of the step, s
   Eigen::Map<Matrix3X> x;                  ///< positions, m (3 x N)
   Eigen::Map<Matrix3X> v;                  ///< velocities, m/s (3 x N)

@@ -25,11 +25,12 @@
 // across a periodic face is not invariant: they do not implement it.
 #pragma once
 
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 
 namespace pdyn {
 
-class PeriodicInvariant {
+class PDYN_API PeriodicInvariant {
  public:
   virtual ~PeriodicInvariant();  // defined in the kernel: one type_info for every library
 

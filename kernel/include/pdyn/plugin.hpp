@@ -31,6 +31,7 @@
 #include "pdyn/collider.hpp"
 #include "pdyn/constraint.hpp"
 #include "pdyn/error.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/particles.hpp"
@@ -45,11 +46,11 @@ namespace pdyn {
 enum class PluginKind { Force, Solver, Collider, Writer, Constraint };
 
 /// "force", "solver", "collider", "writer" or "constraint".
-const char* kind_name(PluginKind kind);
+PDYN_API const char* kind_name(PluginKind kind);
 
 /// What a factory may look at besides its parameters: the scene's initial
 /// particles (e.g. for rest lengths) and its named particle groups.
-struct SceneContext {
+struct PDYN_API SceneContext {
   ParticleView particles;
   const std::map<std::string, std::vector<Index>>* groups = nullptr;
 };

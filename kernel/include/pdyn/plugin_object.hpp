@@ -5,9 +5,11 @@
 #include <span>
 #include <vector>
 
+#include "pdyn/export.hpp"
+
 namespace pdyn {
 
-class PluginObject {
+class PDYN_API PluginObject {
  public:
   virtual ~PluginObject() = default;
 

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -21,7 +22,7 @@ namespace pdyn {
 /// Which numbers: a user's seed and a stream that tells apart the users of
 /// one seed (a plugin picks a constant of its own, so that two plugins given
 /// the same seed draw independent numbers).
-struct RandomKey {
+struct PDYN_API RandomKey {
   std::uint64_t seed = 0;
   std::uint64_t stream = 0;
 };
@@ -37,10 +38,10 @@ inline constexpr std::uint64_t kLangevin = 0x6c616e676576696e;  ///< "langevin":
 /// counter (step, i): Philox4x64-10, then the Box-Muller transform (Random123's
 /// boxmuller). `step` is any 64-bit number naming the draw (a step index, or
 /// the bits of the step's start time), `i` the particle.
-Vec3 standard_normal3(const RandomKey& key, std::uint64_t step, std::uint64_t i);
+PDYN_API Vec3 standard_normal3(const RandomKey& key, std::uint64_t step, std::uint64_t i);
 
 /// Four independent uniform deviates in (0, 1] for the counter (step, i),
 /// from the same generator.
-Eigen::Vector4d uniform4(const RandomKey& key, std::uint64_t step, std::uint64_t i);
+PDYN_API Eigen::Vector4d uniform4(const RandomKey& key, std::uint64_t step, std::uint64_t i);
 
 }  // namespace pdyn

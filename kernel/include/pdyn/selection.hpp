@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "pdyn/export.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/plugin.hpp"
 
@@ -26,10 +27,10 @@ namespace pdyn {
 ///   `group` (string): a group defined by a builder's `name:`;
 ///   `ids` (index list): particle indices, each at most once.
 /// Neither given: every particle. Both: an error.
-std::vector<ParamSpec> selection_params();
+PDYN_API std::vector<ParamSpec> selection_params();
 
 /// The particles a force acts on, resolved once at construction.
-class Selection {
+class PDYN_API Selection {
  public:
   /// Every particle.
   Selection() = default;

@@ -21,29 +21,30 @@
 #include <variant>
 #include <vector>
 
+#include "pdyn/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
 namespace shape {
 /// An infinite plane through `point` (m) with unit `normal` towards the free side.
-struct Plane {
+struct PDYN_API Plane {
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();
 };
 /// A sphere of centre `center` (m) and radius `radius` (m, > 0).
-struct Sphere {
+struct PDYN_API Sphere {
   Vec3 center = Vec3::Zero();
   double radius = 1.0;
 };
 /// An axis-aligned box between the corners `min` and `max` (m, min < max).
-struct Box {
+struct PDYN_API Box {
   Vec3 min = Vec3::Constant(-0.5);
   Vec3 max = Vec3::Constant(0.5);
 };
 /// Any other surface, as triangles: `vertices` (m) and `triangles`, each
 /// three indices into `vertices`, counter-clockwise seen from the free side.
-struct Mesh {
+struct PDYN_API Mesh {
   std::vector<Vec3> vertices;
   std::vector<IndexTriple> triangles;
 };
@@ -53,7 +54,7 @@ struct Mesh {
 using Shape = std::variant<shape::Plane, shape::Sphere, shape::Box, shape::Mesh>;
 
 /// The optional drawing hook of a collider (see the top of this file).
-class ShapeSource {
+class PDYN_API ShapeSource {
  public:
   virtual ~ShapeSource();
   /// The obstacle's pieces, in metres, as they are now. Called by the host
@@ -65,6 +66,6 @@ class ShapeSource {
 /// (expected 0..3)" (a non-finite coordinate, a zero normal, a radius <= 0,
 /// min not below max, a triangle index outside the vertices), or an empty
 /// string when it can. The host checks every shape a plugin gives.
-std::string shape_problem(const Shape& shape);
+PDYN_API std::string shape_problem(const Shape& shape);
 
 }  // namespace pdyn

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "pdyn/export.hpp"
 #include "pdyn/plugin_object.hpp"
 
 namespace pdyn {
@@ -20,7 +21,7 @@ struct StepCounts {
   std::int64_t rejected = 0;
 };
 
-class Solver : public PluginObject {
+class PDYN_API Solver : public PluginObject {
  public:
   /// Advances `sys` by one step of `h` seconds: on return its state is the
   /// solution at time() + h and its time has been advanced by h. Hosts step

@@ -22,9 +22,11 @@
 //   class Langevin final : public pdyn::Force, public pdyn::StepAware { ... };
 #pragma once
 
+#include "pdyn/export.hpp"
+
 namespace pdyn {
 
-class StepAware {
+class PDYN_API StepAware {
  public:
   virtual ~StepAware();  // defined in the kernel: one type_info for every library
 

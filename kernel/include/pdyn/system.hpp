@@ -20,6 +20,7 @@
 
 #include "pdyn/collider.hpp"
 #include "pdyn/constraint.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/particles.hpp"
 #include "pdyn/types.hpp"
@@ -34,14 +35,14 @@ class ConstraintForce;
 /// The settings of Witkin's constraint force (since ABI 7; docs/constraints.md):
 ///   J W J^T lambda = -b - J W Q - ks C - kd Cdot,
 /// solved by preconditioned conjugate gradients to a relative residual.
-struct ConstraintFeedback {
+struct PDYN_API ConstraintFeedback {
   double ks = 0.0;           ///< 1/s^2: pulls a drifted C back to zero
   double kd = 0.0;           ///< 1/s: damps Cdot
   double tolerance = 1e-12;  ///< relative residual |r| / |rhs| at which CG stops
   Index max_iterations = 0;  ///< CG's limit; 0 = 10 x rows + 100
 };
 
-class System {
+class PDYN_API System {
  public:
   System() = default;
   System(const System&) = delete;

@@ -15,12 +15,13 @@
 
 #include <cstddef>
 
+#include "pdyn/export.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
-class MovableTargets {
+class PDYN_API MovableTargets {
  public:
   virtual ~MovableTargets();  // defined in the kernel: one type_info for every library
 

@@ -8,16 +8,19 @@
 #include <string_view>
 #include <vector>
 
+#include "pdyn/export.hpp"
+
 namespace pdyn {
 
 /// Levenshtein distance between two words.
-std::size_t edit_distance(std::string_view a, std::string_view b);
+PDYN_API std::size_t edit_distance(std::string_view a, std::string_view b);
 /// The candidate closest to `word`, if close enough to be a likely typo; else "".
-std::string closest_match(std::string_view word, const std::vector<std::string>& candidates);
+PDYN_API std::string closest_match(std::string_view word,
+                                   const std::vector<std::string>& candidates);
 /// "1 particle", "3 particles": a count with its noun, in the singular for 1.
 /// `plural` defaults to `singular` + "s".
-std::string count_of(long long n, std::string_view singular, std::string_view plural = {});
+PDYN_API std::string count_of(long long n, std::string_view singular, std::string_view plural = {});
 /// "a, b, c"
-std::string join(const std::vector<std::string>& words, std::string_view sep = ", ");
+PDYN_API std::string join(const std::vector<std::string>& words, std::string_view sep = ", ");
 
 }  // namespace pdyn

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "pdyn/constraint.hpp"
+#include "pdyn/export.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/particles.hpp"
 
@@ -48,18 +49,18 @@ inline constexpr double kBoltzmann = 1.380649e-23;
 /// it is LAMMPS's T*), exactly one of them. `what` names it in the docs
 /// ("the bath's temperature"); `positive`: 0 is refused too (a Nose-Hoover
 /// chain's masses scale with it). `kT` has the sample 1 J for `pdyn check`.
-std::vector<ParamSpec> temperature_params(const std::string& what, bool positive);
+PDYN_API std::vector<ParamSpec> temperature_params(const std::string& what, bool positive);
 
 /// k_B T (J) from temperature_params()'s keys. Throws ParamError naming the
 /// key when neither or both are given.
-double temperature_kT(const Params& p);
+PDYN_API double temperature_kT(const Params& p);
 
 /// Optional interface of a force: its virial. Found with dynamic_cast on the
 /// Force (forces built against an earlier SDK keep their vtable). Every
 /// PairForce and BondedForce implements it, and the shipped external forces
 /// (which return 0); a force without it makes the pressure unknown rather than
 /// silently wrong (total_virial()).
-class VirialSource {
+class PDYN_API VirialSource {
  public:
   virtual ~VirialSource();  // defined in the kernel: one type_info for every library
   /// W = sum over this force's interactions of r . f (J): for a pair, (x_i -
@@ -74,7 +75,7 @@ class VirialSource {
 /// far, J. K + U + reservoir_energy() is then the conserved quantity (for a
 /// Nose-Hoover chain, its extended energy). Carried in save_state() by the
 /// object, so that a resumed run continues it.
-class EnergyReservoir {
+class PDYN_API EnergyReservoir {
  public:
   virtual ~EnergyReservoir();
   virtual double reservoir_energy() const = 0;
@@ -87,7 +88,7 @@ struct VirialSum {
   /// unknown then), or empty.
   std::string missing;
 };
-VirialSum total_virial(const System& sys);
+PDYN_API VirialSum total_virial(const System& sys);
 
 class Solver;
 
@@ -105,7 +106,7 @@ class Solver;
 /// evaluate_constraint_rows). The rank is that of the state: at a singular
 /// configuration (a straight line of rods with its "bend" rods) it is lower
 /// than elsewhere.
-double constraint_dof(const System& sys);
+PDYN_API double constraint_dof(const System& sys);
 
 /// Since 0.10.0: the virial of constraint forces J^T Lambda at the state `p`:
 /// sum over rows r of Lambda_r sum_e (x_k(e) - x_k(first)) . J_e, the row's
@@ -113,8 +114,8 @@ double constraint_dof(const System& sys);
 /// convention of VirialSource for a term over several particles; a row over
 /// one particle, a pin, contributes 0, as external forces do). `rows` gives
 /// the pattern and J, `multipliers` Lambda (N per row unit), one per row.
-double constraint_force_virial(const ParticleView& p, const ConstraintRows& rows,
-                               const Eigen::VectorXd& multipliers);
+PDYN_API double constraint_force_virial(const ParticleView& p, const ConstraintRows& rows,
+                                        const Eigen::VectorXd& multipliers);
 
 /// Since 0.10.0: optional interface of a solver that keeps constraints itself
 /// (pdyn/constraint_solver.hpp): the virial (J) of its constraint forces at
@@ -123,7 +124,7 @@ double constraint_force_virial(const ParticleView& p, const ConstraintRows& rows
 /// virial of the position stage's constraint forces of the step that starts
 /// at this state, LAMMPS's convention for fix shake and fix rattle. A
 /// solver that enforces constraints without it makes the pressure unknown.
-class ConstraintVirialSource {
+class PDYN_API ConstraintVirialSource {
  public:
   virtual ~ConstraintVirialSource();  // defined in the kernel: one type_info for every library
   /// Called between steps, with the forces of an evaluation at the current
@@ -141,14 +142,14 @@ class ConstraintVirialSource {
 /// for a solver that keeps the constraints without ConstraintVirialSource
 /// (xpbd), or kSolverFailed followed by the solver's message when its
 /// constraint_virial threw at this state.
-VirialSum total_virial(const System& sys, const Solver* solver, double h);
+PDYN_API VirialSum total_virial(const System& sys, const Solver* solver, double h);
 /// VirialSum::missing's start when the solver could not compute the
 /// constraint virial at the state (total_virial above).
 inline constexpr const char* kSolverFailed = "solver failed: ";
 
 /// The energy every EnergyReservoir among `sys`'s forces and `solver` (if
 /// not null) has taken out of the particles, J.
-double total_reservoir_energy(const System& sys, const Solver* solver);
+PDYN_API double total_reservoir_energy(const System& sys, const Solver* solver);
 
 /// Temperature and pressure of a state.
 struct Thermo {
@@ -167,6 +168,6 @@ struct Thermo {
 /// Sums in particle order: the same bits for any thread count. With
 /// constraints, pass extra_dof + constraint_dof(sys) and the virial of
 /// total_virial(sys, solver, h).
-Thermo thermo(const ParticleView& p, double virial, double extra_dof = 3.0);
+PDYN_API Thermo thermo(const ParticleView& p, double virial, double extra_dof = 3.0);
 
 }  // namespace pdyn

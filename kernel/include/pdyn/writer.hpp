@@ -31,6 +31,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pdyn/export.hpp"
 #include "pdyn/particles.hpp"
 #include "pdyn/plugin_object.hpp"
 #include "pdyn/shape.hpp"
@@ -53,7 +54,7 @@ inline constexpr const char* kId = "id";        ///< particle index
 }  // namespace field
 
 /// Every field name the host knows, in the order above.
-const std::vector<std::string>& known_fields();
+PDYN_API const std::vector<std::string>& known_fields();
 
 /// One output time, as a writer sees it. Valid during write() only.
 struct Frame {
@@ -149,7 +150,7 @@ struct FrameRecord {
 /// with the frames it wrote. Throws pdyn::Error if the output is unreadable.
 using WriterReader = std::function<std::vector<FrameRecord>(const std::filesystem::path& path)>;
 
-class Writer : public PluginObject {
+class PDYN_API Writer : public PluginObject {
  public:
   /// Writes one frame. Throws pdyn::Error naming the file on failure (a full
   /// disk): the run then stops, keeping what was committed to the marks.

@@ -8,19 +8,20 @@
 #include <vector>
 
 #include "pdyn/error.hpp"
+#include "pdyn/host/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
 /// A checkpoint cannot be used: exit status 2. Nothing of it was applied.
-class CheckpointError : public Error {
+class PDYN_HOST_API CheckpointError : public Error {
  public:
   using Error::Error;
 };
 
 /// How far one writer's output had gone at the checkpoint (Writer::mark()),
 /// so a resumed run can check the output is the same and continue it.
-struct WriterMark {
+struct PDYN_HOST_API WriterMark {
   std::string path;                ///< the writer's path as the scene names it
   std::vector<std::uint8_t> mark;  ///< the writer's own bytes (csv: pdyn::FileMark)
   /// Whether the output holds the checkpoint's state as a frame: 1 yes, 0
@@ -33,7 +34,7 @@ struct WriterMark {
   std::vector<std::vector<std::uint8_t>> pending;
 };
 
-struct Checkpoint {
+struct PDYN_HOST_API Checkpoint {
   /// Version 6 adds the accelerations a velocity-Verlet solver keeps for
   /// its next step (pdyn/force_reuse.hpp): the resumed run's first step
   /// reuses them as the uninterrupted run would, and gives the same bits.
@@ -72,13 +73,13 @@ struct Checkpoint {
 /// Writes `c` to `path` atomically: a temporary file in the same folder,
 /// fsync, rename. The previous checkpoint stays intact until the new one is
 /// complete. Throws Error if it cannot be written.
-void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c);
+PDYN_HOST_API void write_checkpoint(const std::filesystem::path& path, const Checkpoint& c);
 
 /// Reads and verifies a checkpoint (magic, format version, length, CRC-32).
 /// Throws CheckpointError naming the file and what is wrong.
-Checkpoint read_checkpoint(const std::filesystem::path& path);
+PDYN_HOST_API Checkpoint read_checkpoint(const std::filesystem::path& path);
 
 /// FNV-1a 64-bit hash, for naming a scene text compactly.
-std::uint64_t fnv1a(const std::string& text);
+PDYN_HOST_API std::uint64_t fnv1a(const std::string& text);
 
 }  // namespace pdyn

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/kernel/plugin_call.hpp"
 
 namespace pdyn {
@@ -26,24 +27,24 @@ namespace crash {
 
 /// "SIGSEGV", "SIGABRT", ... for the usual signals; nullptr for others.
 /// Async-signal-safe (returns a string literal).
-const char* signal_name(int sig) noexcept;
+PDYN_HOST_API const char* signal_name(int sig) noexcept;
 
 /// The step the runner is taking, for the crash message (one store).
-void set_step(std::int64_t step) noexcept;
+PDYN_HOST_API void set_step(std::int64_t step) noexcept;
 
 /// While alive, turns the fatal-signal report on for the runs of this
 /// process (run_scene installs a FatalSignalReport while it steps): `pdyn
 /// run` does, for its one run; tests, renderers and servers that run scenes
 /// in-process keep their own signal handling. Process-wide, as signal
 /// dispositions are.
-class ReportCrashes {
+class PDYN_HOST_API ReportCrashes {
  public:
   ReportCrashes() noexcept;
   ~ReportCrashes();
   ReportCrashes(const ReportCrashes&) = delete;
   ReportCrashes& operator=(const ReportCrashes&) = delete;
 };
-bool reporting_enabled() noexcept;
+PDYN_HOST_API bool reporting_enabled() noexcept;
 
 /// While alive, SIGSEGV, SIGBUS, SIGFPE, SIGILL and SIGABRT make the
 /// process print one line on stderr naming the plugin call in progress (its
@@ -52,7 +53,7 @@ bool reporting_enabled() noexcept;
 /// 128 + signal). Everything the handler prints is formatted here, before
 /// the run; the handler itself only copies bytes, calls write(2) and
 /// unlink(2). One at a time per process.
-class FatalSignalReport {
+class PDYN_HOST_API FatalSignalReport {
  public:
   FatalSignalReport(const Scene& scene, const std::vector<std::filesystem::path>& temp_files);
   ~FatalSignalReport();

@@ -9,12 +9,13 @@
 #include <string_view>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/plugin.hpp"
 
 namespace pdyn {
 
 /// One plugin found on the search path.
-struct PluginRecord {
+struct PDYN_HOST_API PluginRecord {
   const PluginDescriptor* descriptor = nullptr;
   std::filesystem::path library;
   std::shared_ptr<void> handle;  // the loaded library; every created object holds a copy
@@ -27,7 +28,7 @@ struct PluginRecord {
 };
 
 /// A library on the search path that could not be used.
-struct PluginFault {
+struct PDYN_HOST_API PluginFault {
   std::filesystem::path library;
   std::string plugin;   // the plugin's name, or the name its file suggests
   std::string message;  // one line: what is wrong
@@ -35,7 +36,7 @@ struct PluginFault {
 
 /// A plugin that a library in a later default folder also provides: the
 /// earlier folder's library wins, and `pdyn plugins` lists this one.
-struct PluginShadow {
+struct PDYN_HOST_API PluginShadow {
   std::filesystem::path library;  // the library not loaded
   std::string plugin;
   std::filesystem::path by;  // the library that provides the plugin
@@ -49,7 +50,7 @@ struct PluginShadow {
 /// another one (a build tree's module on a machine with the packages too).
 enum class DefaultFolders { Library, LibraryAndProgram };
 
-class PluginRegistry {
+class PDYN_HOST_API PluginRegistry {
  public:
   /// The search path, in order: `extra` (--plugin-path), the directories in
   /// $PDYN_PLUGIN_PATH (':'-separated), then the default folders: the plugin
@@ -124,12 +125,12 @@ class PluginRegistry {
 
 /// Creates a writer of a scene's output list (the runner does, when a run
 /// starts). It keeps its library loaded for as long as it lives.
-std::shared_ptr<Writer> create_writer(const PluginRecord& r, const Params& p,
-                                      const WriterContext& ctx);
+PDYN_HOST_API std::shared_ptr<Writer> create_writer(const PluginRecord& r, const Params& p,
+                                                    const WriterContext& ctx);
 
 /// True for names of the form [a-z0-9_]+.
-bool is_valid_plugin_name(std::string_view name);
+PDYN_HOST_API bool is_valid_plugin_name(std::string_view name);
 /// True for parameter names: [A-Za-z_][A-Za-z0-9_]*, except "type" (see ParamSpec::name).
-bool is_valid_param_name(std::string_view name);
+PDYN_HOST_API bool is_valid_param_name(std::string_view name);
 
 }  // namespace pdyn

@@ -14,12 +14,13 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/params.hpp"
 
 namespace pdyn {
 
 /// One problem resolve() found with one parameter.
-struct ParamProblem {
+struct PDYN_HOST_API ParamProblem {
   enum class Kind {
     Missing,     ///< required and not given
     WrongType,   ///< given (or defaulted) as a value of another type
@@ -40,7 +41,7 @@ struct ParamProblem {
 };
 
 /// Values with every default filled in, and what is wrong with them.
-struct Resolved {
+struct PDYN_HOST_API Resolved {
   Params params;  ///< every given value (even one with a problem) plus the defaults
   std::vector<ParamProblem> problems;  ///< in spec order; at most one per vector or list element
   bool ok() const noexcept { return problems.empty(); }
@@ -48,10 +49,10 @@ struct Resolved {
 
 /// Resolves `given` against `specs`. Never throws for bad values: each is a
 /// problem in the result.
-Resolved resolve(const std::vector<ParamSpec>& specs, const Params& given);
+PDYN_HOST_API Resolved resolve(const std::vector<ParamSpec>& specs, const Params& given);
 
 /// What a spec accepts, for messages: "a number > 0 in s", "a vector [x, y,
 /// z], not zero in m".
-std::string expectation(const ParamSpec& spec);
+PDYN_HOST_API std::string expectation(const ParamSpec& spec);
 
 }  // namespace pdyn

@@ -9,12 +9,13 @@
 #include <string_view>
 
 #include "pdyn/host/checkpoint.hpp"
+#include "pdyn/host/export.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/stepper.hpp"
 
 namespace pdyn {
 
-struct RunOptions {
+struct PDYN_HOST_API RunOptions {
   bool progress = false;        ///< draw a progress bar on `log`
   std::ostream* log = nullptr;  ///< where the progress bar goes
   /// Catch SIGINT and SIGTERM: finish the current step, write the final
@@ -35,7 +36,7 @@ struct RunOptions {
   bool strict = false;
 };
 
-struct RunResult {
+struct PDYN_HOST_API RunResult {
   /// 0 done; 3 a plugin threw or a writer failed (a full disk); 4 the state
   /// became non-finite; 130 interrupted.
   int exit_code = 0;
@@ -64,19 +65,19 @@ struct RunResult {
 /// state becomes NaN or infinite, or a plugin throws, the run stops at that
 /// step, the last good state is restored, written as the final frame and
 /// checkpointed. Throws CheckpointError if resumed output files do not match.
-RunResult run_scene(Scene& scene, const RunOptions& options = {});
+PDYN_HOST_API RunResult run_scene(Scene& scene, const RunOptions& options = {});
 
 /// One line for the user on a failed step `k` (Stepper::fault()): which
 /// plugin object is at fault and its library, or where the state became
 /// non-finite. `kept` completes "the last good state (step k-1) ...": what
 /// the host did with it ("was written as the final frame").
-std::string step_fault_message(const StepFault& fault, const Scene& scene, std::int64_t k,
-                               std::string_view kept);
+PDYN_HOST_API std::string step_fault_message(const StepFault& fault, const Scene& scene,
+                                             std::int64_t k, std::string_view kept);
 
 /// The scene's complete state as a checkpoint at step `step`: particles,
 /// time, and every plugin object's save_state(), solver first. Output marks
 /// and the adaptive schedule (next_frame, has_dense) are left for the caller.
-Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step);
+PDYN_HOST_API Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step);
 
 /// Applies checkpoint `c` to a freshly loaded `scene`: state, masses, fixed
 /// flags, time and every plugin's internal state. Throws CheckpointError if
@@ -84,13 +85,13 @@ Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step);
 /// fit it. With `force`, `differences` receives one line per differing key.
 /// `anyway` names, in the caller's terms, how to restore regardless; it ends
 /// the message of a scene mismatch.
-void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
-                        std::vector<std::string>* differences = nullptr,
-                        std::string_view anyway = "--force resumes anyway");
+PDYN_HOST_API void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
+                                      std::vector<std::string>* differences = nullptr,
+                                      std::string_view anyway = "--force resumes anyway");
 
 /// Where a run's checkpoint goes: output.checkpoint.path (or checkpoint.path),
 /// else beside output.path or the first writer's file (.ckpt), else
 /// `<scene name>.ckpt` in the working directory.
-std::filesystem::path checkpoint_path(const Scene& scene);
+PDYN_HOST_API std::filesystem::path checkpoint_path(const Scene& scene);
 
 }  // namespace pdyn

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/system.hpp"
 
@@ -15,7 +16,7 @@ namespace pdyn {
 
 /// One located problem: `location` is "FILE:LINE:COLUMN", "FILE" or
 /// "--set PATH=VALUE"; `message` is "what is wrong (what was expected)".
-struct Diagnostic {
+struct PDYN_HOST_API Diagnostic {
   std::string location;
   std::string message;
   std::string text() const { return location + ": " + message; }
@@ -23,7 +24,7 @@ struct Diagnostic {
 
 /// The scene is invalid: exit status 2. what() holds every diagnostic, one
 /// per line.
-class SceneError : public Error {
+class PDYN_HOST_API SceneError : public Error {
  public:
   explicit SceneError(std::vector<Diagnostic> diagnostics);
   const std::vector<Diagnostic>& diagnostics() const noexcept { return diagnostics_; }
@@ -33,16 +34,16 @@ class SceneError : public Error {
 };
 
 /// A `--set key.path=value` override: path like `forces[0].g`, value YAML.
-struct Override {
+struct PDYN_HOST_API Override {
   std::string path;
   std::string value;
 };
 /// Parses "key.path=value"; throws SceneError if there is no '='.
-Override parse_override(const std::string& text);
+PDYN_HOST_API Override parse_override(const std::string& text);
 
 /// One writer of `output:` (a writer plugin, pdyn/writer.hpp), checked: the
 /// runner creates it when the run starts.
-struct WriterSpec {
+struct PDYN_HOST_API WriterSpec {
   PluginRecord record;              ///< the writer plugin (keeps its library loaded)
   std::string label;                ///< "vtk (scene.yaml:9:5)", as in messages
   std::filesystem::path path;       ///< the scene's `path:`
@@ -81,7 +82,7 @@ struct OutputSpec {
 /// what a renderer or viewer needs to draw it (springs from its particle
 /// pairs and triples, obstacles from their shape parameters) without
 /// knowing the plugin's insides. Builders' springs are listed too.
-struct PluginUse {
+struct PDYN_HOST_API PluginUse {
   PluginKind kind = PluginKind::Force;
   std::string type;   ///< the plugin's name, the scene's `type:`
   std::string label;  ///< "spring (scene.yaml:12:5)", as in messages
@@ -89,7 +90,7 @@ struct PluginUse {
 };
 
 /// A loaded, validated scene, ready for the runner.
-struct Scene {
+struct PDYN_HOST_API Scene {
   std::string file;
   std::unique_ptr<System> system;
   std::shared_ptr<Solver> solver;
@@ -123,11 +124,12 @@ struct Scene {
 /// Reads, validates and assembles the scene in `file`, with `overrides`
 /// applied first. Throws SceneError (bad scene) or PluginError (a plugin
 /// the scene needs cannot be used).
-Scene load_scene(const std::filesystem::path& file, const PluginRegistry& registry,
-                 const std::vector<Override>& overrides = {});
+PDYN_HOST_API Scene load_scene(const std::filesystem::path& file, const PluginRegistry& registry,
+                               const std::vector<Override>& overrides = {});
 /// The same, from text; `file` only names it in messages.
-Scene load_scene_text(const std::string& text, const std::string& file,
-                      const PluginRegistry& registry, const std::vector<Override>& overrides = {});
+PDYN_HOST_API Scene load_scene_text(const std::string& text, const std::string& file,
+                                    const PluginRegistry& registry,
+                                    const std::vector<Override>& overrides = {});
 
 /// Adds one plugin object to the assembled `scene`, or replaces its solver:
 /// `text` is what a scene would hold for it, as YAML (`{type: spring, ks:
@@ -138,7 +140,7 @@ Scene load_scene_text(const std::string& text, const std::string& file,
 /// ("spring (ORIGIN)"): give each call its own. Returns that label. Throws
 /// SceneError (diagnostics located at `origin`) or PluginError; on a throw
 /// the scene is unchanged.
-std::string add_plugin(Scene& scene, const PluginRegistry& registry, PluginKind kind,
-                       const std::string& text, const std::string& origin);
+PDYN_HOST_API std::string add_plugin(Scene& scene, const PluginRegistry& registry, PluginKind kind,
+                                     const std::string& text, const std::string& origin);
 
 }  // namespace pdyn

@@ -8,13 +8,14 @@
 #include <vector>
 
 #include "pdyn/domain.hpp"
+#include "pdyn/host/export.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/shape.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
-struct Drawables {
+struct PDYN_HOST_API Drawables {
   std::vector<IndexPair> links;
   std::vector<shape::Plane> planes;  ///< normals of unit length
   std::vector<shape::Sphere> spheres;
@@ -26,19 +27,19 @@ struct Drawables {
 /// The drawables of a loaded scene, its colliders' shapes as they are now.
 /// Throws PluginRuntimeError, naming the collider and its library, when a
 /// collider's shapes() throws or gives a shape that cannot be drawn.
-Drawables drawables(const Scene& scene);
+PDYN_HOST_API Drawables drawables(const Scene& scene);
 
 /// The scene's simulation box (simulation.box), or nothing when the scene
 /// has none (open space: the default Domain, whose min equals its max).
-std::optional<Domain> simulation_box(const Scene& scene);
+PDYN_HOST_API std::optional<Domain> simulation_box(const Scene& scene);
 
 /// The links alone: every force's particle pairs, and the edges of its
 /// triples. Cheap; no plugin is called.
-std::vector<IndexPair> scene_links(const Scene& scene);
+PDYN_HOST_API std::vector<IndexPair> scene_links(const Scene& scene);
 
 /// Points (m) a camera must keep in view for these obstacles: sphere and
 /// box extents, mesh vertices and the simulation box's corners (planes are
 /// unbounded and are drawn to fit the particles).
-std::vector<Vec3> obstacle_points(const Drawables& d);
+PDYN_HOST_API std::vector<Vec3> obstacle_points(const Drawables& d);
 
 }  // namespace pdyn

@@ -8,36 +8,37 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/params.hpp"
 #include "pdyn/plugin.hpp"
 
 namespace pdyn {
 
 /// `simulation:` (besides `solver:`, a plugin entry).
-std::vector<ParamSpec> simulation_specs();
+PDYN_HOST_API std::vector<ParamSpec> simulation_specs();
 /// `simulation.box:` besides `periodic` (a list of three booleans, which no
 /// ParamType describes: the loader reads it itself).
-std::vector<ParamSpec> box_specs();
+PDYN_HOST_API std::vector<ParamSpec> box_specs();
 /// `simulation.constraint_force:` (Witkin's constraint force, pdyn::ConstraintFeedback).
-std::vector<ParamSpec> constraint_force_specs();
+PDYN_HOST_API std::vector<ParamSpec> constraint_force_specs();
 /// One `particles:` entry that is a single particle.
-std::vector<ParamSpec> particle_specs();
+PDYN_HOST_API std::vector<ParamSpec> particle_specs();
 /// `output:` (besides `checkpoint:`).
-std::vector<ParamSpec> output_specs();
+PDYN_HOST_API std::vector<ParamSpec> output_specs();
 /// The keys of one entry of the list form of `output:` besides `type` and
 /// the writer plugin's own parameters: path, every, fields. A writer's
 /// parameters may not take these names (the registry refuses it).
-std::vector<ParamSpec> writer_entry_keys();
+PDYN_HOST_API std::vector<ParamSpec> writer_entry_keys();
 /// `velocities:` (Maxwell-Boltzmann initial velocities, pdyn/host/velocities.hpp).
-std::vector<ParamSpec> velocities_specs();
+PDYN_HOST_API std::vector<ParamSpec> velocities_specs();
 /// `output.checkpoint:`, and the top-level `checkpoint:` of a scene whose
 /// `output:` is a list.
-std::vector<ParamSpec> checkpoint_specs();
+PDYN_HOST_API std::vector<ParamSpec> checkpoint_specs();
 
 /// A key of a builder that holds a mapping: the parameters of a force
 /// plugin the builder creates (less the particle list it generates), a
 /// mapping of families of those, or a fixed set of keys (a region).
-struct BuilderNested {
+struct PDYN_HOST_API BuilderNested {
   std::string key;                    ///< "springs", "bend", "box"
   std::string doc;                    ///< one line
   std::string plugin;                 ///< force plugin ("spring"); empty: `specs`
@@ -52,7 +53,7 @@ struct BuilderNested {
 };
 
 /// A particle builder: a `particles:` entry `{ KEY: { ... } }`.
-struct BuilderSpec {
+struct PDYN_HOST_API BuilderSpec {
   std::string key;                    ///< "grid"
   std::string doc;                    ///< one line
   std::vector<ParamSpec> params;      ///< the builder's own keys
@@ -61,6 +62,6 @@ struct BuilderSpec {
 
 /// Every builder the loader accepts. A new builder is listed here, with the
 /// same specs its reader uses, and appears in the schema.
-std::vector<BuilderSpec> builder_specs();
+PDYN_HOST_API std::vector<BuilderSpec> builder_specs();
 
 }  // namespace pdyn

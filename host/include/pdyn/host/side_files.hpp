@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/types.hpp"
 
@@ -38,7 +39,7 @@ inline constexpr std::array<const char*, 4> kParticleFileFormats = {"csv", "lamm
                                                                     "lammps_dump", "extxyz"};
 
 /// Particles read from a CSV file, one entry per record.
-struct ParticleRows {
+struct PDYN_HOST_API ParticleRows {
   std::vector<Vec3> x;              ///< m
   std::vector<Vec3> v;              ///< m/s (zero when the file has no vx,vy,vz)
   std::vector<double> mass;         ///< kg, > 0
@@ -51,24 +52,24 @@ struct ParticleRows {
 /// not at all; fixed as 0/1/true/false; radius (m, >= 0) and type (a whole
 /// number >= 0) optional). `shown` is the name used in
 /// messages. Returns nothing and appends to `problems` if anything is wrong.
-std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
-                                           const std::string& shown,
-                                           std::vector<Diagnostic>& problems);
+PDYN_HOST_API std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
+                                                         const std::string& shown,
+                                                         std::vector<Diagnostic>& problems);
 
 /// Reads an index-tuple file with header i,j (K = 2), i,j,k (K = 3) or i,j,k,l (K = 4); every
 /// index must be a whole number in 0..n_particles-1 (unchecked if
 /// n_particles < 0).
 template <std::size_t K>
-std::optional<std::vector<std::array<Index, K>>> read_tuples(const std::filesystem::path& file,
-                                                             const std::string& shown,
-                                                             Index n_particles,
-                                                             std::vector<Diagnostic>& problems);
+PDYN_HOST_API std::optional<std::vector<std::array<Index, K>>> read_tuples(
+    const std::filesystem::path& file, const std::string& shown, Index n_particles,
+    std::vector<Diagnostic>& problems);
 
 /// Writes particles in the format read_particles reads (17 significant
 /// digits: the round trip is exact), with radius and type columns when
 /// `rows` holds them.
-void write_particles(const std::filesystem::path& file, const ParticleRows& rows);
+PDYN_HOST_API void write_particles(const std::filesystem::path& file, const ParticleRows& rows);
 /// Writes pairs with header i,j.
-void write_pairs(const std::filesystem::path& file, const std::vector<IndexPair>& pairs);
+PDYN_HOST_API void write_pairs(const std::filesystem::path& file,
+                               const std::vector<IndexPair>& pairs);
 
 }  // namespace pdyn::side_files

@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
 #include "pdyn/host/stepper.hpp"
@@ -17,7 +18,7 @@ namespace pdyn {
 /// A step failed (Stepper::fault()): what() is the line `pdyn run` prints,
 /// naming the plugin object at fault and its library. The simulation is back
 /// at the last good state, the start of the failed step.
-class StepError : public Error {
+class PDYN_HOST_API StepError : public Error {
  public:
   StepError(const std::string& message, StepFault fault)
       : Error(message), fault_(std::move(fault)) {}
@@ -27,7 +28,7 @@ class StepError : public Error {
   StepFault fault_;
 };
 
-class Simulation {
+class PDYN_HOST_API Simulation {
  public:
   /// Takes over a loaded scene (load_scene). Sets the thread count: `threads`
   /// if > 0, else the scene's simulation.threads, else

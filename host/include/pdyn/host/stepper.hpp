@@ -23,6 +23,7 @@
 #include <optional>
 #include <string>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -31,7 +32,7 @@ class Solver;
 class System;
 
 /// Why a step failed. The system is back at the step's start when this is set.
-struct StepFault {
+struct PDYN_HOST_API StepFault {
   enum class Kind {
     PluginThrew,     ///< a plugin object threw: `label` and `what` say which and what
     SolverThrew,     ///< the solver threw on its own account (replays found no other culprit)
@@ -67,7 +68,7 @@ struct StepFault {
 /// Takes steps of one system with one solver. Holds the last good state and
 /// the next one (2 x 6N doubles, allocated when the stepper is made; steps do
 /// not allocate unless the system's size changed).
-class Stepper {
+class PDYN_HOST_API Stepper {
  public:
   /// `solver_label` names the solver in faults and crash reports ("rk4
   /// (scene.yaml:3:11)"); it is referenced, not copied, and must outlive the

@@ -5,15 +5,17 @@
 
 #include <pdyn/types.hpp>
 
+#include "pdyn/host/export.hpp"
+
 namespace pdyn {
 
 /// Sets the number of threads (>= 1) every later parallel loop in
 /// the process uses, kernel and plugins alike (omp_set_num_threads). Without
 /// OpenMP it does nothing. The runner calls it; plugins never need to.
-void set_threads(int n);
+PDYN_HOST_API void set_threads(int n);
 
 /// The number of cores this process may use (omp_get_num_procs).
-int available_threads() noexcept;
+PDYN_HOST_API int available_threads() noexcept;
 
 /// The thread count for `particles` particles on a machine with
 /// `free_cores` cores not busy with other work: one thread per
@@ -24,13 +26,13 @@ int available_threads() noexcept;
 /// thread on a core another process keeps busy stalls the others at every
 /// barrier: with a CPU-bound process on each core, 2 threads took 1.8x the
 /// time of 1 (docs/performance.md, "Threads and determinism").
-int threads_for(Index particles, int free_cores) noexcept;
+PDYN_HOST_API int threads_for(Index particles, int free_cores) noexcept;
 
 /// The thread count a host uses when the scene and the user name none:
 /// threads_for(particles, the cores left idle by other processes, sampled
 /// from /proc/stat over 20 ms when more than one thread would be worth it;
 /// every core where that cannot be read). Results are bit-identical for
 /// every count, so this changes only the speed.
-int default_threads(Index particles) noexcept;
+PDYN_HOST_API int default_threads(Index particles) noexcept;
 
 }  // namespace pdyn

@@ -8,11 +8,12 @@
 #include <span>
 #include <vector>
 
+#include "pdyn/host/export.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
 
-struct VelocitySpec {
+struct PDYN_HOST_API VelocitySpec {
   double kT = 0.0;             ///< k_B T, J (>= 0)
   std::uint64_t seed = 1;      ///< the generator's seed (pdyn/random.hpp)
   bool zero_momentum = true;   ///< remove the members' total momentum
@@ -31,7 +32,7 @@ struct VelocitySpec {
 /// energy writer then report at step 0. Fixed particles keep zero velocity.
 /// Throws pdyn::Error when scaling is asked for but impossible: no degrees
 /// of freedom, or every velocity zero.
-void maxwell_boltzmann(Eigen::Ref<Matrix3X> v, const Eigen::VectorXd& mass,
-                       std::span<const std::uint8_t> fixed, const VelocitySpec& spec);
+PDYN_HOST_API void maxwell_boltzmann(Eigen::Ref<Matrix3X> v, const Eigen::VectorXd& mass,
+                                     std::span<const std::uint8_t> fixed, const VelocitySpec& spec);
 
 }  // namespace pdyn

@@ -14,6 +14,8 @@
 
 #include <string>
 
+#include "pdyn/export.hpp"
+
 namespace pdyn::crash {
 
 /// One plugin call in progress: the label the System holds for the object
@@ -24,7 +26,7 @@ struct PluginCall {
 };
 
 /// The calling thread's innermost plugin call, or null.
-extern thread_local const PluginCall* t_current_call;
+PDYN_API extern thread_local const PluginCall* t_current_call;
 
 /// Marks a plugin call for its lifetime. Nested scopes (the forces a
 /// solver's step calls) restore the outer one on exit. Per thread, so two
