@@ -113,11 +113,18 @@ def build_old_plugin(a, src, name, stub):
         return lib, (f"calls what this build's kernel no longer exports (expected every "
                      f"symbol of the release's SDK exported, tests/kernel/kernel_exports.txt):"
                      f"\n{checked.stderr[-2000:]}")
-    linked = subprocess.run(link + ["-o", str(lib), "-L", str(stub), "-lpdyn_kernel",
-                                    f"-Wl,-rpath,{a.kernel_lib_dir}"],
+    # --no-as-needed: the stub defines nothing, and the linker would drop it.
+    linked = subprocess.run(link + ["-o", str(lib), "-L", str(stub), "-Wl,--no-as-needed",
+                                    "-lpdyn_kernel", f"-Wl,-rpath,{a.kernel_lib_dir}"],
                             capture_output=True, text=True)
     if linked.returncode != 0:
         return lib, f"does not link as its release did:\n{linked.stderr[-2000:]}"
+    dynamic = subprocess.run(["objdump", "-p", str(lib)], capture_output=True, text=True).stdout
+    soname = subprocess.run(["objdump", "-p", str(stub / "libpdyn_kernel.so")],
+                            capture_output=True, text=True).stdout
+    wanted = re.search(r"SONAME\s+(\S+)", soname).group(1)
+    if not re.search(rf"NEEDED\s+{re.escape(wanted)}$", dynamic, re.M):
+        return lib, f"was linked without NEEDED {wanted} (expected the release's soname)"
     return lib, None
 
 
