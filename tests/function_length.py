@@ -12,12 +12,12 @@ constructor with its member-initialiser list, an operator, a macro that
 opens a body (PYBIND11_MODULE), and a lambda at namespace or class scope.
 A lambda or block inside a function is part of that function. The sources
 are read by a small tokenizer that skips comments, strings (raw strings
-included), character literals and preprocessor lines (of an #if, only the
-first branch, so braces stay balanced), then braces are matched: a `{` is a
-function body when the header before it (since the previous `;`, `{` or `}`
-of its scope) ends in a parameter list `)` followed only by qualifiers
-(const, noexcept, override, final, mutable, `-> type`, `requires ...`) or a
-member-initialiser list; `class`, `struct`, `union`, `namespace`,
+included), character literals and preprocessor lines (of an #if whose
+branches do not each balance their brackets, only the first), then braces
+are matched: a `{` is a function body when the header before it (since the
+previous `;`, `{` or `}` of its scope) ends in a parameter list `)`
+followed only by qualifiers (const, noexcept, override, final, mutable,
+`-> type`, `requires ...`) or a member-initialiser list; `class`, `struct`, `union`, `namespace`,
 `extern "C"` open scopes, `enum` and `= {` open initialisers. A function's
 length runs from the first line of its header (template line included) to
 its closing `}`, both counted.
@@ -31,9 +31,10 @@ list of work left). Anything else over the limit fails.
 
 --self-test adds a file with an 83-line function and an 80-line one, at
 namespace scope and as in-class members indented by two, among decoys (long
-classes, namespaces and initialisers; braces in strings, comments and
-character literals), and passes only if exactly the two 83-line ones are
-reported beside what the tree itself gives (the check of the check).
+classes, namespaces and initialisers; braces in strings, comments,
+character literals and the branches of an #if), and passes only if exactly
+the two 83-line ones are reported beside what the tree itself gives (the
+check of the check).
 --list prints every function over 60 lines, longest first.
 """
 import argparse
@@ -67,47 +68,59 @@ CLASS_KEYS = {"class", "struct", "union"}
 ACCESS = {"public", "private", "protected"}
 
 
-def strip_preprocessor(text):
-    """`text` with preprocessor lines blanked (newlines kept), and of each
-    #if only its first branch, so that braces stay balanced."""
-    out, skipping, depth = [], None, 0
+def preprocessor(text):
+    """`text` with its preprocessor lines blanked (newlines kept), and the
+    line ranges [first, end) of the branches of each #if, in order."""
+    out, groups, open_ = [], [], []
     lines = text.split("\n")
     i = 0
     while i < len(lines):
-        line = lines[i]
         # A directive runs on over lines ending in a backslash.
         j = i
         while lines[j].endswith("\\") and j + 1 < len(lines):
             j += 1
-        directive = re.match(r"\s*#\s*(\w*)", line)
+        directive = re.match(r"\s*#\s*(\w*)", lines[i])
         if directive:
             word = directive.group(1)
             if word.startswith("if"):
-                depth += 1
-            elif word in ("else", "elif", "elifdef", "elifndef") and skipping is None:
-                skipping = depth
-            elif word == "endif":
-                if skipping == depth:
-                    skipping = None
-                depth -= 1
+                open_.append([[j + 2, None]])
+            elif word.startswith("el") and open_:
+                open_[-1][-1][1] = i + 1
+                open_[-1].append([j + 2, None])
+            elif word == "endif" and open_:
+                open_[-1][-1][1] = i + 1
+                groups.append(open_.pop())
             out.extend([""] * (j - i + 1))
         else:
-            out.extend(lines[i:j + 1] if skipping is None else [""] * (j - i + 1))
+            out.extend(lines[i:j + 1])
         i = j + 1
-    return "\n".join(out)
+    return "\n".join(out), groups
+
+
+def balanced(toks):
+    """Whether brackets of every kind open and close within `toks`."""
+    depth = 0
+    for t in toks:
+        depth += 1 if t in OPENERS else -1 if t in CLOSERS else 0
+        if depth < 0:
+            return False
+    return depth == 0
 
 
 def tokens(text):
     """(token, line) of each token of C++ `text`, without comments, strings,
-    character literals and preprocessor lines."""
-    text = strip_preprocessor(text)
+    character literals and preprocessor lines. Every branch of an #if is
+    read when each opens and closes its own brackets; otherwise only the
+    first (an `if (a) {` under #if and `if (b) {` under #else), so that
+    brackets stay balanced."""
+    text, groups = preprocessor(text)
     pos, line, out = 0, 1, []
     while pos < len(text):
         m = TOKEN.match(text, pos)
         kind = m.lastgroup
-        if kind == "raw" or (kind == "delim"):
-            end = text.find(")" + (m.group("delim") or "") + '"', m.end())
-            end = len(text) if end < 0 else end + len(m.group("delim") or "") + 2
+        if kind == "raw":
+            end = text.find(")" + m.group("delim") + '"', m.end())
+            end = len(text) if end < 0 else end + len(m.group("delim")) + 2
             line += text.count("\n", pos, end)
             pos = end
             continue
@@ -115,7 +128,13 @@ def tokens(text):
             out.append((m.group(), line))
         line += m.group().count("\n")
         pos = m.end()
-    return out
+    dropped = set()
+    for branches in groups:
+        parts = [[t for t, n in out if first <= n < end] for first, end in branches]
+        if not all(balanced(part) for part in parts):
+            for first, end in branches[1:]:
+                dropped.update(range(first, end))
+    return [(t, n) for t, n in out if n not in dropped]
 
 
 def match_forward(toks, i):
@@ -389,7 +408,15 @@ def sample():
         '  auto raw = R"x(})x";',
         "  auto l = [&](int y) { return y + x; };",
         "  x = l(1'000);",
-    ] * 15)
+    ] * 14 + [
+        "#ifdef SOMETHING",
+        "  if (x) {",
+        "#else",
+        "  if (x > 1) {",
+        "#endif",
+        "    x += 1;",
+        "  }",
+    ])
     return f"""// braces in a comment: {{{{
 int too_long(int x) {{
 {SAMPLE_BODY}
