@@ -75,6 +75,87 @@ std::vector<std::string> function_names(const mu::Parser& parser) {
   return names;
 }
 
+// What explain() reports: what muParser found, a "did you mean" hint
+// (empty, or ending in "? ") and what the expression may contain.
+struct Diagnosis {
+  std::string what, hint, expected;
+};
+
+// muParser's text for an error explain() has no words of its own for, without
+// its "... at position N." and " found" (the position follows).
+std::string muparser_message(const mu::ParserError& e) {
+  std::string what = e.GetMsg();
+  if (const auto at = what.find(" at position"); at != std::string::npos) what.resize(at);
+  if (const auto found = what.rfind(" found");
+      found != std::string::npos && found + 6 == what.size()) {
+    what.resize(found);
+  }
+  if (!what.empty()) what[0] = static_cast<char>(std::tolower(what[0]));
+  return what;
+}
+
+// What muParser found, for the errors that name a token it did not expect
+// where it was (every error but an unknown token and an unexpected operator).
+std::string unexpected(const mu::ParserError& e) {
+  const std::string& tok = e.GetToken();
+  switch (e.GetCode()) {
+    case mu::ecUNEXPECTED_EOF:
+      return "unexpected end of the expression";
+    case mu::ecUNEXPECTED_ARG_SEP:
+      return "unexpected ','";
+    case mu::ecUNEXPECTED_PARENS:
+      return fmt::format("unexpected parenthesis '{}'", tok);
+    case mu::ecMISSING_PARENS:
+      return "missing parenthesis ')'";
+    case mu::ecUNEXPECTED_VAL:
+      return fmt::format("unexpected value '{}'", tok);
+    case mu::ecUNEXPECTED_VAR:
+      return fmt::format("unexpected variable '{}'", tok);
+    case mu::ecUNEXPECTED_FUN:
+      return fmt::format("unexpected function '{}'", tok);
+    case mu::ecTOO_MANY_PARAMS:
+      return fmt::format("too many arguments to '{}'", tok);
+    case mu::ecTOO_FEW_PARAMS:
+      return fmt::format("too few arguments to '{}'", tok);
+    default:
+      return muparser_message(e);
+  }
+}
+
+// A token muParser could not read (ecUNASSIGNABLE_TOKEN): an unknown function
+// or variable, with the nearest known names, or a stray character. `names`
+// lists the variables and constants.
+void explain_unknown(const mu::ParserError& e, const std::string& expr, const std::string& names,
+                     const mu::Parser& parser, const pdyn::NamedReals& user_constants,
+                     Diagnosis& d) {
+  const std::string& tok = e.GetToken();
+  if (!is_name(tok)) {
+    // muParser's token is the rest of the expression ("% 2 "): name its
+    // first character, where the position points.
+    d.what = fmt::format("unexpected '{}'", tok.empty() ? tok : tok.substr(0, 1));
+    return;
+  }
+  // muParser reports an unknown function as an unknown token too: a name
+  // followed by '(' was meant as a function.
+  const auto after = e.GetPos() < 0 ? std::string::npos
+                                    : expr.find_first_not_of(
+                                          " \t", static_cast<std::size_t>(e.GetPos()) + tok.size());
+  if (after != std::string::npos && expr[after] == '(') {
+    const auto functions = function_names(parser);
+    d.what = fmt::format("unknown function '{}'", tok);
+    d.hint = suggestion(tok, functions);
+    d.expected = fmt::format("one of the functions {}", fmt::join(functions, ", "));
+    return;
+  }
+  d.what = fmt::format("unknown variable '{}'", tok);
+  // `pi` for `_pi`, a typo in a variable or constant.
+  std::vector<std::string> known(kVariables.begin(), kVariables.end());
+  for (const auto& kv : parser.GetConst()) known.push_back(kv.first);
+  for (const auto& kv : user_constants) known.push_back(kv.first);
+  d.hint = suggestion(tok, known);
+  d.expected = "one of " + names;
+}
+
 // "unexpected operator '*' at position 3 in "-k**y" (expected ...)": what
 // muParser found, where (0-based character offset, as muParser counts), and
 // what the expression may contain.
@@ -84,93 +165,32 @@ std::string explain(const mu::ParserError& e, const std::string& expr, const std
   const std::string names =
       fmt::format("the variables {}{}", kVariableList,
                   constants.empty() ? "" : fmt::format(" or the constants {}", constants));
-  std::string what, hint,
-      expected = fmt::format(
-          "an expression in {} and functions such as sin, "
-          "exp, sqrt",
-          names);
+  Diagnosis d{"", "",
+              fmt::format("an expression in {} and functions such as sin, "
+                          "exp, sqrt",
+                          names)};
   switch (e.GetCode()) {
     case mu::ecUNEXPECTED_OPERATOR:
-      what = fmt::format("unexpected operator '{}'", tok);
+      d.what = fmt::format("unexpected operator '{}'", tok);
       // Python's and Fortran's power operator: muParser's is '^'.
       if (tok == "*" && e.GetPos() > 0 && expr[static_cast<std::size_t>(e.GetPos()) - 1] == '*') {
-        expected += "; a power is written x^2, not x**2";
+        d.expected += "; a power is written x^2, not x**2";
       }
       break;
     case mu::ecUNASSIGNABLE_TOKEN:
-      if (is_name(tok)) {
-        // muParser reports an unknown function as an unknown token too:
-        // a name followed by '(' was meant as a function.
-        const auto after =
-            e.GetPos() < 0
-                ? std::string::npos
-                : expr.find_first_not_of(" \t", static_cast<std::size_t>(e.GetPos()) + tok.size());
-        if (after != std::string::npos && expr[after] == '(') {
-          const auto functions = function_names(parser);
-          what = fmt::format("unknown function '{}'", tok);
-          hint = suggestion(tok, functions);
-          expected = fmt::format("one of the functions {}", fmt::join(functions, ", "));
-        } else {
-          what = fmt::format("unknown variable '{}'", tok);
-          // `pi` for `_pi`, a typo in a variable or constant.
-          std::vector<std::string> known(kVariables.begin(), kVariables.end());
-          for (const auto& kv : parser.GetConst()) known.push_back(kv.first);
-          for (const auto& kv : user_constants) known.push_back(kv.first);
-          hint = suggestion(tok, known);
-          expected = "one of " + names;
-        }
-      } else {
-        // muParser's token is the rest of the expression ("% 2 "): name
-        // its first character, where the position points.
-        what = fmt::format("unexpected '{}'", tok.empty() ? tok : tok.substr(0, 1));
-      }
+      explain_unknown(e, expr, names, parser, user_constants, d);
       break;
-    case mu::ecUNEXPECTED_EOF:
-      what = "unexpected end of the expression";
-      break;
-    case mu::ecUNEXPECTED_ARG_SEP:
-      what = "unexpected ','";
-      break;
-    case mu::ecUNEXPECTED_PARENS:
-      what = fmt::format("unexpected parenthesis '{}'", tok);
-      break;
-    case mu::ecMISSING_PARENS:
-      what = "missing parenthesis ')'";
-      break;
-    case mu::ecUNEXPECTED_VAL:
-      what = fmt::format("unexpected value '{}'", tok);
-      break;
-    case mu::ecUNEXPECTED_VAR:
-      what = fmt::format("unexpected variable '{}'", tok);
-      break;
-    case mu::ecUNEXPECTED_FUN:
-      what = fmt::format("unexpected function '{}'", tok);
-      break;
-    case mu::ecTOO_MANY_PARAMS:
-      what = fmt::format("too many arguments to '{}'", tok);
-      break;
-    case mu::ecTOO_FEW_PARAMS:
-      what = fmt::format("too few arguments to '{}'", tok);
-      break;
-    default: {
-      what = e.GetMsg();
-      // muParser's own text ends "... at position N."; the position follows.
-      if (const auto at = what.find(" at position"); at != std::string::npos) what.resize(at);
-      if (const auto found = what.rfind(" found");
-          found != std::string::npos && found + 6 == what.size()) {
-        what.resize(found);
-      }
-      if (!what.empty()) what[0] = static_cast<char>(std::tolower(what[0]));
-    }
+    default:
+      d.what = unexpected(e);
   }
   if (expr.find_first_not_of(" \t") == std::string::npos) {
-    return fmt::format("the expression is empty (expected {})", expected);
+    return fmt::format("the expression is empty (expected {})", d.expected);
   }
   if (e.GetPos() < 0) {
-    return fmt::format("{} in \"{}\" ({}expected {})", what, expr, hint, expected);
+    return fmt::format("{} in \"{}\" ({}expected {})", d.what, expr, d.hint, d.expected);
   }
-  return fmt::format("{} at position {} in \"{}\" ({}expected {})", what, e.GetPos(), expr, hint,
-                     expected);
+  return fmt::format("{} at position {} in \"{}\" ({}expected {})", d.what, e.GetPos(), expr,
+                     d.hint, d.expected);
 }
 
 class Field final : public pdyn::Force, public pdyn::VirialSource {

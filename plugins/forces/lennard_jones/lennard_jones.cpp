@@ -197,6 +197,28 @@ Pair mix(const Pair& a, const Pair& b, Mix rule) {
   return {epsilon, 0.5 * (a.sigma + b.sigma), 0.5 * (a.cutoff + b.cutoff)};
 }
 
+// How many particles of each type take part, up to 2 (a pair of them), for
+// the types 0..top; `top` grows to the largest type among them.
+std::vector<int> type_counts(const pdyn::ParticleView& particles,
+                             const std::vector<std::uint8_t>& members, std::int32_t& top) {
+  std::vector<int> count;
+  for (pdyn::Index i = 0; i < particles.size(); ++i) {
+    if (!members.empty() && members[static_cast<std::size_t>(i)] == 0) continue;
+    const std::int32_t t = particles.type.empty() ? 0 : particles.type[static_cast<std::size_t>(i)];
+    if (t > kMaxType) {
+      throw pdyn::ParamError("pair_coeff",
+                             fmt::format("particle {} has type {} (expected types 0..{} with "
+                                         "pair_coeff, a table of every pair of types)",
+                                         i, t, kMaxType));
+    }
+    if (static_cast<std::size_t>(t) >= count.size()) count.resize(static_cast<std::size_t>(t) + 1);
+    count[static_cast<std::size_t>(t)] = std::min(2, count[static_cast<std::size_t>(t)] + 1);
+    top = std::max(top, t);
+  }
+  count.resize(static_cast<std::size_t>(top) + 1);
+  return count;
+}
+
 // The per-type law from the rows, for the particles the scene starts with
 // (their types must all be covered), and the pair loop's cutoff: the
 // largest of the table's.
@@ -217,22 +239,7 @@ TypedSetup typed_setup(const pdyn::Params& p, const pdyn::ParticleView& particle
     rows.push_back(parse_row(text[k], static_cast<long>(k), default_cutoff));
     top = std::max({top, rows.back().i, rows.back().j});
   }
-  // How many particles of each type take part (2 = a pair of them).
-  std::vector<int> count;
-  for (pdyn::Index i = 0; i < particles.size(); ++i) {
-    if (!members.empty() && members[static_cast<std::size_t>(i)] == 0) continue;
-    const std::int32_t t = particles.type.empty() ? 0 : particles.type[static_cast<std::size_t>(i)];
-    if (t > kMaxType) {
-      throw pdyn::ParamError("pair_coeff",
-                             fmt::format("particle {} has type {} (expected types 0..{} with "
-                                         "pair_coeff, a table of every pair of types)",
-                                         i, t, kMaxType));
-    }
-    if (static_cast<std::size_t>(t) >= count.size()) count.resize(static_cast<std::size_t>(t) + 1);
-    count[static_cast<std::size_t>(t)] = std::min(2, count[static_cast<std::size_t>(t)] + 1);
-    top = std::max(top, t);
-  }
-  count.resize(static_cast<std::size_t>(top) + 1);
+  const std::vector<int> count = type_counts(particles, members, top);
 
   const auto n = static_cast<std::size_t>(top) + 1;
   std::vector<std::optional<Pair>> given(n * n);
