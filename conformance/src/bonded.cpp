@@ -1,9 +1,10 @@
 // The bonded checks: what a bonded force (pdyn/bonded.hpp) must do beyond
 // what every force must, one term at a time, through the optional
-// interface BondedReference (found with dynamic_cast, as pair_checks finds
-// PairReference). The generic force.* checks run at the construction state,
-// where a bonded term built without `rest` is at rest and exerts nothing;
-// these run on random states, away from rest:
+// interface BondedReference (pdyn/bonded_reference.hpp; found with
+// dynamic_cast, as pair_checks finds PairReference). The generic force.*
+// checks run at the construction state, where a bonded term built without
+// `rest` is at rest and exerts nothing; these run on random states, away
+// from rest:
 //
 //   bonded.third_law        an `internal` force's terms each sum to zero
 //                           force and zero torque
@@ -16,7 +17,7 @@
 //   bonded.matches_terms    the force's loop (blocks, boundary terms,
 //                           threads) adds what its terms add, and the same
 //                           bits on 1 and 2 threads, on 5,000 particles
-#include "pdyn/bonded.hpp"
+#include "pdyn/bonded_reference.hpp"
 
 #include <fmt/format.h>
 

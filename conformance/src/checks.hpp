@@ -37,7 +37,7 @@ void pair_checks(const PluginDescriptor& d, const Params& params, const Force& f
                  std::mt19937_64& rng, std::vector<CheckResult>& out);
 
 /// bonded.cpp: the bonded.* checks of a force that offers
-/// pdyn::BondedReference (pdyn/bonded.hpp; every BondedForce does), or their
+/// pdyn::BondedReference (pdyn/bonded_reference.hpp; every BondedForce does), or their
 /// skips, on random states away from rest.
 void bonded_checks(const PluginDescriptor& d, const Params& params, const Force& force,
                    std::mt19937_64& rng, std::vector<CheckResult>& out);

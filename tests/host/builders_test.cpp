@@ -15,7 +15,7 @@
 #include <numbers>
 #include <set>
 
-#include "pdyn/bonded.hpp"
+#include "pdyn/bonded_reference.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 

@@ -25,7 +25,7 @@
 // It is undefined where a triangle degenerates (A = 0 or B = 0: i, j, k or
 // j, k, l collinear) or the edge has no length: `defined` is then false.
 // The scalar type T is double, or an automatic-differentiation scalar for
-// second derivatives (pdyn/bonded.hpp's Jacobians; the bending
+// second derivatives (pdyn/harmonic.hpp's Jacobians; the bending
 // constraint's bias v^T (d2 phi/dx2) v).
 #pragma once
 
@@ -39,7 +39,7 @@
 
 namespace pdyn {
 
-/// The dihedral angle as a coordinate of pdyn/bonded.hpp (Harmonic<Dihedral>).
+/// The dihedral angle as a coordinate of pdyn/harmonic.hpp (Harmonic<Dihedral>).
 struct Dihedral {
   static constexpr int arity = 4;
 

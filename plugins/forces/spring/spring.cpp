@@ -8,11 +8,13 @@
 // motion along dx without slowing rigid rotation. Potential U = ks (L-r)^2/2.
 //
 // The loop over the springs, the per-type coefficients, the 32-bit ids, the
-// block-deterministic threads and the energy are pdyn/bonded.hpp's
-// (BondedForce); this file gives one spring's force and its Jacobians.
+// block-deterministic threads and the energy are pdyn/bonded_force.hpp's
+// (BondedForce); this file gives one spring's force and its Jacobians. It
+// includes that header rather than pdyn/bonded.hpp: written by hand, the law
+// needs none of Harmonic's automatic differentiation (pdyn/harmonic.hpp).
 #include <Eigen/Core>
 #include <cmath>
-#include <pdyn/bonded.hpp>
+#include <pdyn/bonded_force.hpp>
 #include <pdyn/plugin.hpp>
 
 namespace {
@@ -80,7 +82,7 @@ struct Hooke {
   //   section 5.2). It vanishes when dv = 0.
   // Elsewhere (stretched or at rest, kd = 0 or dv = 0) the blocks are the
   // exact derivatives of operator(). Given as the (i,i) blocks alone
-  // (pdyn/bonded.hpp's pair_jacobian): BondedForce reports all four.
+  // (pdyn/bonded_law.hpp's pair_jacobian): BondedForce reports all four.
   bool pair_jacobian(const BondedPoint<2>& p, const Coefficients& c, Eigen::Matrix3d& k,
                      Eigen::Matrix3d& d) const {
     const pdyn::Vec3 dx = p.position(0) - p.position(1);

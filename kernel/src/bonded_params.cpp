@@ -1,12 +1,12 @@
-// Bonded terms: the non-template parts of pdyn/bonded.hpp (the checking
-// hook's anchor and the parameters every bonded plugin shares).
-#include "pdyn/bonded.hpp"
+// The parameters every bonded plugin shares: the non-template parts of
+// pdyn/bonded_params.hpp.
+#include "pdyn/bonded_params.hpp"
 
 #include <fmt/format.h>
 
-namespace pdyn {
+#include <algorithm>
 
-BondedReference::~BondedReference() = default;
+namespace pdyn {
 
 std::int32_t bonded_type_count(const Params& params, std::initializer_list<std::string_view> keys) {
   std::size_t n = 1;
@@ -29,26 +29,6 @@ std::int32_t bonded_type_count(const Params& params, std::initializer_list<std::
 double bonded_coefficient(const Params& params, std::string_view key, std::int32_t t) {
   const auto& values = params.reals(key);
   return values.size() == 1 ? values[0] : values.at(static_cast<std::size_t>(t));
-}
-
-std::vector<HarmonicCoefficients> harmonic_coefficients(const Params& params, std::int32_t n_types,
-                                                        std::string_view k, std::string_view kd) {
-  std::vector<HarmonicCoefficients> out(static_cast<std::size_t>(n_types));
-  for (std::int32_t t = 0; t < n_types; ++t) {
-    out[static_cast<std::size_t>(t)] = {bonded_coefficient(params, k, t),
-                                        bonded_coefficient(params, kd, t)};
-  }
-  return out;
-}
-
-std::vector<ParamSpec> harmonic_params(const std::string& what, const std::string& k_unit,
-                                       const std::string& kd_unit) {
-  return {bonded_types_param(),
-          param::real_list("k", 1.0, k_unit, what + ": one for all term types or one per type")
-              .at_least(0),
-          param::real_list("kd", 0.0, kd_unit,
-                           "damping of its rate: one for all term types or one per type")
-              .at_least(0)};
 }
 
 ParamSpec bonded_types_param() {
