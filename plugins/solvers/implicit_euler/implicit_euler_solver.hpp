@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "supernodal_cholesky.hpp"
+
 namespace pdyn::solvers {
 
 /// How the linear system of a step is solved.
@@ -39,85 +41,6 @@ struct ImplicitEulerOptions {
 };
 
 /// Linearised backward Euler (Baraff & Witkin 1998): see implicit_euler_solver.cpp.
-namespace detail {
-
-/// Sparse Cholesky factorisation A = L L^T of a symmetric positive definite
-/// matrix of 3 x 3 blocks, supernodal and left-looking (Ng & Peyton, "Block
-/// sparse Cholesky algorithms on advanced uniprocessor computers", SIAM J.
-/// Sci. Comput. 14 (1993); the linked lists of descendants as in CHOLMOD,
-/// Chen, Davis, Hager & Rajamanickam, ACM TOMS 35 (2008)), after an
-/// approximate minimum degree ordering of the block graph (Eigen's AMD).
-/// Block columns of L with nested patterns are grouped into supernodes and
-/// stored as dense column-major panels, so that nearly all of the work is
-/// dense matrix products (BLAS dgemm / dsyrk), a dense Cholesky (LAPACK
-/// dpotrf) and a dense triangular solve (dtrsm). analyze() does everything
-/// that depends only on the pattern; the first factorize() after it
-/// allocates, later ones and solve() allocate nothing.
-class SupernodalCholesky {
- public:
-  /// The pattern: `particles` lists the unknowns' particle indices; block row
-  /// r (of particle particles[r]) holds slots row_start[particles[r]] ..
-  /// row_start[particles[r] + 1] - 1 of the caller's block-CSR matrix, slot s
-  /// at column particle col[s]. `compact` maps a particle to its position in
-  /// `particles` (-1: not an unknown; such columns must not appear).
-  void analyze(const std::vector<Index>& particles, const std::vector<Index>& compact,
-               const std::vector<Index>& row_start, const std::vector<Index>& col);
-  /// Factorises the matrix whose block-CSR values are `val` (same slots as
-  /// given to analyze). Returns -1, or the elimination step of the first
-  /// block column whose pivot was not positive.
-  Index factorize(const std::vector<Eigen::Matrix3d>& val);
-  /// x = A^-1 b on the unknowns' particles; other entries of x are not touched.
-  void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
-  /// 3 x 3 blocks of L below the diagonal blocks, known after analyze().
-  std::size_t factor_blocks() const noexcept { return blocks_; }
-  /// Memory factorize() needs, known after analyze().
-  double factor_bytes() const noexcept;
-  /// Floating-point operations of one factorize() on L's nonzero blocks,
-  /// known after analyze(): 54 per 3 x 3 block product (27 multiplies, 27
-  /// additions), counted as the up-looking block algorithm would, for bench/.
-  double factor_flops() const noexcept { return flops_; }
-  /// Supernodes, known after analyze() (bench/ and tests).
-  std::size_t supernodes() const noexcept { return super_.empty() ? 0 : super_.size() - 1; }
-
- private:
-  std::vector<Index> order_;  // elimination step -> particle
-  // A's lower triangle in elimination order, by block column: column j
-  // lists (step i >= j, slot of A(order_[i], order_[j])).
-  std::vector<Index> acol_start_, arow_, aslot_;
-  // Supernode s covers block columns super_[s] .. super_[s + 1] - 1; its
-  // block rows are rows_[row_start_[s] ..], the columns themselves first,
-  // then the rows below in increasing order. Its panel of 3 x 3 blocks is
-  // dense, column-major, 3 rows per block row, at lx_[panel_[s]].
-  std::vector<Index> super_, super_of_, row_start_, rows_;
-  std::vector<std::size_t> panel_;
-  std::vector<double> lx_, work_;
-  std::size_t work_size_ = 0;  // the largest update, doubles
-  // Factorisation workspace: per supernode, the next of its rows still to
-  // update an ancestor and the link of the list of descendants waiting to
-  // update the supernode head_[t] belongs to; block row -> panel row.
-  std::vector<Index> head_, next_, cursor_, local_;
-  std::vector<double> z_, t_;  // solve's permuted right side and a gather buffer
-  std::size_t blocks_ = 0;
-  double flops_ = 0.0;
-  // Supernode s's panel: block columns first .. first + cols - 1, nrows
-  // block rows (rows[0 .. nrows)), values at x: ld = 3 nrows scalar rows,
-  // width = 3 cols scalar columns, below = ld - width rows under the
-  // diagonal block.
-  struct Panel {
-    Index first, cols, nrows;
-    const Index* rows;
-    int ld, width, below;
-    double* x;
-  };
-  Panel panel(Index s);
-  void gather(const Panel& p, const std::vector<Eigen::Matrix3d>& val);
-  void update(Index d, const Panel& p);
-  void link(Index d, Index row);
-  bool allocated_ = false;  // the storage above, by the first factorize() after analyze()
-};
-
-}  // namespace detail
-
 class ImplicitEuler final : public Solver {
  public:
   explicit ImplicitEuler(const ImplicitEulerOptions& options) : o_(options) {}
@@ -150,6 +73,23 @@ class ImplicitEuler final : public Solver {
   const PartSeconds& part_seconds() const noexcept { return parts_; }
   /// Wall time spent factorising so far, s.
   double factor_seconds() const noexcept { return parts_.factorisation; }
+  /// The last step's linear system A dv = b, for bench/ (another
+  /// factorisation timed on the same matrices): A on the free particles in
+  /// block-CSR form, as SupernodalCholesky::analyze() and factorize() take
+  /// it (kg; b in kg m/s, dv in m/s, over all particles). Valid until the
+  /// next step.
+  struct LinearSystem {
+    const std::vector<Index>& free;       ///< the unknowns' particles
+    const std::vector<Index>& compact;    ///< particle -> position in `free`, or -1
+    const std::vector<Index>& row_start;  ///< particle i's blocks: slots row_start[i] ..
+    const std::vector<Index>& col;        ///< each slot's column particle
+    const std::vector<Eigen::Matrix3d>& val;  ///< each slot's 3 x 3 block
+    const Eigen::VectorXd& b;                 ///< right side, 3 per particle (0 if fixed)
+    const Eigen::VectorXd& dv;                ///< the step's solution
+  };
+  LinearSystem linear_system() const noexcept {
+    return {free_, compact_, row_start_, col_, val_, b_, dv_};
+  }
 
  private:
   struct Key {

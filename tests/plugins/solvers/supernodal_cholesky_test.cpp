@@ -9,7 +9,7 @@
 #include <Eigen/Cholesky>
 #include <random>
 
-#include "implicit_euler_solver.hpp"
+#include "supernodal_cholesky.hpp"
 
 namespace pdyn {
 namespace {
