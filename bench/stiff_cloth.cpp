@@ -5,13 +5,18 @@
 //       directly (sparse Cholesky, the default) and, for comparison, by
 //       conjugate gradients at each --cg-tolerance,
 // and print one Markdown table with a row per size and implicit solve
-// (docs/solvers.md). A plain timing program rather than Google Benchmark:
-// each configuration is one long run whose wall time and step count are the
+// (docs/solvers.md). With --llt, then (c) one more implicit_euler run per
+// size whose linear system of every step is factorised and solved again,
+// by the hand-written supernodal Cholesky and by Eigen's SimplicialLLT, each
+// timed, in a second table (docs/solvers.md, "The direct solve against a
+// library"). A plain timing program rather than Google Benchmark: each
+// configuration is one long run whose wall time and step count are the
 // result, and the bisection is part of the measurement.
 //
 //   pdyn_bench_stiff_cloth [--size N]... [--repeats N] [--duration S]
 //                          [--cg-tolerance E]... [--threads T]
-//                          [--bisect-steps K] [--rk4-dt S] [--skip-rk4] [--trace]
+//                          [--bisect-steps K] [--rk4-dt S] [--skip-rk4]
+//                          [--llt] [--trace]
 //
 // --size N (repeatable; default 30) is an N x N grid of the same sheet:
 // 1 m x 1 m, 1 kg in all (spacing 1/(N-1) m, 1/N^2 kg per particle), springs
@@ -39,15 +44,19 @@
 // S (with one --size: a step an earlier bisection found).
 #include <fmt/format.h>
 
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "implicit_euler_solver.hpp"
+#include "pdyn/error.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
@@ -214,119 +223,354 @@ ImplicitOutcome run_implicit(int size, double dt, double cg_tolerance, const Set
   return o;
 }
 
-}  // namespace
+// (c) The implicit step's linear solve done twice more after each direct
+// step of implicit_euler, on the step's own matrix A and right side b: by a
+// second SupernodalCholesky (the solver's own code, timed here as the
+// library is, so that both see the same matrices in the same state of the
+// caches) and by Eigen's SimplicialLLT on the scalar matrix (its default
+// ordering, AMD on the 3n x 3n pattern; its lower triangle only). Each
+// analyses the pattern once and factorises and solves at every step; which
+// goes first alternates from step to step.
+struct SolveTimes {
+  struct Seconds {
+    double analysis = 0.0, factor = 0.0, solve = 0.0;  // s, summed over the steps
+  };
+  Seconds supernodal, llt;
+  std::int64_t steps = 0;
+  Eigen::Index unknowns = 0;
+  double supernodal_nonzeros = 0.0, llt_nonzeros = 0.0;  // scalar entries of L
+  double difference = 0.0;     // max over steps of |x_llt - x| / |x| (max norms)
+  bool same_as_solver = true;  // the second SupernodalCholesky gave the solver's dv, bit for bit
+};
 
-int main(int argc, char** argv) {
+class SolveComparison final : public pdyn::Solver {
+ public:
+  SolveTimes t;
+
+  explicit SolveComparison(std::shared_ptr<pdyn::solvers::ImplicitEuler> inner)
+      : inner_(std::move(inner)) {}
+
+  void step(pdyn::System& sys, double h) override {
+    inner_->step(sys, h);
+    if (!inner_->last_step_direct()) throw pdyn::Error("--llt: the step was not solved directly");
+    const auto a = inner_->linear_system();
+    if (a.free.empty()) return;
+    if (a.row_start != row_start_ || a.col != col_) analyze(a);
+    load(a);
+    if (t.steps % 2 == 0) {
+      factor_supernodal(a);
+      factor_llt();
+    } else {
+      factor_llt();
+      factor_supernodal(a);
+    }
+    check(a);
+    ++t.steps;
+  }
+
+ private:
+  static double since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  // Both factorisations' symbolic analysis, and where each entry of A's
+  // lower triangle goes among matrix_'s values.
+  void analyze(const pdyn::solvers::ImplicitEuler::LinearSystem& a) {
+    row_start_ = a.row_start;
+    col_ = a.col;
+    t.unknowns = 3 * static_cast<Eigen::Index>(a.free.size());
+    auto start = std::chrono::steady_clock::now();
+    cholesky_.analyze(a.free, a.compact, a.row_start, a.col);
+    t.supernodal.analysis += since(start);
+    // The blocks below the diagonal, and the diagonal blocks' lower triangles.
+    t.supernodal_nonzeros = 9.0 * static_cast<double>(cholesky_.factor_blocks()) +
+                            6.0 * static_cast<double>(a.free.size());
+    std::vector<Eigen::Triplet<double, Eigen::Index>> entries;
+    for_each_entry(
+        a, [&](Eigen::Index r, Eigen::Index c, double) { entries.emplace_back(r, c, 1.0); });
+    matrix_.resize(t.unknowns, t.unknowns);
+    matrix_.setFromTriplets(entries.begin(), entries.end());
+    position_.clear();
+    for_each_entry(a, [&](Eigen::Index r, Eigen::Index c, double) {
+      const auto* begin = matrix_.innerIndexPtr() + matrix_.outerIndexPtr()[c];
+      const auto* end = matrix_.innerIndexPtr() + matrix_.outerIndexPtr()[c + 1];
+      position_.push_back(std::lower_bound(begin, end, static_cast<int>(r)) -
+                          matrix_.innerIndexPtr());
+    });
+    start = std::chrono::steady_clock::now();
+    llt_.analyzePattern(matrix_);
+    t.llt.analysis += since(start);
+  }
+
+  // visit(r, c, value) for each entry of A's lower triangle, at scalar row
+  // r and column c of the free particles' unknowns, in a fixed order.
+  template <class Visit>
+  static void for_each_entry(const pdyn::solvers::ImplicitEuler::LinearSystem& a, Visit&& visit) {
+    for (std::size_t row = 0; row < a.free.size(); ++row) {
+      const pdyn::Index i = a.free[row];
+      for (pdyn::Index s = a.row_start[i]; s < a.row_start[i + 1]; ++s) {
+        const auto column = static_cast<Eigen::Index>(a.compact[a.col[s]]);
+        for (int cc = 0; cc < 3; ++cc) {
+          for (int rr = 0; rr < 3; ++rr) {
+            const Eigen::Index r = 3 * static_cast<Eigen::Index>(row) + rr, c = 3 * column + cc;
+            if (r >= c) visit(r, c, a.val[s](rr, cc));
+          }
+        }
+      }
+    }
+  }
+
+  // A's values into matrix_ and b's into b_ (not timed: a caller of the
+  // library would have assembled them so).
+  void load(const pdyn::solvers::ImplicitEuler::LinearSystem& a) {
+    double* values = matrix_.valuePtr();
+    std::size_t k = 0;
+    for_each_entry(a, [&](Eigen::Index, Eigen::Index, double v) { values[position_[k++]] = v; });
+    b_.resize(t.unknowns);
+    for (std::size_t row = 0; row < a.free.size(); ++row) {
+      b_.segment<3>(3 * static_cast<Eigen::Index>(row)) = a.b.segment<3>(3 * a.free[row]);
+    }
+  }
+
+  void factor_supernodal(const pdyn::solvers::ImplicitEuler::LinearSystem& a) {
+    auto start = std::chrono::steady_clock::now();
+    if (cholesky_.factorize(a.val) >= 0) throw pdyn::Error("--llt: A is not positive definite");
+    t.supernodal.factor += since(start);
+    x_.setZero(a.b.size());
+    start = std::chrono::steady_clock::now();
+    cholesky_.solve(a.b, x_);
+    t.supernodal.solve += since(start);
+  }
+
+  void factor_llt() {
+    auto start = std::chrono::steady_clock::now();
+    llt_.factorize(matrix_);
+    t.llt.factor += since(start);
+    if (llt_.info() != Eigen::Success) throw pdyn::Error("--llt: SimplicialLLT failed");
+    start = std::chrono::steady_clock::now();
+    x_llt_ = llt_.solve(b_);
+    t.llt.solve += since(start);
+    t.llt_nonzeros = static_cast<double>(llt_.matrixL().nestedExpression().nonZeros());
+  }
+
+  // The two answers against each other and the second supernodal one
+  // against the solver's.
+  void check(const pdyn::solvers::ImplicitEuler::LinearSystem& a) {
+    double scale = 0.0, worst = 0.0;
+    for (std::size_t row = 0; row < a.free.size(); ++row) {
+      const auto k = 3 * static_cast<Eigen::Index>(row);
+      const Eigen::Vector3d x = x_.segment<3>(3 * a.free[row]);
+      t.same_as_solver = t.same_as_solver && x == a.dv.segment<3>(3 * a.free[row]);
+      scale = std::max(scale, x.lpNorm<Eigen::Infinity>());
+      worst = std::max(worst, (x_llt_.segment<3>(k) - x).lpNorm<Eigen::Infinity>());
+    }
+    if (scale > 0.0) t.difference = std::max(t.difference, worst / scale);
+  }
+
+  std::shared_ptr<pdyn::solvers::ImplicitEuler> inner_;
+  std::vector<pdyn::Index> row_start_, col_;  // the pattern analysed
+  pdyn::solvers::detail::SupernodalCholesky cholesky_;
+  Eigen::SimplicialLLT<Eigen::SparseMatrix<double>, Eigen::Lower> llt_;
+  Eigen::SparseMatrix<double> matrix_;    // A's lower triangle, scalar
+  std::vector<std::ptrdiff_t> position_;  // entry k of for_each_entry -> matrix_'s value
+  Eigen::VectorXd b_, x_, x_llt_;
+};
+
+// One implicit_euler run at dt = 0.01 s, its linear solves compared (c).
+SolveTimes compare_solves(int size, const Settings& s) {
+  Scene scene = load(size, "implicit_euler", 0.01, s.duration);
+  pdyn::solvers::ImplicitEulerOptions options;
+  options.linear_solver = pdyn::solvers::LinearSolver::Direct;
+  auto comparison =
+      std::make_shared<SolveComparison>(std::make_shared<pdyn::solvers::ImplicitEuler>(options));
+  scene.solver = comparison;
+  const Outcome o = run(scene, s.threads);
+  if (!o.stable) throw pdyn::Error(fmt::format("--llt: the {0} x {0} run was not stable", size));
+  return comparison->t;
+}
+
+void print_llt_row(int size, const SolveTimes& c) {
+  const double n = static_cast<double>(std::max<std::int64_t>(1, c.steps));
+  const auto ms = [n](double seconds) { return fmt::format("{:.2f}", 1e3 * seconds / n); };
+  const double ratio = (c.llt.factor + c.llt.solve) / (c.supernodal.factor + c.supernodal.solve);
+  std::cout << fmt::format(
+      "| {0} x {0} | {1} | {2} | {3:.3f} | {4} | {5} | {6:.3f} | {7} | {8} | **{9:.2f}x** | "
+      "{10:.3g} / {11:.3g} | {12:.1e}{13} |\n",
+      size, c.unknowns, c.steps, c.supernodal.analysis, ms(c.supernodal.factor),
+      ms(c.supernodal.solve), c.llt.analysis, ms(c.llt.factor), ms(c.llt.solve), ratio,
+      c.supernodal_nonzeros, c.llt_nonzeros, c.difference,
+      c.same_as_solver ? "" : " (the supernodal replica differs from the solver!)");
+}
+
+void print_llt_table(const std::vector<int>& sizes, const Settings& s) {
+  std::cout << fmt::format(
+      "\nThe implicit step's linear solve, {} s simulated at dt = 0.01 s, 1 thread: the "
+      "supernodal factorisation against Eigen's SimplicialLLT on the same matrices\n\n",
+      s.duration);
+  std::cout << "| size | unknowns | steps | supernodal analysis (s) | supernodal factor (ms "
+               "per step) | supernodal solve (ms per step) | SimplicialLLT analysis (s) | "
+               "SimplicialLLT factor (ms per step) | SimplicialLLT solve (ms per step) | "
+               "factor + solve, SimplicialLLT / supernodal | nonzeros of L, supernodal / "
+               "SimplicialLLT | max relative difference |\n";
+  std::cout << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const int size : sizes) {
+    print_llt_row(size, compare_solves(size, s));
+    std::cout.flush();
+  }
+}
+
+struct Options {
   Settings s;
   std::vector<int> sizes;
   std::vector<double> tolerances;
-  bool skip_rk4 = false, tolerances_given = false;
+  bool skip_rk4 = false, llt = false;
   double given_rk4_dt = 0.0;
+};
+
+// The command line into `o`; false on an argument it does not know.
+bool parse(int argc, char** argv, Options& o) {
+  bool tolerances_given = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--size" && i + 1 < argc) {
-      sizes.push_back(std::max(2, std::atoi(argv[++i])));
-    } else if (a == "--repeats" && i + 1 < argc) {
-      s.repeats = std::max(1, std::atoi(argv[++i]));
-    } else if (a == "--duration" && i + 1 < argc) {
-      s.duration = std::atof(argv[++i]);
-    } else if (a == "--cg-tolerance" && i + 1 < argc) {
+    const bool value = i + 1 < argc;
+    if (a == "--size" && value) {
+      o.sizes.push_back(std::max(2, std::atoi(argv[++i])));
+    } else if (a == "--repeats" && value) {
+      o.s.repeats = std::max(1, std::atoi(argv[++i]));
+    } else if (a == "--duration" && value) {
+      o.s.duration = std::atof(argv[++i]);
+    } else if (a == "--cg-tolerance" && value) {
       tolerances_given = true;
       const double tol = std::atof(argv[++i]);
-      if (tol > 0) tolerances.push_back(tol);  // --cg-tolerance 0: no CG rows
-    } else if (a == "--threads" && i + 1 < argc) {
-      s.threads = std::max(1, std::atoi(argv[++i]));
-    } else if (a == "--bisect-steps" && i + 1 < argc) {
-      s.bisect_steps = std::max(0, std::atoi(argv[++i]));
-    } else if (a == "--rk4-dt" && i + 1 < argc) {
-      given_rk4_dt = std::atof(argv[++i]);
+      if (tol > 0) o.tolerances.push_back(tol);  // --cg-tolerance 0: no CG rows
+    } else if (a == "--threads" && value) {
+      o.s.threads = std::max(1, std::atoi(argv[++i]));
+    } else if (a == "--bisect-steps" && value) {
+      o.s.bisect_steps = std::max(0, std::atoi(argv[++i]));
+    } else if (a == "--rk4-dt" && value) {
+      o.given_rk4_dt = std::atof(argv[++i]);
     } else if (a == "--skip-rk4") {
-      skip_rk4 = true;
+      o.skip_rk4 = true;
+    } else if (a == "--llt") {
+      o.llt = true;
     } else if (a == "--trace") {
-      s.trace = true;
+      o.s.trace = true;
     } else {
-      std::cerr << "usage: pdyn_bench_stiff_cloth [--size N]... [--repeats N] [--duration S] "
-                   "[--cg-tolerance E]... [--threads T] [--bisect-steps K] [--rk4-dt S] "
-                   "[--skip-rk4] "
-                   "[--trace]\n";
-      return 2;
+      return false;
     }
   }
-  if (sizes.empty()) sizes = {30};
-  if (!tolerances_given) tolerances = {1e-3};
-  constexpr double kImplicitDt = 0.01;
+  if (o.sizes.empty()) o.sizes = {30};
+  if (!tolerances_given) o.tolerances = {1e-3};
+  return true;
+}
+
+constexpr double kImplicitDt = 0.01;
+
+// (b) at one size: the direct solve, then CG at each tolerance, each the
+// best of s.repeats runs.
+std::vector<ImplicitOutcome> time_implicit(int size, const Options& o) {
+  std::vector<double> solves = {0.0};  // 0: direct
+  solves.insert(solves.end(), o.tolerances.begin(), o.tolerances.end());
+  std::vector<ImplicitOutcome> implicit;
+  for (const double tol : solves) {
+    ImplicitOutcome best;
+    for (int k = 0; k < o.s.repeats; ++k) {
+      ImplicitOutcome r = run_implicit(size, kImplicitDt, tol, o.s, o.s.trace && k == 0);
+      if (k == 0 || r.run.wall < best.run.wall) best = std::move(r);
+    }
+    implicit.push_back(std::move(best));
+  }
+  return implicit;
+}
+
+struct Rk4Timing {
+  double dt = 0.0, unstable = 0.0;  // s: the step timed, and the unstable one above it
+  Outcome best;
+};
+
+// (a) at one size: the step (bisected, or --rk4-dt), then the best of
+// s.repeats runs at it.
+Rk4Timing time_rk4(int size, const Options& o) {
+  Rk4Timing t;
+  t.dt = o.given_rk4_dt > 0 ? o.given_rk4_dt : largest_stable_rk4_dt(size, o.s, &t.unstable);
+  for (int k = 0; k < o.s.repeats; ++k) {
+    Scene scene = load(size, "rk4", t.dt, o.s.duration);
+    Outcome r = run(scene, o.s.threads);
+    if (!r.stable) {  // only possible with --bisect-steps
+      t.dt *= 0.99;
+      t.unstable = t.dt / 0.99;
+      k = -1;
+      continue;
+    }
+    if (k == 0 || r.wall < t.best.wall) t.best = std::move(r);
+  }
+  return t;
+}
+
+// One row of the table: an implicit run against rk4's (none with --skip-rk4).
+void print_row(int size, const ImplicitOutcome& o, const Rk4Timing* rk4) {
+  // Where the rest of the time goes: the profile printed with a miss.
+  const auto share = [&o](double seconds) { return 100.0 * seconds / o.run.wall; };
+  const std::string rest =
+      fmt::format("Jacobians {:.0f}%, forces {:.0f}%, solve {:.0f}%, analysis {:.0f}%",
+                  share(o.parts.jacobians), share(o.parts.forces), share(o.parts.solve),
+                  share(o.parts.analysis));
+  const std::string solve =
+      o.direct
+          ? fmt::format(
+                "direct LL^T ({} blocks in L, {:.3f} GB; factorising {:.0f}% of the "
+                "time, {:.1f} GFlop/s; {})",
+                o.factor_blocks, o.factor_bytes * 1e-9, share(o.factor_seconds),
+                o.factor_flops * static_cast<double>(o.run.steps) / o.factor_seconds * 1e-9, rest)
+          : fmt::format("CG {:g} ({:.0f} / {} iterations per step; {})", o.cg_tolerance, o.cg_mean,
+                        o.cg_max, rest);
+  const auto rk4_cell = [rk4](auto&& cell) { return rk4 ? std::string(cell()) : "-"; };
+  std::cout << fmt::format(
+      "| {} x {} | {} | {} | {} | {} | {:.4g} | {} | {:.3f} | {} | {} / {:.3f} | {} |\n", size,
+      size, rk4_cell([&] { return fmt::format("{:.4g}", rk4->dt); }),
+      rk4_cell([&] { return std::to_string(rk4->best.steps); }),
+      rk4_cell([&] { return fmt::format("{:.3f}", rk4->best.wall); }), solve, kImplicitDt,
+      o.run.steps, o.run.wall,
+      rk4_cell([&] { return fmt::format("{:.1f}x", rk4->best.wall / o.run.wall); }),
+      rk4_cell([&] { return fmt::format("{:.3f}", rk4->best.max_travel); }), o.run.max_travel,
+      rk4_cell([&] {
+        return fmt::format("{:.3f}", (o.run.x - rk4->best.x).colwise().norm().maxCoeff());
+      }));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  if (!parse(argc, argv, o)) {
+    std::cerr << "usage: pdyn_bench_stiff_cloth [--size N]... [--repeats N] [--duration S] "
+                 "[--cg-tolerance E]... [--threads T] [--bisect-steps K] [--rk4-dt S] "
+                 "[--skip-rk4] [--llt] [--trace]\n";
+    return 2;
+  }
   try {
     std::cout << fmt::format(
         "Stiff cloth: 1 m x 1 m, 1 kg, ks = 1e5 N/m, {} s simulated, {} thread(s); best of {} "
         "runs\n\n",
-        s.duration, s.threads, s.repeats);
+        o.s.duration, o.s.threads, o.s.repeats);
     std::cout << "| size | rk4 dt (s) | rk4 steps | rk4 wall (s) | implicit solve | implicit dt "
                  "(s) | steps | implicit wall (s) | speed-up | max travel rk4 / implicit (m) | "
                  "implicit vs rk4 at the end (m) |\n";
     std::cout << "|---|---|---|---|---|---|---|---|---|---|---|\n";
     bool all_stable = true;
-    for (const int size : sizes) {
-      std::vector<double> solves = {0.0};  // 0: direct
-      solves.insert(solves.end(), tolerances.begin(), tolerances.end());
-      std::vector<ImplicitOutcome> implicit;
-      for (const double tol : solves) {
-        ImplicitOutcome best;
-        for (int k = 0; k < s.repeats; ++k) {
-          ImplicitOutcome o = run_implicit(size, kImplicitDt, tol, s, s.trace && k == 0);
-          if (k == 0 || o.run.wall < best.run.wall) best = std::move(o);
-        }
-        all_stable = all_stable && best.run.stable;
-        implicit.push_back(std::move(best));
-      }
-      double rk4_dt = 0.0, rk4_unstable = 0.0;
-      Outcome rk4;
-      if (!skip_rk4) {
-        rk4_dt = given_rk4_dt > 0 ? given_rk4_dt : largest_stable_rk4_dt(size, s, &rk4_unstable);
-        for (int k = 0; k < s.repeats; ++k) {
-          Scene scene = load(size, "rk4", rk4_dt, s.duration);
-          Outcome o = run(scene, s.threads);
-          if (!o.stable) {  // only possible with --bisect-steps
-            rk4_dt *= 0.99;
-            rk4_unstable = rk4_dt / 0.99;
-            k = -1;
-            continue;
-          }
-          if (k == 0 || o.wall < rk4.wall) rk4 = std::move(o);
-        }
-      }
-      for (const ImplicitOutcome& o : implicit) {
-        // Where the rest of the time goes: the profile printed with a miss.
-        const auto share = [&o](double seconds) { return 100.0 * seconds / o.run.wall; };
-        const std::string rest =
-            fmt::format("Jacobians {:.0f}%, forces {:.0f}%, solve {:.0f}%, analysis {:.0f}%",
-                        share(o.parts.jacobians), share(o.parts.forces), share(o.parts.solve),
-                        share(o.parts.analysis));
-        const std::string solve =
-            o.direct
-                ? fmt::format(
-                      "direct LL^T ({} blocks in L, {:.3f} GB; factorising {:.0f}% of the "
-                      "time, {:.1f} GFlop/s; {})",
-                      o.factor_blocks, o.factor_bytes * 1e-9, share(o.factor_seconds),
-                      o.factor_flops * static_cast<double>(o.run.steps) / o.factor_seconds * 1e-9,
-                      rest)
-                : fmt::format("CG {:g} ({:.0f} / {} iterations per step; {})", o.cg_tolerance,
-                              o.cg_mean, o.cg_max, rest);
-        const std::string vs_rk4 =
-            skip_rk4 ? "-" : fmt::format("{:.3f}", (o.run.x - rk4.x).colwise().norm().maxCoeff());
-        std::cout << fmt::format(
-            "| {} x {} | {} | {} | {} | {} | {:.4g} | {} | {:.3f} | {} | {} / {:.3f} | {} |\n",
-            size, size, skip_rk4 ? "-" : fmt::format("{:.4g}", rk4_dt),
-            skip_rk4 ? "-" : std::to_string(rk4.steps),
-            skip_rk4 ? "-" : fmt::format("{:.3f}", rk4.wall), solve, kImplicitDt, o.run.steps,
-            o.run.wall, skip_rk4 ? "-" : fmt::format("{:.1f}x", rk4.wall / o.run.wall),
-            skip_rk4 ? "-" : fmt::format("{:.3f}", rk4.max_travel), o.run.max_travel, vs_rk4);
-      }
-      if (!skip_rk4 && rk4_unstable > 0) {
+    for (const int size : o.sizes) {
+      const std::vector<ImplicitOutcome> implicit = time_implicit(size, o);
+      for (const ImplicitOutcome& r : implicit) all_stable = all_stable && r.run.stable;
+      Rk4Timing rk4;
+      if (!o.skip_rk4) rk4 = time_rk4(size, o);
+      for (const ImplicitOutcome& r : implicit) print_row(size, r, o.skip_rk4 ? nullptr : &rk4);
+      if (!o.skip_rk4 && rk4.unstable > 0) {
         std::cerr << fmt::format("{} x {}: rk4 is unstable at dt = {:.4g} s\n", size, size,
-                                 rk4_unstable);
+                                 rk4.unstable);
       }
       std::cout.flush();
     }
+    if (o.llt) print_llt_table(o.sizes, o.s);
     return all_stable ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "pdyn_bench_stiff_cloth: " << e.what() << "\n";

@@ -17,8 +17,6 @@
 //   bonded.matches_terms    the force's loop (blocks, boundary terms,
 //                           threads) adds what its terms add, and the same
 //                           bits on 1 and 2 threads, on 5,000 particles
-#include "pdyn/bonded_reference.hpp"
-
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
@@ -27,6 +25,7 @@
 #include <memory>
 
 #include "checks.hpp"
+#include "pdyn/bonded_reference.hpp"
 #include "pdyn/host/threads.hpp"
 #include "sample.hpp"
 

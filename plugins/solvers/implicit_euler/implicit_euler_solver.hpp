@@ -79,10 +79,10 @@ class ImplicitEuler final : public Solver {
   /// it (kg; b in kg m/s, dv in m/s, over all particles). Valid until the
   /// next step.
   struct LinearSystem {
-    const std::vector<Index>& free;       ///< the unknowns' particles
-    const std::vector<Index>& compact;    ///< particle -> position in `free`, or -1
-    const std::vector<Index>& row_start;  ///< particle i's blocks: slots row_start[i] ..
-    const std::vector<Index>& col;        ///< each slot's column particle
+    const std::vector<Index>& free;           ///< the unknowns' particles
+    const std::vector<Index>& compact;        ///< particle -> position in `free`, or -1
+    const std::vector<Index>& row_start;      ///< particle i's blocks: slots row_start[i] ..
+    const std::vector<Index>& col;            ///< each slot's column particle
     const std::vector<Eigen::Matrix3d>& val;  ///< each slot's 3 x 3 block
     const Eigen::VectorXd& b;                 ///< right side, 3 per particle (0 if fixed)
     const Eigen::VectorXd& dv;                ///< the step's solution

@@ -4,12 +4,12 @@
 // solve A x = b as a dense Cholesky of the same matrix does, refactorise
 // in place when the values change, and report a matrix that is not positive
 // definite, then factorise the next good one as if nothing had happened.
+#include "supernodal_cholesky.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
 #include <random>
-
-#include "supernodal_cholesky.hpp"
 
 namespace pdyn {
 namespace {
