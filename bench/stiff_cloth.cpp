@@ -395,7 +395,7 @@ void print_llt_row(int size, const SolveTimes& c) {
   const double ratio = (c.llt.factor + c.llt.solve) / (c.supernodal.factor + c.supernodal.solve);
   std::cout << fmt::format(
       "| {0} x {0} | {1} | {2} | {3:.3f} | {4} | {5} | {6:.3f} | {7} | {8} | **{9:.2f}x** | "
-      "{10:.3g} / {11:.3g} | {12:.1e}{13} |\n",
+      "{10:.0f} / {11:.0f} | {12:.1e}{13} |\n",
       size, c.unknowns, c.steps, c.supernodal.analysis, ms(c.supernodal.factor),
       ms(c.supernodal.solve), c.llt.analysis, ms(c.llt.factor), ms(c.llt.solve), ratio,
       c.supernodal_nonzeros, c.llt_nonzeros, c.difference,
