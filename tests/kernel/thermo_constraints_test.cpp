@@ -8,11 +8,13 @@
 // stage of the step starting at the state (the same tension over a step of
 // h: Lambda = (sqrt(d^2 - 4 u^2 h^2) - d) m / h^2); the energy writer's dof,
 // kT, virial and pressure columns show them.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -261,6 +263,100 @@ TEST(ThermoConstraints, ALongChainGivenTwiceCountsItsRodsOnceBySparseQr) {
   Scene chain = test::load_text(yaml);
   EXPECT_EQ(chain.system->constraint_rows(), 600);
   EXPECT_EQ(constraint_dof(*chain.system), 300.0);
+}
+
+// The rank constraint_dof is the count of: J restricted to the free
+// particles' coordinates, each row scaled to unit length, by dense
+// column-pivoted QR of J^T with the threshold 1e-10 (the method of its
+// groups up to 200 rows).
+double DenseConstraintRank(const System& sys) {
+  const ConstraintRows& rows = sys.evaluate_constraint_rows();
+  const auto& fixed = sys.fixed();
+  Eigen::MatrixXd jt = Eigen::MatrixXd::Zero(3 * sys.size(), rows.rows());
+  for (Index r = 0; r < rows.rows(); ++r) {
+    for (Index e = rows.row_begin[r]; e < rows.row_begin[r + 1]; ++e) {
+      if (fixed[static_cast<std::size_t>(rows.particle[e])] != 0) continue;
+      jt.block<3, 1>(3 * rows.particle[e], r) += rows.jacobian.col(e);
+    }
+    if (jt.col(r).norm() > 0.0) jt.col(r).normalize();
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(jt);
+  qr.setThreshold(1e-10);
+  return static_cast<double>(qr.rank());
+}
+
+// An n x n sheet of particles, (i, j) at `at(i, j)`, with rods to their
+// neighbours along the rows and columns, across the diagonals and to the
+// second neighbours (a cloth's structural, shear and bend rods), each given
+// `copies` times; the particles of `fixed` are nailed. The positions are
+// written to the last bit.
+std::string RodSheet(int n, const std::function<Vec3(int, int)>& at, const std::vector<int>& fixed,
+                     int copies = 1) {
+  std::string yaml = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n";
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const bool nailed = std::find(fixed.begin(), fixed.end(), j * n + i) != fixed.end();
+      const Vec3 x = at(i, j);
+      yaml += fmt::format("  - {{ position: [{}, {}, {}], mass: 1{} }}\n", x.x(), x.y(), x.z(),
+                          nailed ? ", fixed: true" : "");
+    }
+  }
+  std::string pairs;
+  auto rod = [&](int i, int j, int di, int dj) {
+    if (i + di < 0 || i + di >= n || j + dj >= n) return;
+    pairs += fmt::format("{}[{}, {}]", pairs.empty() ? "" : ", ", j * n + i, (j + dj) * n + i + di);
+  };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      for (const auto& [di, dj] : {std::pair{1, 0}, {0, 1}, {1, 1}, {-1, 1}, {2, 0}, {0, 2}}) {
+        rod(i, j, di, dj);
+      }
+    }
+  }
+  yaml += "constraints:\n";
+  for (int c = 0; c < copies; ++c) yaml += "  - { type: distance, pairs: [" + pairs + "] }\n";
+  return yaml;
+}
+
+TEST(ThermoConstraints, AClothsRankIsTheDenseQrs) {
+  // 12 x 12 particles, 746 rods: one group above the dense QR's 200 rows,
+  // ranked by Givens rotations (thermo.cpp, sparse_rank). Flat, its rods
+  // leave every particle its motion across the plane and make the sheet
+  // rigid in it: 2 N - 3 rows count, 2 N - 1 with a corner nailed (the
+  // rotation about it is left), 2 N - 4 with two (the rod between them
+  // counts none). In a plane along no axis the rows' components across it
+  // are rounding, not 0, and still count none. Crumpled, most rows count;
+  // every rod given twice, none more.
+  const auto flat = [](int i, int j) { return Vec3(0.1 * i, 0.1 * j, 0.0); };
+  const auto tilted = [](int i, int j) {
+    return Vec3(0.1 * i + 0.03 * j, 0.07 * j - 0.02 * i, 0.05 * j + 0.011 * i);
+  };
+  const auto crumpled = [](int i, int j) {
+    return Vec3(0.1 * i, 0.1 * j, 0.03 * std::sin(1.3 * i) * std::cos(0.7 * j));
+  };
+  struct Case {
+    std::string what;
+    std::string yaml;
+    double expected;  // -1: the dense QR's only
+  };
+  const std::vector<Case> cases = {
+      {"flat", RodSheet(12, flat, {}), 2.0 * 144 - 3},
+      {"flat, a corner nailed", RodSheet(12, flat, {0}), 2.0 * 143 - 1},
+      {"flat, two corners nailed", RodSheet(12, flat, {132, 143}), 2.0 * 142},
+      {"flat, every rod twice", RodSheet(12, flat, {}, 2), 2.0 * 144 - 3},
+      {"tilted, a corner nailed", RodSheet(12, tilted, {0}), 2.0 * 143 - 1},
+      {"crumpled", RodSheet(12, crumpled, {}), -1},
+      {"crumpled, a corner nailed, every rod twice", RodSheet(12, crumpled, {0}, 2), -1}};
+  for (const Case& c : cases) {
+    Scene scene = test::load_text(c.yaml);
+    const double dense = DenseConstraintRank(*scene.system);
+    EXPECT_EQ(constraint_dof(*scene.system), dense) << c.what;
+    if (c.expected >= 0) {
+      EXPECT_EQ(dense, c.expected) << c.what;
+    }
+    std::cout << "thermo constraints: " << c.what << ": " << scene.system->constraint_rows()
+              << " rows of rank " << dense << "\n";
+  }
 }
 
 }  // namespace constrained_thermo

@@ -99,9 +99,10 @@ class Solver;
 /// particles only counts none. Rows are grouped by the free particles they
 /// share; a group of one row counts 1 (0 if its gradient vanishes), a larger
 /// group the rank of its rows, each scaled to unit length, by column-pivoted
-/// QR with the relative threshold 1e-10 (sparse QR of J above 200 rows, a
-/// cloth: counted once per structure, the System, its constraint objects
-/// and fixed particles, and kept per thread for later calls). 0
+/// QR with the relative threshold 1e-10 (above 200 rows, a cloth, by Givens
+/// rotations of the rows into R with the same threshold: counted once per
+/// structure, the System, its constraint objects and fixed particles, and
+/// kept per thread for later calls). 0
 /// without constraints. Evaluates the constraints (System::
 /// evaluate_constraint_rows). The rank is that of the state: at a singular
 /// configuration (a straight line of rods with its "bend" rods) it is lower
