@@ -8,6 +8,10 @@
 #   bash scripts/ci-extra.sh     (PDYN_FUZZ_SECONDS, default 120)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
+# Google Benchmark for bench/ (scripts/fuzz.sh and package.sh install what
+# they need themselves).
+source scripts/packages.sh
+install_missing libbenchmark-dev
 source scripts/ccache.sh
 # The benchmarks compile (the test command leaves them out): the build for use
 # with them on, then as the test command left it.

@@ -9,6 +9,9 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-120}"
+# clang with its sanitizer runtimes, OpenMP for clang (g++ brings libgomp).
+source scripts/packages.sh
+install_missing clang libclang-rt-14-dev libomp-dev
 source scripts/ccache.sh
 cmake --preset fuzz "${launcher[@]}" >/dev/null
 cmake --build --preset fuzz --target scene_fuzzer pdyn_plugins

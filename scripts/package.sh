@@ -2,7 +2,7 @@
 # Builds pdyn's Debian packages (cmake/PdynPackaging.cmake) in build-deb/:
 # pdyn, pdyn-dev and python3-pdyn, installed under /usr. Needs what
 # scripts/quickstart.sh installs, plus dpkg-dev and help2man, which it
-# installs if missing. The compiler flags are the default preset's, so
+# installs if missing (scripts/packages.sh). The compiler flags are the default preset's, so
 # ccache serves the objects of an earlier build of the same sources.
 #
 #   bash scripts/package.sh          then: apt-get install ./build-deb/*.deb
@@ -10,15 +10,9 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 source scripts/ccache.sh
 # dpkg-dev: dpkg-shlibdeps, for the packages' dependencies; help2man: the
-# manual page. scripts/quickstart.sh test installs both.
-missing=()
-for p in dpkg-dev help2man; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
-  apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+# manual page.
+source scripts/packages.sh
+install_missing dpkg-dev help2man
 [[ -d viewer/node_modules/three ]] || npm ci --prefix viewer --no-audit --no-fund --loglevel=error
 # The changelog entry's date: the commit's, so that two builds of one commit agree.
 if [[ -z "${SOURCE_DATE_EPOCH:-}" ]] && git rev-parse --git-dir >/dev/null 2>&1; then

@@ -31,15 +31,15 @@ packages=(
   pybind11-dev python3-dev python3-numpy   # `import pdyn` (python/)
 )
 # The tests, the benchmarks and CI's other builds need more; the demo does
-# without them (clang and its runtimes are the largest).
+# without them (Chromium and VTK are the largest).
 [[ "$what" == test ]] && packages+=(
   libgtest-dev libgmock-dev        # tests
-  clang libclang-rt-14-dev         # libFuzzer and the sanitizer runtimes
   python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
-  libomp-dev                       # OpenMP for clang (the fuzz build); g++ brings libgomp
-  libbenchmark-dev                 # bench/ (Google Benchmark)
   clang-format-14                  # the formatting check (tests/format.cmake)
 )
+# CI's further builds bring their own: clang and its sanitizer runtimes for
+# the fuzz run (scripts/fuzz.sh), Google Benchmark for bench/ and dpkg-dev
+# with help2man for the Debian packages (scripts/ci-extra.sh, package.sh).
 # pdyn serve's page takes three.js from the npm registry (viewer/package.json
 # and its lock file); Node.js and npm come from Debian unless the machine
 # already has them.
@@ -51,20 +51,8 @@ command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
 # The Python module's tests and examples: pytest, dask.distributed for the
 # sweep across workers, matplotlib for the examples' plots.
 [[ "$what" == test ]] && packages+=(python3-pytest python3-distributed python3-matplotlib)
-# CI then builds the Debian packages (scripts/ci-extra.sh, scripts/package.sh):
-# dpkg-shlibdeps finds their dependencies, help2man writes pdyn's manual page.
-[[ "$what" == test ]] && packages+=(dpkg-dev help2man)
-sudo=""
-[[ $(id -u) -ne 0 ]] && sudo="sudo"
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if ((${#missing[@]})); then
-  echo "quickstart: installing ${missing[*]}"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+source scripts/packages.sh
+install_missing "${packages[@]}"
 
 # three.js (and, for the tests, playwright-core) into viewer/node_modules,
 # exactly as the lock file pins them.
@@ -90,6 +78,8 @@ fi
 # `import pdyn` for Debian's python3 from anywhere: a .pth file in its
 # site-packages naming this build's package folder (a development install;
 # `cmake --install build` installs a copy instead).
+sudo=""
+[[ $(id -u) -ne 0 ]] && sudo="sudo"
 site=$(/usr/bin/python3 -c "import sysconfig; print(sysconfig.get_path('purelib'))")
 { $sudo mkdir -p "$site" && echo "$PWD/build/python" | $sudo tee "$site/pdyn-build.pth" >/dev/null; } ||
   echo "quickstart: could not write $site/pdyn-build.pth: use PYTHONPATH=$PWD/build/python" >&2
