@@ -1,4 +1,4 @@
-// @NAME@'s own tests (GoogleTest): the plugin's source is compiled into this
+// @NAME@'s own tests (GoogleTest): the plugin's objects are linked into this
 // program, so its descriptor is at hand without loading a library. The first
 // test runs every check of the conformance kit; add tests of your physics
 // beside it (analytic solutions, conservation laws, known values).

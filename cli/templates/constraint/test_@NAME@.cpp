@@ -1,4 +1,4 @@
-// @NAME@'s own tests (GoogleTest): the plugin's source is compiled into this
+// @NAME@'s own tests (GoogleTest): the plugin's objects are linked into this
 // program, so its descriptor is at hand without loading a library.
 //
 // The first three tests hold for any constraint written from this template,
