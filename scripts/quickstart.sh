@@ -33,9 +33,7 @@ packages=(
 # The tests, the benchmarks and CI's other builds need more; the demo does
 # without them (Chromium and VTK are the largest).
 [[ "$what" == test ]] && packages+=(
-  libgtest-dev libgmock-dev        # tests
-  python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
-  clang-format-14                  # the formatting check (tests/format.cmake)
+  libgtest-dev libgmock-dev        # tests (CMake finds them when it configures)
 )
 # CI's further builds bring their own: clang and its sanitizer runtimes for
 # the fuzz run (scripts/fuzz.sh), Google Benchmark for bench/ and dpkg-dev
@@ -44,15 +42,28 @@ packages=(
 # and its lock file); Node.js and npm come from Debian unless the machine
 # already has them.
 command -v npm >/dev/null 2>&1 || packages+=(nodejs npm)
-# The browser test drives Debian's Chromium headless (no browser download).
-[[ "$what" == test ]] && packages+=(chromium)
-# The writers' read-back tests read every file with VTK's and h5py's own readers.
-[[ "$what" == test ]] && packages+=(python3-vtk9 python3-h5py)
-# The Python module's tests and examples: pytest, dask.distributed for the
-# sweep across workers, matplotlib for the examples' plots.
-[[ "$what" == test ]] && packages+=(python3-pytest python3-distributed python3-matplotlib)
+# What only the tests run, never the build: installed while the build runs
+# (the downloads overlap the compiler; about a minute of the test command on
+# a fresh machine), and waited for before the first test.
+test_packages=(
+  python3-jsonschema python3-yaml  # the test validating scenes against `pdyn schema`
+  clang-format-14                  # the formatting check (tests/format.cmake)
+  chromium                         # the browser test drives Debian's Chromium headless
+  python3-vtk9 python3-h5py        # the writers' read-back tests: VTK's and h5py's own readers
+  # The Python module's tests and examples: pytest, dask.distributed for the
+  # sweep across workers, matplotlib for the examples' plots.
+  python3-pytest python3-distributed python3-matplotlib
+)
 source scripts/packages.sh
 install_missing "${packages[@]}"
+if [[ "$what" == test ]]; then
+  mkdir -p build
+  # sudo asks for a password here, if at all, not in the background.
+  [[ $(id -u) -ne 0 ]] && sudo -v
+  install_missing "${test_packages[@]}" >build/quickstart-test-packages.log 2>&1 &
+  test_install=$!
+  trap 'wait' EXIT  # a failed build still lets apt finish before the script ends
+fi
 
 # three.js (and, for the tests, playwright-core) into viewer/node_modules,
 # exactly as the lock file pins them.
@@ -70,9 +81,16 @@ else
   # fails, not skips, if it cannot run. The benchmarks are no test: the
   # scripts that run them (scripts/bench.sh, bench_targets.sh,
   # lammps_compare.sh) build them, and CI's scripts/ci-extra.sh compiles them.
+  # Chromium is named by its path: it may still be being installed.
   cmake --preset default -DPDYN_BUILD_TESTS=ON -DPDYN_BUILD_BENCH=OFF -DPDYN_BROWSER_TEST=ON \
-    "${launcher[@]}"
+    -DPDYN_CHROMIUM=/usr/bin/chromium "${launcher[@]}"
   cmake --build --preset default
+  if ! wait "$test_install"; then
+    echo "quickstart: installing the tests' packages failed (build/quickstart-test-packages.log):" >&2
+    cat build/quickstart-test-packages.log >&2
+    exit 1
+  fi
+  cat build/quickstart-test-packages.log
 fi
 
 # `import pdyn` for Debian's python3 from anywhere: a .pth file in its
