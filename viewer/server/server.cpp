@@ -79,7 +79,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(tcp::socket socket, Hub& hub, int id) : ws_(std::move(socket)), hub_(hub), id_(id) {}
 
-  void start(http::request<http::string_body> req) {
+  void start(const http::request<http::string_body>& req) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(kMaxReadBytes);
     ws_.async_accept(req, [self = shared_from_this()](beast::error_code ec) {

@@ -255,7 +255,7 @@ Params Session::defaults_of(const PluginRecord& r, const Params& given) const {
   return std::move(resolved.params);
 }
 
-std::shared_ptr<Force> Session::make_force(const char* type, Params params,
+std::shared_ptr<Force> Session::make_force(const char* type, const Params& params,
                                            const std::string& label) {
   const PluginRecord* r = registry_->find(PluginKind::Force, type);
   if (!r) {
