@@ -89,6 +89,8 @@ double status_bytes(const std::string& key) {
 
 }  // namespace
 
+// An error ends the benchmark with its message (std::terminate prints it).
+// NOLINTNEXTLINE(bugprone-exception-escape)
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::cerr << "usage: pdyn_bench_lj_melt init.dump [--threads N] [--steps S] [--plugins DIR]\n";

@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
                            entry("h5md", "all.h5", ", fields: [velocity]") + ", " +
                            entry("csv", "all.csv") + "]"},
   };
-  const double frames = steps / kEvery + 1;
+  const double frames = steps / kEvery + 1;  // NOLINT(bugprone-integer-division): whole frames
   const double particle_frames = frames * n * n;
   fmt::print(
       "pdyn_bench_writers: {0} x {0} cloth, rk4, {1} steps, a frame every {2} steps ({3} "

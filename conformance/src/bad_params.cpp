@@ -107,8 +107,6 @@ Values wrong_types(const ParamSpec& s) {
       add("wrong type", "'maybe'");
       break;
     case ParamType::String:
-      add("wrong type", "[1, 2]");
-      break;
     case ParamType::Vector:
       add("wrong type", "[1, 2]");
       break;

@@ -27,6 +27,7 @@
 #include "checks.hpp"
 #include "pdyn/bonded_reference.hpp"
 #include "pdyn/host/threads.hpp"
+#include "pdyn/parallel.hpp"
 #include "sample.hpp"
 
 namespace pdyn::conformance::detail {

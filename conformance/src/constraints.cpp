@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -465,7 +466,7 @@ void constraint_basic_checks(ConstraintCase& c, std::vector<CheckResult>& out) {
     const bool same = bit_equal(s.x, before.x) && bit_equal(s.v, before.v) &&
                       bit_equal(s.mass, before.mass) && s.fixed == before.fixed &&
                       s.radius == before.radius &&
-                      std::memcmp(&s.t, &before.t, sizeof(double)) == 0;
+                      std::bit_cast<std::uint64_t>(s.t) == std::bit_cast<std::uint64_t>(before.t);
     return result("constraint.read_only", same, same ? 0 : 1, 0,
                   "x, v, m, fixed, radius, t unchanged by evaluate");
   });

@@ -204,9 +204,11 @@ CheckResult check_threads(const PluginDescriptor& d, const Options& o) {
     for (int k = 0; k < 2; ++k) {
       if (bit_equal(got[k].state, expected[k].state)) continue;
       ++differing;
+      // NOLINTBEGIN(bugprone-narrowing-conversions): to Eigen's Scalar, a double too
       worst = std::max(worst, got[k].state.size() == expected[k].state.size()
                                   ? (got[k].state - expected[k].state).cwiseAbs().maxCoeff()
                                   : std::numeric_limits<double>::infinity());
+      // NOLINTEND(bugprone-narrowing-conversions)
     }
   }
   return result(name, differing == 0, worst, 0,

@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <bit>
+#include <cstdint>
 #include <fstream>
 #include <map>
 #include <random>
@@ -117,7 +119,8 @@ std::size_t read_back_differences(const PluginDescriptor& d, const Frames& frame
     const State& s = frames.states[k];
     const bool v_ok = got[k].v.size() == 0 || same_bits(got[k].v, s.v);
     const bool ok =
-        std::memcmp(&got[k].time, &s.t, sizeof(double)) == 0 && same_bits(got[k].x, s.x) && v_ok;
+        std::bit_cast<std::uint64_t>(got[k].time) == std::bit_cast<std::uint64_t>(s.t) &&
+        same_bits(got[k].x, s.x) && v_ok;
     if (!ok && detail.empty()) detail = fmt::format("frame {} differs", k);
     bad += !ok;
   }

@@ -280,7 +280,7 @@ std::string checked_payload(const std::string& data, const std::string& file,
         "(expected {} bytes)",
         file, have - sizeof(std::uint32_t) - length, kHeader + length + sizeof(std::uint32_t)));
   }
-  const std::string payload = data.substr(kHeader, length);
+  std::string payload = data.substr(kHeader, length);
   std::uint32_t stored = 0;
   std::memcpy(&stored, data.data() + kHeader + length, sizeof(stored));
   if (crc32(payload) != stored) {

@@ -18,6 +18,8 @@
 
 namespace pdyn {
 
+class Solver;
+
 struct FrameSnapshot {
   std::int64_t step = 0;  ///< the step the frame belongs to (Frame::step)
   double t = 0.0;         ///< s

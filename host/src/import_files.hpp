@@ -81,9 +81,9 @@ struct ReadResult {
 };
 
 /// Reads `file` as `format`: frame `frame` of a dump or XYZ file (0 the
-/// first, -1 the last). Appends located problems (`shown:LINE:COLUMN: ...`,
+/// first, -1 the last). Appends to `out` located problems (`shown:LINE:COLUMN: ...`,
 /// at most side_files::kMaxProblemsPerFile) if anything is wrong.
 ReadResult read(const std::filesystem::path& file, Format format, long long frame,
-                const std::string& shown, std::vector<Diagnostic>& problems);
+                const std::string& shown, std::vector<Diagnostic>& out);
 
 }  // namespace pdyn::import_files

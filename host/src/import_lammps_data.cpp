@@ -269,8 +269,8 @@ void read_atom_row(const Line& r, DataFile& d, Problems& problems) {
     ok = false;
   }
   for (int c = 0; c < 3; ++c) {
-    const auto x = parse_real(f[static_cast<std::size_t>(s.x + c)], r.number,
-                              std::string(1, "xyz"[c]), problems);
+    const auto x = parse_real(f[static_cast<std::size_t>(s.x) + static_cast<std::size_t>(c)],
+                              r.number, std::string(1, "xyz"[c]), problems);
     ok = ok && x;
     if (x) a.x[c] = *x;
   }

@@ -68,7 +68,7 @@ void lammps_kinds(Atoms& atoms, long long declared, Imported& out);
 /// Sorts by id, refuses duplicate ids (at their lines), and fills out.rows
 /// (types as Atom::type, or the kind's index for XYZ species) and, with
 /// `images`, out.images. False if a problem was found.
-bool to_rows(Atoms& atoms, bool images, Problems& problems, Imported& out);
+bool to_rows(Atoms& in, bool images, Problems& problems, Imported& out);
 
 /// The box [lo, hi] with its periodic axes.
 Domain orthogonal_box(const Vec3& lo, const Vec3& hi, const std::array<bool, 3>& periodic);

@@ -53,6 +53,9 @@ struct ParticleEntry {
 };
 
 // A queued force or collider: created once all particles exist.
+// Its move assignment copies a YAML::Node (yaml-cpp's has no move), which may
+// throw bad_alloc, as any copy.
+// NOLINTNEXTLINE(bugprone-exception-escape)
 struct PendingPlugin {
   const PluginRecord* record;
   Params params;

@@ -152,6 +152,7 @@ Resolved resolve(const std::vector<ParamSpec>& specs, const Params& given) {
     if (!declared) {
       r.params.set(name, value);
       std::vector<std::string> names;
+      names.reserve(specs.size());
       for (const auto& s : specs) names.push_back(s.name);
       r.problems.push_back(
           {ParamProblem::Kind::Unknown,

@@ -97,9 +97,9 @@ std::vector<BuilderSpec> more_builder_specs();
 /// The grid builder's keys (scene_specs.cpp), as builder_specs() lists them.
 std::vector<ParamSpec> grid_specs();
 
-/// Reads the `grid:` entry `node` at `path` (e.g. "particles[0].grid"): a
+/// Reads the `grid:` entry `g` at `path` (e.g. "particles[0].grid"): a
 /// rectangular sheet of particles with Provot's cloth springs.
-void read_grid(BuilderHost& host, const YAML::Node& node, const std::string& path);
+void read_grid(BuilderHost& host, const YAML::Node& g, const std::string& path);
 
 /// Reads the builder `name` (one of builder_names()) from `node`, a
 /// particles entry's value, at `path` (e.g. "particles[2].chain").

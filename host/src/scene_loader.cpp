@@ -280,7 +280,7 @@ const PluginRecord* Loader::find_plugin(const YAML::Node& item, const std::strin
                       shown(t), join(registry_.names(kind))));
     return nullptr;
   }
-  const std::string name = t.Scalar();
+  const std::string& name = t.Scalar();
   if (const PluginRecord* r = registry_.find(kind, name)) {
     registry_.require_healthy(name);
     return r;
@@ -920,7 +920,7 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
   PendingPlugin p{rec, std::move(*params), item, path, *compliance};
   const SceneContext ctx{sys.view(), &scene.groups};
   const std::string name = rec->descriptor->name;
-  const std::string label = fmt::format("{} ({})", name, file_);
+  std::string label = fmt::format("{} ({})", name, file_);
   switch (kind) {
     case PluginKind::Force: {
       auto f = create(p, [&] { return registry_.create_force(*rec, p.params, ctx); });

@@ -20,6 +20,7 @@ namespace pdyn::loading {
 
 std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs) {
   std::vector<std::string> names;
+  names.reserve(specs.size());
   for (const auto& s : specs) names.push_back(s.name);
   return names;
 }

@@ -45,6 +45,8 @@ py::tuple split_location(const std::string& location) {
 }  // namespace
 
 void bind_errors(py::module_&) {
+  // pybind11's translator type (ExceptionTranslator) takes the pointer by value.
+  // NOLINTNEXTLINE(performance-unnecessary-value-param)
   py::register_exception_translator([](std::exception_ptr p) {
     if (!p) return;
     try {

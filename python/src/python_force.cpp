@@ -7,6 +7,7 @@
 
 #include <map>
 
+#include "bindings.hpp"
 #include "convert.hpp"
 
 namespace pdyn::python {
@@ -37,6 +38,9 @@ class PythonForce final : public Force {
 
   StateDependence dependence() const override { return dependence_; }
 
+  // Acquiring the GIL throws only if Python cannot make a thread state, where
+  // terminating is all that is left.
+  // NOLINTNEXTLINE(bugprone-exception-escape)
   ~PythonForce() override {
     // The kit and a released-GIL step may destroy it on any thread.
     py::gil_scoped_acquire gil;

@@ -29,6 +29,4 @@ const PluginDescriptor& python_descriptor(py::handle cls);
 /// the class's module and name as its origin.
 void add_python_plugins(PluginRegistry& registry);
 
-void bind_python_force(py::module_& m);
-
 }  // namespace pdyn::python

@@ -251,7 +251,7 @@ class PySimulation {
   std::string add_python_force(py::object instance) {
     py::handle cls = py::type::handle_of(instance);
     const PluginDescriptor& d = python_descriptor(cls);
-    const std::string label = fmt::format("{} (add_force #{})", d.name, ++calls_);
+    std::string label = fmt::format("{} (add_force #{})", d.name, ++calls_);
     SystemAssembly(sys()).add_force(make_python_force(std::move(instance)), label);
     sim_.scene().force_traits[label] = d.force_traits;
     return label;
@@ -397,6 +397,7 @@ std::unique_ptr<PySimulation> load(const std::string& source, bool is_text, cons
                                    int threads) {
   auto registry = make_registry(plugin_path);
   std::vector<Override> overrides;
+  overrides.reserve(set.size());
   for (const auto& [path, value] : set) overrides.push_back({path, value});
   Scene scene = is_text ? load_scene_text(source, name, *registry, overrides)
                         : load_scene(source, *registry, overrides);

@@ -39,7 +39,7 @@ struct Frame {
 std::string encode_frame(const Frame& frame);
 /// The inverse, for tests and tools. Throws ProtocolError on a short or
 /// inconsistent message.
-Frame decode_frame(std::string_view bytes);
+Frame decode_frame(std::string_view in);
 
 /// A message a client sent is not a command: the text goes back to it in an
 /// `error` message.

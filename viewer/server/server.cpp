@@ -63,7 +63,7 @@ struct Hub {
   int next_id = 1;
   bool stopping = false;
 
-  void accept_websocket(tcp::socket socket, http::request<http::string_body> req);
+  void accept_websocket(tcp::socket socket, const http::request<http::string_body>& req);
   void remove(int id);
   void broadcast_text(const Bytes& text);
   void broadcast_frame(const Bytes& frame);
@@ -79,7 +79,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
  public:
   WsSession(tcp::socket socket, Hub& hub, int id) : ws_(std::move(socket)), hub_(hub), id_(id) {}
 
-  void start(http::request<http::string_body> req) {
+  void start(const http::request<http::string_body>& req) {
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(kMaxReadBytes);
     ws_.async_accept(req, [self = shared_from_this()](beast::error_code ec) {
@@ -190,13 +190,13 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
   bool writing_ = false, open_ = false, removed_ = false;
 };
 
-void Hub::accept_websocket(tcp::socket socket, http::request<http::string_body> req) {
+void Hub::accept_websocket(tcp::socket socket, const http::request<http::string_body>& req) {
   if (stopping) return;
   const int id = next_id++;
   auto ws = std::make_shared<WsSession>(std::move(socket), *this, id);
   clients[id] = ws;
   client_count = static_cast<int>(clients.size());
-  ws->start(std::move(req));
+  ws->start(req);
 }
 
 void Hub::remove(int id) {
@@ -284,7 +284,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     const std::string path = target.substr(0, target.find('?'));
     if (websocket::is_upgrade(req) && path == "/ws") {
       stream_.expires_never();
-      hub_.accept_websocket(stream_.release_socket(), std::move(req));
+      hub_.accept_websocket(stream_.release_socket(), req);
       return;
     }
     respond(handle(req, path));

@@ -255,7 +255,7 @@ Params Session::defaults_of(const PluginRecord& r, const Params& given) const {
   return std::move(resolved.params);
 }
 
-std::shared_ptr<Force> Session::make_force(const char* type, Params params,
+std::shared_ptr<Force> Session::make_force(const char* type, const Params& params,
                                            const std::string& label) {
   const PluginRecord* r = registry_->find(PluginKind::Force, type);
   if (!r) {
@@ -351,7 +351,7 @@ void Session::start_drag(const Command& c, int client) {
   p.set("ks", c.ks.value_or(ks0));
   p.set("kd", c.kd.value_or(kd0));
   const std::string label = fmt::format("mouse spring (viewer client {})", client);
-  auto force = make_force("anchor", std::move(p), label);
+  auto force = make_force("anchor", p, label);
   if (!movable_targets(*force)) {
     throw CommandError(
         "drag: the 'anchor' plugin on the plugin path cannot move its target "

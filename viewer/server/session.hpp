@@ -111,7 +111,8 @@ class Session {
   void fail(std::string message);
   void check_particle(const Command& c, const char* field, Index i) const;
   void refresh_solver();
-  std::shared_ptr<Force> make_force(const char* type, Params params, const std::string& label);
+  std::shared_ptr<Force> make_force(const char* type, const Params& params,
+                                    const std::string& label);
   Params defaults_of(const PluginRecord& r, const Params& given) const;
 
   mutable std::mutex mutex_;

@@ -34,7 +34,7 @@ class Attractor final : public pdyn::Force, public pdyn::VirialSource {
   /// From outside the system: no virial (pdyn/thermo.hpp), as LAMMPS's fixes.
   double virial(const pdyn::ParticleView&) const override { return 0.0; }
 
-  Attractor(Vec3 center, double strength, double softening, double exponent,
+  Attractor(const Vec3& center, double strength, double softening, double exponent,
             pdyn::Selection selection)
       : center_(center),
         strength_(strength),

@@ -70,6 +70,7 @@ std::vector<Column> read_columns(const pdyn::Params& p, const pdyn::Domain& doma
                                  [&](const ColumnInfo& c) { return names[k] == c.name; });
     if (it == kColumns.end()) {
       std::vector<std::string> known;
+      known.reserve(kColumns.size());
       for (const auto& c : kColumns) known.emplace_back(c.name);
       throw pdyn::ParamError("columns",
                              fmt::format("unknown column '{}' (expected one of: {})", names[k],
@@ -200,6 +201,7 @@ pdyn::PluginDescriptor describe() {
       "energy log: a row per frame of t,kinetic,potential,total (J), or the columns asked for "
       "(temperature, pressure, ...), 17 significant digits";
   std::vector<std::string> names;
+  names.reserve(kColumns.size());
   for (const auto& c : kColumns) names.emplace_back(c.name);
   pdyn::ParamSpec columns =
       pdyn::param::optional("columns", pdyn::ParamType::StringList, "",

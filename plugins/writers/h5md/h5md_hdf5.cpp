@@ -147,6 +147,7 @@ class H5md final : public pdyn::Writer {
     // gives the frames it completed.
     if (!failed_ && H5Fflush(file_, H5F_SCOPE_GLOBAL) < 0) fail("flush");
     std::vector<std::uint8_t> out;
+    out.reserve(8);
     for (int k = 0; k < 8; ++k) out.push_back(static_cast<std::uint8_t>(frames_ >> (8 * k)));
     return out;
   }

@@ -51,10 +51,11 @@ struct PDYN_HOST_API ParticleRows {
 /// Reads a particle file (columns x,y,z,mass required; vx,vy,vz together or
 /// not at all; fixed as 0/1/true/false; radius (m, >= 0) and type (a whole
 /// number >= 0) optional). `shown` is the name used in
-/// messages. Returns nothing and appends to `problems` if anything is wrong.
+/// messages. Returns nothing and appends to `out` its problems if anything
+/// is wrong.
 PDYN_HOST_API std::optional<ParticleRows> read_particles(const std::filesystem::path& file,
                                                          const std::string& shown,
-                                                         std::vector<Diagnostic>& problems);
+                                                         std::vector<Diagnostic>& out);
 
 /// Reads an index-tuple file with header i,j (K = 2), i,j,k (K = 3) or i,j,k,l (K = 4); every
 /// index must be a whole number in 0..n_particles-1 (unchecked if
@@ -62,7 +63,7 @@ PDYN_HOST_API std::optional<ParticleRows> read_particles(const std::filesystem::
 template <std::size_t K>
 PDYN_HOST_API std::optional<std::vector<std::array<Index, K>>> read_tuples(
     const std::filesystem::path& file, const std::string& shown, Index n_particles,
-    std::vector<Diagnostic>& problems);
+    std::vector<Diagnostic>& out);
 
 /// Writes particles in the format read_particles reads (17 significant
 /// digits: the round trip is exact), with radius and type columns when
