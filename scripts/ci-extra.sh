@@ -1,6 +1,5 @@
 #!/usr/bin/env bash
 # What CI runs after the README's test command (scripts/quickstart.sh test):
-# clang-tidy on the product folders (scripts/tidy.sh, .clang-tidy), then
 # the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer,
 # then a bounded libFuzzer run of the scene loader, then the Debian packages
 # built, installed, tried and removed (scripts/package_smoke.sh). Slower than the default
@@ -9,17 +8,15 @@
 #   bash scripts/ci-extra.sh     (PDYN_FUZZ_SECONDS, default 120)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-# Google Benchmark for bench/ and clang-tidy-14 for scripts/tidy.sh
-# (scripts/fuzz.sh and package.sh install what they need themselves).
+# Google Benchmark for bench/ (scripts/fuzz.sh and package.sh install what
+# they need themselves).
 source scripts/packages.sh
-install_missing libbenchmark-dev clang-tidy-14
+install_missing libbenchmark-dev
 source scripts/ccache.sh
 # The benchmarks compile (the test command leaves them out): the build for use
 # with them on, then as the test command left it.
 cmake --preset default -DPDYN_BUILD_BENCH=ON "${launcher[@]}"
 cmake --build --preset default
-# Static analysis while the compile database holds the benchmarks too.
-bash scripts/tidy.sh build
 cmake --preset default -DPDYN_BUILD_BENCH=OFF "${launcher[@]}"
 cmake --preset asan -DPDYN_BROWSER_TEST=OFF "${launcher[@]}"  # the browser test runs on the build for use
 cmake --build --preset asan
