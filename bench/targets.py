@@ -123,15 +123,17 @@ def write_markdown(path, header):
     """Replaces the generated block of `path` with `header` and the report,
     through a temporary file renamed over it."""
     with open(path, encoding="utf-8") as f:
-        page = f.read()
-    if page.count(BEGIN) != 1 or page.count(END) != 1 or page.index(BEGIN) > page.index(END):
+        lines = f.read().split("\n")
+    # The markers count as whole lines only: the page's prose names them too.
+    begins = [i for i, l in enumerate(lines) if l.strip() == BEGIN]
+    ends = [i for i, l in enumerate(lines) if l.strip() == END]
+    if len(begins) != 1 or len(ends) != 1 or begins[0] > ends[0]:
         sys.exit(f"targets.py: {path} needs one line {BEGIN} and, after it, one line {END}")
-    before, rest = page.split(BEGIN)
-    after = rest.split(END)[1]
-    body = "\n".join(header + report).strip("\n")
+    body = "\n".join(header + report).strip("\n").split("\n")
+    page = lines[:begins[0] + 1] + body + lines[ends[0]:]
     tmp = f"{path}.tmp-{os.getpid()}"
     with open(tmp, "w", encoding="utf-8") as f:
-        f.write(f"{before}{BEGIN}\n{body}\n{END}{after}")
+        f.write("\n".join(page))
     os.replace(tmp, path)
     print(f"targets.py: wrote the current results into {path}", file=sys.stderr)
 
