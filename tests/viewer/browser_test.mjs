@@ -38,8 +38,7 @@ function check(ok, what) {
   if (!ok) failures += 1;
   return ok;
 }
-// Waits of up to a minute: the test shares the machine with other tests.
-async function until(what, predicate, timeout = 60000) {
+async function until(what, predicate, timeout = 20000) {
   const end = Date.now() + timeout;
   for (;;) {
     const value = await predicate();
@@ -182,11 +181,11 @@ try {
   await page.mouse.move(to.x, to.y, { steps: 10 });
   await sleep(1500);
   await shot('2-drag.png');
-  // Held until it has come a fifth of the way, or 60 s: on a loaded machine
+  // Held until it has come a fifth of the way, or 30 s: on a loaded machine
   // the simulation gets what the browser's software rendering leaves.
   const d0 = dist(before, target);
   let d1 = d0;
-  for (const end = Date.now() + 60000; Date.now() < end && d1 >= 0.8 * d0; await sleep(500)) {
+  for (const end = Date.now() + 30000; Date.now() < end && d1 >= 0.8 * d0; await sleep(500)) {
     d1 = dist((await state()).particles[id].x, target);
   }
   await page.mouse.up();
