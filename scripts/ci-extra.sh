@@ -21,10 +21,11 @@ cmake --build --preset default
 # clang-tidy on what changed since the last whole clean run (with the
 # benchmarks in the compile database): scripts/tidy.sh, CONTRIBUTING.md.
 # A clone without that commit (a shallow one) skips it, saying so.
-if git rev-parse --verify --quiet "$(cat scripts/tidy-clean-at)^{commit}" >/dev/null; then
-  bash scripts/tidy.sh build --since "$(cat scripts/tidy-clean-at)"
+tidy_clean=$(cat scripts/tidy-clean-at)
+if git rev-parse --verify --quiet "$tidy_clean^{commit}" >/dev/null; then
+  bash scripts/tidy.sh build --since "$tidy_clean"
 else
-  echo "ci-extra: clang-tidy skipped: this clone lacks $(cat scripts/tidy-clean-at) (a shallow clone)"
+  echo "ci-extra: clang-tidy skipped: this clone lacks $tidy_clean (a shallow clone)"
 fi
 cmake --preset default -DPDYN_BUILD_BENCH=OFF "${launcher[@]}"
 cmake --preset asan -DPDYN_BROWSER_TEST=OFF "${launcher[@]}"  # the browser test runs on the build for use

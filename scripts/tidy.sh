@@ -47,6 +47,8 @@ for f in "$@"; do
 done
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 root="$PWD"
+# The product folders: the files analysed, and the headers whose findings count.
+product="kernel|host|plugins|conformance|cli|viewer|python|bench"
 jobs="${PDYN_TIDY_JOBS:-$(nproc)}"
 tidy="${CLANG_TIDY:-clang-tidy-14}"
 if [[ ! -f "$build/compile_commands.json" ]]; then
@@ -68,11 +70,7 @@ if [[ -n "$since" ]]; then
     exit 2
   fi
   while IFS= read -r f; do
-    [[ -f "$f" ]] || continue  # deleted since
-    case "$f" in
-      kernel/* | host/* | plugins/* | conformance/* | cli/* | viewer/* | python/* | bench/*) ;;
-      *) continue ;;
-    esac
+    [[ -f "$f" && "$f" =~ ^($product)/ ]] || continue  # deleted since, or no product's
     case "$f" in
       *.cpp) only+=("$root/$f") ;;
       *.hpp) headers+=("$root/$f") ;;
@@ -85,11 +83,11 @@ if [[ -n "$since" ]]; then
   fi
 fi
 
-python3 - "$build/compile_commands.json" "$root" "$out" "${#headers[@]}" "${headers[@]}" "${only[@]}" <<'EOF'
+python3 - "$build/compile_commands.json" "$root" "$out" "$product" "${#headers[@]}" "${headers[@]}" \
+  "${only[@]}" <<'EOF'
 import json, os, re, shlex, sys
-db, root, out, n = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
-headers, only = sys.argv[5:5 + n], set(sys.argv[5 + n:])
-product = ("kernel", "host", "plugins", "conformance", "cli", "viewer", "python", "bench")
+db, root, out, product, n = sys.argv[1:4] + [sys.argv[4].split("|"), int(sys.argv[5])]
+headers, only = sys.argv[6:6 + n], set(sys.argv[6 + n:])
 entries, seen = [], set()
 for e in json.load(open(db)):
     args = e["arguments"] if "arguments" in e else shlex.split(e["command"])
@@ -138,6 +136,8 @@ if headers:
                 break
         else:
             print(f"tidy.sh: no source includes {os.path.relpath(h, root)}: not analysed")
+for src in sorted(only - {x["file"] for x in entries}):
+    print(f"tidy.sh: {os.path.relpath(src, root)} is not compiled in this build: not analysed")
 entries.sort(key=lambda x: x["file"])
 json.dump(entries, open(os.path.join(out, "compile_commands.json"), "w"), indent=1)
 with open(os.path.join(out, "files.txt"), "w") as f:
@@ -148,7 +148,7 @@ files=$(wc -l <"$out/files.txt")
 # Each file's output to its own log; clang-tidy exits non-zero on a finding
 # (WarningsAsErrors) or when it cannot parse the file.
 export tidy out
-header_filter="^$root/(kernel|host|plugins|conformance|cli|viewer|python|bench)/"
+header_filter="^$root/($product)/"
 export header_filter
 xargs -a "$out/files.txt" -P "$jobs" -I{} bash -c \
   'f="$1"; log="$out/logs/$(echo "${f#/}" | tr / _).log"
