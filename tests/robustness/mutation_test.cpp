@@ -1,8 +1,14 @@
 // Mutation test: thousands of scenes made by mutating configs/ (deleted and
 // duplicated lines, swapped types, huge, tiny, negative and non-finite
-// numbers, deep nesting, unicode and invalid UTF-8, truncation) are run by
-// the real `pdyn` binary in a child process. Each must exit 0, 2, 3 or 4:
-// never a signal, never a hang, never an unclassified failure.
+// numbers, deep nesting, unicode and invalid UTF-8, truncation) are run, each
+// in its own folder and its own child process, by `pdyn run` for 3 steps.
+// Each must exit 0, 2, 3 or 4: never a signal, never a hang, never an
+// unclassified failure.
+//
+// The children are forked by pdyn_mutation_runner (mutation_runner.cpp) once
+// it has opened the plugins, so that each mutant costs its run and not a
+// program start; every 25th mutant is run again by the real `pdyn` program,
+// which must end the same way.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -10,6 +16,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <random>
@@ -121,13 +128,13 @@ std::string mutate(std::vector<std::string> lines, std::mt19937& rng) {
   return out;
 }
 
-// Runs `pdyn ARGS` as a child process; returns its wait status, or -1 if it
-// had to be killed after `timeout`.
-int run_child(const std::vector<std::string>& args, const fs::path& cwd,
+// Runs `PROGRAM ARGS` as a child process in `cwd`; returns its wait status,
+// or -1 if it had to be killed after `timeout`.
+int run_child(const char* program, const std::vector<std::string>& args, const fs::path& cwd,
               std::chrono::seconds timeout) {
   std::vector<char*> argv;
   std::vector<std::string> storage = args;
-  storage.insert(storage.begin(), PDYN_BIN);
+  storage.insert(storage.begin(), program);
   for (auto& s : storage) argv.push_back(s.data());
   argv.push_back(nullptr);
   posix_spawn_file_actions_t actions;
@@ -137,7 +144,7 @@ int run_child(const std::vector<std::string>& args, const fs::path& cwd,
   const fs::path old = fs::current_path();
   fs::current_path(cwd);
   pid_t pid = 0;
-  const int rc = posix_spawn(&pid, PDYN_BIN, &actions, nullptr, argv.data(), environ);
+  const int rc = posix_spawn(&pid, program, &actions, nullptr, argv.data(), environ);
   fs::current_path(old);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) return -2;
@@ -154,6 +161,13 @@ int run_child(const std::vector<std::string>& args, const fs::path& cwd,
   return status;
 }
 
+// "exit 2" or "signal 11" for a wait status.
+std::string outcome(int status) {
+  if (status == -1) return "hang (killed after 60 s)";
+  if (WIFSIGNALED(status)) return "signal " + std::to_string(WTERMSIG(status));
+  return "exit " + std::to_string(WEXITSTATUS(status));
+}
+
 TEST(Mutation, MutatedConfigsNeverCrashOrHang) {
   const char* env = std::getenv("PDYN_MUTATIONS");
   const int count = env ? std::atoi(env) : 2000;
@@ -162,23 +176,51 @@ TEST(Mutation, MutatedConfigsNeverCrashOrHang) {
     if (e.path().extension() == ".yaml") sources.push_back(read_lines(e.path()));
   }
   ASSERT_FALSE(sources.empty());
+  std::sort(sources.begin(), sources.end());  // the same mutants whatever the folder's order
   const fs::path dir = test::temp_dir("mutation");
   std::mt19937 rng(20261122);
+  std::vector<std::string> texts;
+  std::string list;
+  for (int n = 0; n < count; ++n) {
+    texts.push_back(mutate(sources[static_cast<std::size_t>(n) % sources.size()], rng));
+    const fs::path folder = dir / std::to_string(n);
+    test::write_file(folder / "mutant.yaml", texts.back());
+    list += folder.string() + "\n";
+  }
+  test::write_file(dir / "list.txt", list);
+  const int runner = run_child(PDYN_MUTATION_RUNNER,
+                               {(dir / "list.txt").string(), (dir / "results.txt").string(), "60"},
+                               dir, std::chrono::seconds(3600));
+  ASSERT_TRUE(WIFEXITED(runner) && WEXITSTATUS(runner) == 0)
+      << "pdyn_mutation_runner failed: " << outcome(runner);
+  std::vector<int> statuses;
+  for (const auto& line : test::split_lines(test::read_bytes(dir / "results.txt"))) {
+    statuses.push_back(std::stoi(line));
+  }
+  ASSERT_EQ(statuses.size(), texts.size());
+
   std::map<int, int> outcomes;
   for (int n = 0; n < count; ++n) {
-    const std::string text = mutate(sources[static_cast<std::size_t>(n) % sources.size()], rng);
-    const fs::path scene = test::write_file(dir / "mutant.yaml", text);
-    const int status = run_child({"run", scene.string(), "--steps", "3", "--quiet"}, dir,
-                                 std::chrono::seconds(60));
-    ASSERT_NE(status, -1) << "hang (killed after 60 s) on mutant " << n << ":\n" << text;
-    ASSERT_NE(status, -2) << "could not start " << PDYN_BIN;
-    ASSERT_TRUE(WIFEXITED(status)) << "signal " << WTERMSIG(status) << " on mutant " << n << ":\n"
-                                   << text;
+    const int status = statuses[static_cast<std::size_t>(n)];
+    const std::string& text = texts[static_cast<std::size_t>(n)];
+    ASSERT_TRUE(WIFEXITED(status)) << outcome(status) << " on mutant " << n << ":\n" << text;
     const int code = WEXITSTATUS(status);
     ASSERT_TRUE(code == 0 || code == 2 || code == 3 || code == 4)
         << "exit " << code << " on mutant " << n << ":\n"
         << text;
     ++outcomes[code];
+  }
+  // The program itself, on every 25th mutant in a fresh folder of its own,
+  // ends as the forked child did.
+  for (int n = 0; n < count; n += 25) {
+    const fs::path folder = dir / (std::to_string(n) + "-program");
+    test::write_file(folder / "mutant.yaml", texts[static_cast<std::size_t>(n)]);
+    const int status = run_child(PDYN_BIN, {"run", "mutant.yaml", "--steps", "3", "--quiet"},
+                                 folder, std::chrono::seconds(60));
+    ASSERT_NE(status, -2) << "could not start " << PDYN_BIN;
+    EXPECT_EQ(outcome(status), outcome(statuses[static_cast<std::size_t>(n)]))
+        << "the pdyn program and the forked run disagree on mutant " << n << ":\n"
+        << texts[static_cast<std::size_t>(n)];
   }
   std::cout << "mutation test: " << count << " mutants; exit 0: " << outcomes[0]
             << ", exit 2: " << outcomes[2] << ", exit 3: " << outcomes[3]
