@@ -93,6 +93,9 @@ BASE_SCENE = {
 SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "constraints",
                   "checkpoint", "velocities"}
 
+# The fewest C++ blocks of one prelude worth precompiling it for (prelude_header).
+PCH_MIN_BLOCKS = 4
+
 CPP_PRELUDE = ["<pdyn/plugin.hpp>", "<pdyn/contact.hpp>", "<pdyn/targets.hpp>",
                "<pdyn/shape.hpp>", "<pdyn/pair.hpp>", "<pdyn/conformance.hpp>", "<cmath>"]
 
@@ -127,6 +130,7 @@ class Checker:
         self._kinds = None
         self._cmake_commands = None
         self._prelude_pch = {}    # with GoogleTest or not -> the prelude header, or None
+        self._cpp_blocks = {}     # with GoogleTest or not -> how many C++ blocks will compile
         # The shipped plugins only, as in schema.scenes: not a user's PDYN_PLUGIN_PATH.
         self.env = dict(os.environ)
         self.env.pop("PDYN_PLUGIN_PATH", None)
@@ -274,9 +278,13 @@ class Checker:
     def prelude_header(self, gtest):
         """The prelude every block is compiled after, as a header precompiled
         once (GCC's .gch beside it): parsing the SDK, Eigen and GoogleTest is
-        most of a block's compile time, and there are about a hundred
-        compiles. None if the compiler cannot make one (blocks then compile
-        without it, as before)."""
+        most of a block's compile time. None if the compiler cannot make
+        one, or if fewer than PCH_MIN_BLOCKS blocks will compile after it:
+        GCC takes about three times as long to write the header (150 MB) as
+        to parse it once, so a header for one or two blocks costs more than
+        it saves. Blocks then compile without it, the same way."""
+        if self._cpp_blocks.get(gtest, 0) < PCH_MIN_BLOCKS:
+            return None
         if gtest not in self._prelude_pch:
             d = os.path.join(self.tmp, "prelude-gtest" if gtest else "prelude")
             os.makedirs(d, exist_ok=True)
@@ -308,7 +316,7 @@ class Checker:
 
     def check_cpp(self, block):
         lines = block.text.split("\n")
-        gtest = bool(re.search(r"\b(EXPECT_|ASSERT_|TEST(_F)?\s*\()", block.text))
+        gtest = uses_gtest(block.text)
         prelude = cpp_prelude(gtest)
         # `#line` makes the compiler say the doc's file and line.
         here = f'#line {block.line + 1} "{block.path}"'
@@ -686,11 +694,15 @@ class Checker:
             self.fail(block, f"{block.lang}: timed out: {' '.join(map(str, e.cmd))}")
 
     def run(self, docs):
-        for doc in docs:
-            for block in read_blocks(doc, self.src):
-                self.check(block)
-                if block.side_file:
-                    self.side_files.setdefault(block.path, {})[block.side_file] = block.text
+        blocks = [block for doc in docs for block in read_blocks(doc, self.src)]
+        for block in blocks:
+            if block.lang == "cpp" and block.not_checked is None:
+                gtest = uses_gtest(block.text)
+                self._cpp_blocks[gtest] = self._cpp_blocks.get(gtest, 0) + 1
+        for block in blocks:
+            self.check(block)
+            if block.side_file:
+                self.side_files.setdefault(block.path, {})[block.side_file] = block.text
         for b in self.not_checked:
             print(f"{b.path}:{b.line}: not checked ({b.lang}): {b.not_checked}")
         if len(self.not_checked) > MAX_NOT_CHECKED:
@@ -924,6 +936,11 @@ def same_range(doc, declared):
 
 def first_line(text):
     return next((l.strip() for l in text.splitlines() if l.strip()), "")
+
+
+def uses_gtest(text):
+    """Whether a C++ block asserts or defines a TEST (GoogleTest's prelude)."""
+    return bool(re.search(r"\b(EXPECT_|ASSERT_|TEST(_F)?\s*\()", text))
 
 
 def cpp_prelude(gtest):
