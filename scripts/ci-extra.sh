@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # What CI runs after the README's test command (scripts/quickstart.sh test):
 # the benchmarks' build, clang-tidy on the sources changed since its last
-# whole clean run, the whole suite built with AddressSanitizer + UndefinedBehaviorSanitizer,
-# then a bounded libFuzzer run of the scene loader, then the Debian packages
-# built, installed, tried and removed (scripts/package_smoke.sh). Slower than the default
-# suite, so users get a fast answer from the quick start and CI stays complete.
+# whole clean run, the whole suite built with AddressSanitizer +
+# UndefinedBehaviorSanitizer, then a bounded libFuzzer run of the scene
+# loader, then the Debian packages built, installed, tried and removed
+# (scripts/package_smoke.sh). Slower than the default suite, so users get a
+# fast answer from the quick start and CI stays complete.
 #
 #   bash scripts/ci-extra.sh     (PDYN_FUZZ_SECONDS, default 120)
 set -euo pipefail

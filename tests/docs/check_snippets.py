@@ -53,6 +53,7 @@ from it.
 """
 
 import argparse
+import collections
 import copy
 import glob
 import json
@@ -130,7 +131,7 @@ class Checker:
         self._kinds = None
         self._cmake_commands = None
         self._prelude_pch = {}    # with GoogleTest or not -> the prelude header, or None
-        self._cpp_blocks = {}     # with GoogleTest or not -> how many C++ blocks will compile
+        self._cpp_blocks = collections.Counter()  # with GoogleTest or not -> C++ blocks to compile
         # The shipped plugins only, as in schema.scenes: not a user's PDYN_PLUGIN_PATH.
         self.env = dict(os.environ)
         self.env.pop("PDYN_PLUGIN_PATH", None)
@@ -283,7 +284,7 @@ class Checker:
         GCC takes about three times as long to write the header (150 MB) as
         to parse it once, so a header for one or two blocks costs more than
         it saves. Blocks then compile without it, the same way."""
-        if self._cpp_blocks.get(gtest, 0) < PCH_MIN_BLOCKS:
+        if self._cpp_blocks[gtest] < PCH_MIN_BLOCKS:
             return None
         if gtest not in self._prelude_pch:
             d = os.path.join(self.tmp, "prelude-gtest" if gtest else "prelude")
@@ -695,10 +696,8 @@ class Checker:
 
     def run(self, docs):
         blocks = [block for doc in docs for block in read_blocks(doc, self.src)]
-        for block in blocks:
-            if block.lang == "cpp" and block.not_checked is None:
-                gtest = uses_gtest(block.text)
-                self._cpp_blocks[gtest] = self._cpp_blocks.get(gtest, 0) + 1
+        self._cpp_blocks.update(uses_gtest(block.text) for block in blocks
+                                if block.lang == "cpp" and block.not_checked is None)
         for block in blocks:
             self.check(block)
             if block.side_file:

@@ -128,10 +128,14 @@ std::string mutate(std::vector<std::string> lines, std::mt19937& rng) {
   return out;
 }
 
-// Runs `PROGRAM ARGS` as a child process in `cwd`; returns its wait status,
-// or -1 if it had to be killed after `timeout`.
+// A mutant's run is a hang after this long.
+constexpr int kTimeoutSeconds = 60;
+
+// Runs `PROGRAM ARGS` as a child process in `cwd`, its standard output on
+// /dev/null and its standard error to `log`; returns its wait status, or -1
+// if it had to be killed after `timeout`.
 int run_child(const char* program, const std::vector<std::string>& args, const fs::path& cwd,
-              std::chrono::seconds timeout) {
+              std::chrono::seconds timeout, const fs::path& log = "/dev/null") {
   std::vector<char*> argv;
   std::vector<std::string> storage = args;
   storage.insert(storage.begin(), program);
@@ -140,7 +144,7 @@ int run_child(const char* program, const std::vector<std::string>& args, const f
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   const fs::path old = fs::current_path();
   fs::current_path(cwd);
   pid_t pid = 0;
@@ -163,7 +167,7 @@ int run_child(const char* program, const std::vector<std::string>& args, const f
 
 // "exit 2" or "signal 11" for a wait status.
 std::string outcome(int status) {
-  if (status == -1) return "hang (killed after 60 s)";
+  if (status == -1) return "hang (killed after " + std::to_string(kTimeoutSeconds) + " s)";
   if (WIFSIGNALED(status)) return "signal " + std::to_string(WTERMSIG(status));
   return "exit " + std::to_string(WEXITSTATUS(status));
 }
@@ -189,10 +193,12 @@ TEST(Mutation, MutatedConfigsNeverCrashOrHang) {
   }
   test::write_file(dir / "list.txt", list);
   const int runner = run_child(PDYN_MUTATION_RUNNER,
-                               {(dir / "list.txt").string(), (dir / "results.txt").string(), "60"},
-                               dir, std::chrono::seconds(3600));
+                               {(dir / "list.txt").string(), (dir / "results.txt").string(),
+                                std::to_string(kTimeoutSeconds)},
+                               dir, std::chrono::seconds(3600), dir / "runner.log");
   ASSERT_TRUE(WIFEXITED(runner) && WEXITSTATUS(runner) == 0)
-      << "pdyn_mutation_runner failed: " << outcome(runner);
+      << "pdyn_mutation_runner failed: " << outcome(runner) << "\n"
+      << test::read_bytes(dir / "runner.log");
   std::vector<int> statuses;
   for (const auto& line : test::split_lines(test::read_bytes(dir / "results.txt"))) {
     statuses.push_back(std::stoi(line));
@@ -216,7 +222,7 @@ TEST(Mutation, MutatedConfigsNeverCrashOrHang) {
     const fs::path folder = dir / (std::to_string(n) + "-program");
     test::write_file(folder / "mutant.yaml", texts[static_cast<std::size_t>(n)]);
     const int status = run_child(PDYN_BIN, {"run", "mutant.yaml", "--steps", "3", "--quiet"},
-                                 folder, std::chrono::seconds(60));
+                                 folder, std::chrono::seconds(kTimeoutSeconds));
     ASSERT_NE(status, -2) << "could not start " << PDYN_BIN;
     EXPECT_EQ(outcome(status), outcome(statuses[static_cast<std::size_t>(n)]))
         << "the pdyn program and the forked run disagree on mutant " << n << ":\n"
