@@ -68,6 +68,20 @@ struct Imported {
     std::size_t line = 0;  ///< its title's line
   };
   std::vector<Unread> unread;
+  /// A data file's Bonds, Angles, Dihedrals and Impropers (issue 44): each
+  /// term's particles as indices into `rows` (id order) and its LAMMPS type
+  /// (1..types). A scene's bonded force or constraint takes one section as
+  /// its term list (`pairs: { file: polymer.data }`).
+  struct Terms {
+    std::string section;   ///< "Bonds", "Angles", "Dihedrals" or "Impropers"
+    int arity = 2;         ///< particles per term: 2, 3, 4, 4
+    long long types = 0;   ///< the header's "N bond types" (0 if it has none)
+    std::size_t line = 0;  ///< the section title's line
+    std::vector<std::array<std::size_t, 4>> particles;  ///< the first `arity` used
+    std::vector<long long> type;                        ///< per term, 1..types
+    std::vector<std::size_t> lines;                     ///< per term, its row's line
+  };
+  std::vector<Terms> topology;
 };
 
 /// The outcome of reading a file: its particles, or nothing (the problems

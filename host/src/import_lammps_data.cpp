@@ -2,13 +2,17 @@
 // ("Format of a data file"): a title line; a header of counts ("256 atoms",
 // "2 atom types", ...) and box bounds ("0 6.7 xlo xhi"); then sections, each
 // a title line (which may carry a comment, "Atoms # full"), a blank line
-// and as many rows as the header's count for it says. Only Atoms, Masses
-// and Velocities are read; the other sections (Bonds, Pair Coeffs, ...) are
-// skipped by their counts, and those that hold particles' topology or shape
-// (kUnread) are listed in Imported::unread for the loader to warn about.
+// and as many rows as the header's count for it says. Atoms, Masses and
+// Velocities are read, and the topology (Bonds, Angles, Dihedrals,
+// Impropers) into Imported::topology with atom ids turned into particle
+// indices; the other sections (Pair Coeffs, ...) are skipped by their
+// counts, and those that hold particles' topology or shape (kUnread) are
+// listed in Imported::unread for the loader to warn about unless a force
+// or constraint of the scene takes them.
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstring>
 #include <map>
 #include <numbers>
 
@@ -114,6 +118,14 @@ struct DataFile {
   std::map<long long, double> type_mass;
   std::map<long long, std::pair<Vec3, std::size_t>> velocity;  // id -> v, line
   std::vector<Imported::Unread> unread;
+  // Topology rows as written: atom ids (and their columns), turned into
+  // particle indices once every atom is read.
+  struct TermRows {
+    Imported::Terms terms;
+    std::vector<std::array<long long, 4>> ids;
+    std::vector<std::array<std::size_t, 4>> columns;
+  };
+  std::vector<TermRows> topology;
 
   long long count(const std::string& key) const {
     if (key == "atom type pairs") {
@@ -340,6 +352,105 @@ std::vector<const Line*> section_rows(const std::vector<Line>& lines, std::size_
   return rows;
 }
 
+// The topology sections: their title, the particles per term and the
+// header count of their types.
+struct TopologySection {
+  const char* title;
+  int arity;
+  const char* count;  // the header's count of rows
+  const char* types;  // the header's count of types
+};
+constexpr TopologySection kTopology[] = {{"Bonds", 2, "bonds", "bond types"},
+                                         {"Angles", 3, "angles", "angle types"},
+                                         {"Dihedrals", 4, "dihedrals", "dihedral types"},
+                                         {"Impropers", 4, "impropers", "improper types"}};
+
+// A Bonds, Angles, Dihedrals or Impropers section: rows "id type atom1 ...
+// atomN", the type within the header's count (read_data's "Bonds section").
+void read_terms(const TopologySection& sec, const Line& title, const std::vector<const Line*>& rows,
+                DataFile& d, Problems& problems) {
+  DataFile::TermRows t;
+  t.terms.section = sec.title;
+  t.terms.arity = sec.arity;
+  t.terms.types = std::max(0LL, d.count(sec.types));
+  t.terms.line = title.number;
+  const std::string singular(sec.types, std::strlen(sec.types) - 1);  // "bond type"
+  if (d.count(sec.count) < 0) return;  // section_rows said so: one problem is enough
+  if (t.terms.types == 0 && !rows.empty()) {
+    problems.add(title.number, 1,
+                 fmt::format("the header has no 'N {}' line (expected one before the {} section)",
+                             sec.types, sec.title));
+    return;
+  }
+  for (const Line* r : rows) {
+    const auto& f = r->fields;
+    if (f.size() != static_cast<std::size_t>(2 + sec.arity)) {
+      problems.add(r->number, 1,
+                   fmt::format("the row has {} (expected {} in {}: id, type and {} atom ids)",
+                               count_of(static_cast<long long>(f.size()), "field"), 2 + sec.arity,
+                               sec.title, sec.arity));
+      continue;
+    }
+    const auto type = parse_whole(f[1], r->number, singular, problems, 1);
+    if (type && *type > t.terms.types) {
+      problems.add(r->number, f[1].column,
+                   fmt::format("{} {} is above the header's {} (expected 1..{})", singular, *type,
+                               count_of(t.terms.types, singular), t.terms.types));
+    }
+    std::array<long long, 4> ids{};
+    std::array<std::size_t, 4> columns{};
+    bool ok = type && *type <= t.terms.types;
+    for (int a = 0; a < sec.arity; ++a) {
+      const auto id = parse_whole(f[2 + a], r->number, "atom id", problems, 1);
+      ok = ok && id;
+      ids[a] = id.value_or(0);
+      columns[a] = f[2 + a].column;
+    }
+    if (!ok) continue;
+    t.terms.type.push_back(*type);
+    t.terms.lines.push_back(r->number);
+    t.ids.push_back(ids);
+    t.columns.push_back(columns);
+  }
+  d.topology.push_back(std::move(t));
+}
+
+// The topology's atom ids as particle indices (the atoms in id order): an
+// id that Atoms does not have, or one named twice by a term, is refused
+// where it is written.
+void index_topology(DataFile& d, Imported& out, Problems& problems) {
+  std::vector<long long> ids;
+  ids.reserve(d.atoms.atoms.size());
+  for (const Atom& a : d.atoms.atoms) ids.push_back(a.id);
+  std::sort(ids.begin(), ids.end());
+  for (auto& t : d.topology) {
+    Imported::Terms& terms = t.terms;
+    terms.particles.resize(t.ids.size());
+    for (std::size_t s = 0; s < t.ids.size(); ++s) {
+      for (int a = 0; a < terms.arity; ++a) {
+        const long long id = t.ids[s][a];
+        const auto at = std::lower_bound(ids.begin(), ids.end(), id);
+        if (at == ids.end() || *at != id) {
+          problems.add(terms.lines[s], t.columns[s][a],
+                       fmt::format("{} names atom {}, which Atoms does not have (expected the ids "
+                                   "of Atoms)",
+                                   terms.section, id));
+        }
+        for (int b = 0; b < a; ++b) {
+          if (t.ids[s][b] == id) {
+            problems.add(terms.lines[s], t.columns[s][a],
+                         fmt::format("{} names atom {} twice in one term (expected {} distinct "
+                                     "atoms)",
+                                     terms.section, id, terms.arity));
+          }
+        }
+        terms.particles[s][a] = static_cast<std::size_t>(at - ids.begin());
+      }
+    }
+    out.topology.push_back(std::move(terms));
+  }
+}
+
 // Masses and velocities onto the atoms, once every section is read.
 void complete(DataFile& d, Imported& out, Problems& problems) {
   const bool sphere = d.style && d.style->diameter >= 0;
@@ -395,6 +506,9 @@ ReadResult read_lammps_data(const std::string& text, Problems& problems) {
     if (name == "Atoms") read_atoms(title, rows, d, problems);
     if (name == "Masses") read_masses(rows, d, problems);
     if (name == "Velocities") read_velocities(rows, d, problems);
+    for (const auto& sec : kTopology) {
+      if (name == sec.title) read_terms(sec, title, rows, d, problems);
+    }
   }
   if (!d.have_atoms && d.count("atoms") > 0) {
     problems.add(d.atoms_line, 1,
@@ -405,6 +519,7 @@ ReadResult read_lammps_data(const std::string& text, Problems& problems) {
   Imported out;
   out.unread = std::move(d.unread);
   complete(d, out, problems);
+  index_topology(d, out, problems);
   // read_data's boundary is the input script's; its default is periodic.
   out.box = orthogonal_box(d.lo, d.hi, {true, true, true});
   lammps_kinds(d.atoms, std::max(0LL, d.count("atom types")), out);

@@ -108,6 +108,18 @@ class Loader final : public BuilderHost {
   std::optional<std::vector<std::array<Index, K>>> read_tuples(const YAML::Node& n,
                                                                const std::string& path,
                                                                Index n_particles);
+  /// `pairs: { file: polymer.data }` (triples, quads): a section of a data
+  /// file the scene's particles came from (scene_topology.cpp).
+  template <std::size_t K>
+  std::optional<std::vector<std::array<Index, K>>> read_data_terms(const YAML::Node& n,
+                                                                   const std::string& path);
+  /// After read_params read a term list from a data file: its types as the
+  /// plugin's `types`, or the reason they cannot be.
+  void apply_data_types(const YAML::Node& map, const std::string& path,
+                        const std::vector<ParamSpec>& specs, Params& given);
+  /// Warns about each data file's topology section that no force or
+  /// constraint took.
+  void warn_unused_topology();
   /// Reads the keys of `map` described by `specs`; `extra` keys are allowed
   /// and left to the caller. Index-typed values are checked against
   /// n_particles when it is >= 0.
@@ -170,13 +182,15 @@ class Loader final : public BuilderHost {
   void read_velocities(const YAML::Node& n);  // scene_velocities.cpp
   void apply_velocities(Matrix3X& v, const Eigen::VectorXd& m);
   // ---- particles and boxes from files (scene_files.cpp) ----
+  fs::path scene_relative(const std::string& name) const;
   std::optional<fs::path> side_file(const YAML::Node& map, const std::string& path,
                                     const char* expected,
                                     const std::vector<std::string>& keys = {"file"});
   void read_particle_file(const YAML::Node& item, const std::string& path);
   /// A file's format (`format`, or its extension) and its contents (frame
   /// `frame`); `for_box`: the keys of simulation.box's, else a particle entry's.
-  void warn_unread(const std::filesystem::path& file, const import_files::Imported& in);
+  void warn_unread(const std::string& file,
+                   const std::vector<import_files::Imported::Unread>& unread);
   std::optional<import_files::Imported> import_file(const YAML::Node& map, const std::string& path,
                                                     bool for_box);
   std::optional<import_files::Format> file_format(const YAML::Node& map, const std::string& path);
@@ -237,6 +251,24 @@ class Loader final : public BuilderHost {
   std::vector<PendingPlugin> builder_forces_;       // springs made by builders
   std::vector<PendingPlugin> builder_constraints_;  // rods made by builders
   bool particles_ok_ = true;
+  // Each particle file's topology (LAMMPS data files), by the file's
+  // normal path, with the scene index of its first particle.
+  struct DataTopology {
+    Index first = 0;
+    int entries = 0;    // particle entries reading the file (terms need it once)
+    std::string shown;  // the file as messages name it
+    std::vector<import_files::Imported::Terms> sections;
+    std::vector<import_files::Imported::Unread> unread;
+    std::vector<std::string> used;  // sections some term list took
+  };
+  std::map<std::string, DataTopology> topology_;
+  // The types of the term list read_data_terms just read (LAMMPS's 1..T),
+  // for read_params to give the plugin as `types` (0..T-1).
+  struct DataTypes {
+    std::string key, section, file;
+    std::vector<long long> type;
+  };
+  std::optional<DataTypes> data_types_;
   std::vector<NamedPath> read_files_;  // side files: no output may overwrite them
   // What a file read for simulation.box gave, kept for a particle entry of
   // the same file, frame and format: read once, its problems said once.

@@ -54,6 +54,12 @@ std::vector<bool> used_kinds(const import_files::Imported& in) {
 
 }  // namespace
 
+// A file name as written in the scene: relative to the scene's folder.
+fs::path Loader::scene_relative(const std::string& name) const {
+  const fs::path p(name);
+  return p.is_absolute() ? p : fs::path(file_).parent_path() / p;
+}
+
 // The `file` of a side-file mapping, relative to the scene's folder.
 std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::string& path,
                                           const char* expected,
@@ -67,8 +73,7 @@ std::optional<fs::path> Loader::side_file(const YAML::Node& map, const std::stri
           fmt::format("{}.file: is not a file name (expected {})", path, expected));
     return std::nullopt;
   }
-  const fs::path name(f.Scalar());
-  fs::path file = name.is_absolute() ? name : fs::path(file_).parent_path() / name;
+  fs::path file = scene_relative(f.Scalar());
   read_files_.push_back({path + ".file", where(f, path + ".file"), file});
   return file;
 }
@@ -140,7 +145,6 @@ std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
                       "from the end: the file has {})",
                       path, *frame, file->filename().string(), n - 1, n, count_of(n, "frame")));
   }
-  if (r.imported && !r.imported->unread.empty() && !for_box) warn_unread(*file, *r.imported);
   if (for_box) {
     std::optional<import_files::Imported> only_box;
     if (r.imported) only_box.emplace().box = r.imported->box;
@@ -150,19 +154,28 @@ std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
   return std::move(r.imported);
 }
 
-// A data file's topology (Bonds, Angles, ...) that pdyn does not read yet:
-// one line naming every such section, at the first one's title.
-void Loader::warn_unread(const std::filesystem::path& file, const import_files::Imported& in) {
+// A data file's topology (Bonds, Angles, ...) that no force or constraint
+// of the scene takes: one line naming every such section, at the first
+// one's title.
+void Loader::warn_unread(const std::string& file,
+                         const std::vector<import_files::Imported::Unread>& unread) {
   std::vector<std::string> parts;
-  for (const auto& u : in.unread) {
+  for (const auto& u : unread) {
     parts.push_back(fmt::format("{} ({})", u.section, count_of(u.rows, "row")));
   }
+  const bool terms = std::all_of(unread.begin(), unread.end(), [](const auto& u) {
+    return u.section == "Bonds" || u.section == "Angles" || u.section == "Dihedrals" ||
+           u.section == "Impropers";
+  });
   warnings_.push_back(fmt::format(
-      "{}:{}:1: {} {} not read: pdyn takes only a data file's atoms, masses and velocities, so "
-      "these particles run without those terms (give the scene the forces or constraints they "
-      "stand for)",
-      file.string(), in.unread.front().line, fmt::join(parts, ", "),
-      parts.size() == 1 ? "is" : "are"));
+      "{}:{}:1: {} {} not read: {}, so these particles run without those terms (give the scene "
+      "the forces or constraints they stand for{})",
+      file, unread.front().line, fmt::join(parts, ", "), parts.size() == 1 ? "is" : "are",
+      terms ? "no force or constraint of the scene takes them"
+            : "pdyn takes a data file's atoms, masses, velocities and topology only",
+      terms ? fmt::format(", e.g. pairs: {{ file: {} }} for the Bonds",
+                          fs::path(file).filename().string())
+            : ""));
 }
 
 // `mass` for every particle, or `masses` per kind (LAMMPS type, XYZ
@@ -380,6 +393,15 @@ void Loader::read_particle_file(const YAML::Node& item, const std::string& path)
   if (!imported->images.empty()) {
     images_.resize(first, {0, 0, 0});
     images_.insert(images_.end(), imported->images.begin(), imported->images.end());
+  }
+  if (!imported->topology.empty() || !imported->unread.empty()) {
+    const fs::path file = scene_relative(item["file"].Scalar());
+    DataTopology& t = topology_[file.lexically_normal().string()];
+    ++t.entries;
+    t.first = static_cast<Index>(first);
+    t.shown = file.string();
+    t.sections = std::move(imported->topology);
+    t.unread = std::move(imported->unread);
   }
 }
 

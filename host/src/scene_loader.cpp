@@ -838,6 +838,7 @@ Scene Loader::load(const std::string& text) {
   read_plugin_list(root["constraints"], "constraints", PluginKind::Constraint, constraints);
   read_solver(root, solvers);
   read_output(root["output"], root["checkpoint"], scene);
+  warn_unused_topology();
   if (!diags_.empty()) fail();
 
   // Assemble. Everything is valid as far as the descriptors can tell; the

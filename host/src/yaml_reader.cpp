@@ -297,7 +297,13 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML:
   const char* expected = K == 2   ? "a list of particle index pairs [[i, j], ...]"
                          : K == 3 ? "a list of particle index triples [[i, j, k], ...]"
                                   : "a list of particle index quadruples [[i, j, k, l], ...]";
-  if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file
+  if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file, or a data file's section
+    const YAML::Node format = n["format"], name = n["file"];
+    const bool data = format.IsDefined() ? format.IsScalar() && format.Scalar() == "lammps_data"
+                                         : name.IsDefined() && name.IsScalar() &&
+                                               import_files::format_of_extension(name.Scalar()) ==
+                                                   import_files::Format::LammpsData;
+    if (data) return read_data_terms<K>(n, path);
     const auto file = side_file(n, path,
                                 K == 2   ? "{ file: pairs.csv } with header i,j"
                                 : K == 3 ? "{ file: triples.csv } with header i,j,k"
@@ -507,6 +513,7 @@ std::optional<Params> Loader::read_params(const YAML::Node& map, const std::stri
   check_keys(map, path, allowed);
   Params given;  // a key set to null (`key:` or `key: ~`) is not given: its default applies
   std::set<std::string> unreadable;
+  data_types_.reset();
   for (const auto& spec : specs) {
     const YAML::Node n = map[spec.name];
     if (!n.IsDefined() || n.IsNull()) continue;
@@ -516,6 +523,7 @@ std::optional<Params> Loader::read_params(const YAML::Node& map, const std::stri
       unreadable.insert(spec.name);  // reported; not "missing" as well
     }
   }
+  if (data_types_) apply_data_types(map, path, specs, given);
   Resolved resolved = resolve(specs, given);
   for (const auto& problem : resolved.problems) {
     if (unreadable.count(problem.param)) continue;

@@ -134,9 +134,9 @@ TEST(ImportLammps, SphereStyleGivesRadiiAndMassesAsLammpsComputesThem) {
 
 // Sections pdyn does not need are skipped by their counts: a molecular
 // file (style full) with bonds, angles and coefficients loads its atoms,
-// and the topology it cannot use yet is named in one warning at the first
-// such section's title (issue 42: never a molecule run as free atoms
-// without a word); coefficient sections are not named.
+// and topology that no force of the scene takes is named in one warning at
+// the first such section's title (issue 42: never a molecule run as free
+// atoms without a word); coefficient sections are not named.
 TEST(ImportLammps, OtherSectionsAreSkippedByTheirCounts) {
   const auto file = test::write_file(test::temp_dir("import-full") / "water.data",
                                      "LAMMPS data file: one water molecule\n\n"
@@ -165,9 +165,10 @@ TEST(ImportLammps, OtherSectionsAreSkippedByTheirCounts) {
   EXPECT_EQ(s.warnings,
             std::vector<std::string>{
                 file.string() +
-                ":38:1: Bonds (2 rows), Angles (1 row) are not read: pdyn takes only a data "
-                "file's atoms, masses and velocities, so these particles run without those terms "
-                "(give the scene the forces or constraints they stand for)"});
+                ":38:1: Bonds (2 rows), Angles (1 row) are not read: no force or constraint of "
+                "the scene takes them, so these particles run without those terms (give the "
+                "scene the forces or constraints they stand for, e.g. pairs: { file: water.data "
+                "} for the Bonds)"});
   // pdyn validate and pdyn run say it too, on stderr, even with --quiet.
   for (const char* command : {"validate", "run"}) {
     const fs::path scene = test::write_file(

@@ -160,7 +160,7 @@ Bonds
 
 
 def test_unread_topology_is_a_located_warning(tmp_path):
-    """A data file's Bonds that pdyn does not read yet (issue 42): a
+    """A data file's Bonds that no force of the scene takes (issue 42): a
     SceneWarning with the command line's located message, not silence."""
     data = tmp_path / "dimer.data"
     data.write_text(DIMER_DATA)
@@ -169,9 +169,9 @@ def test_unread_topology_is_a_located_warning(tmp_path):
     with pytest.warns(pdyn.SceneWarning) as caught:
         sim = pdyn.loads(text)
     assert [str(w.message) for w in caught] == [
-        f"{data}:21:1: Bonds (1 row) is not read: pdyn takes only a data file's atoms, masses "
-        "and velocities, so these particles run without those terms (give the scene the forces "
-        "or constraints they stand for)"]
+        f"{data}:21:1: Bonds (1 row) is not read: no force or constraint of the scene takes "
+        "them, so these particles run without those terms (give the scene the forces or "
+        "constraints they stand for, e.g. pairs: { file: dimer.data } for the Bonds)"]
     assert caught[0].filename == __file__
     assert sim.n == 2
 

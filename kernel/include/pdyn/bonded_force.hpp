@@ -24,6 +24,13 @@
 // Each particle's accumulator receives the same terms in the same order
 // whatever the thread count. With particles numbered in space (a grid, a
 // rope) boundary terms are a few per cent.
+//
+// Periodic boxes (since 0.10.0). In a box periodic along some axis each
+// term is measured with every particle at its image nearest the term's
+// first particle (Domain::nearest_image), as LAMMPS computes a bond with
+// its partner's closest image: a term may cross a periodic face, and must
+// stay shorter than half the box along it. Particles away from the faces
+// are read as they are, bit for bit.
 #pragma once
 
 #include <Eigen/Core>
@@ -41,6 +48,7 @@
 #include "pdyn/bonded_law.hpp"
 #include "pdyn/bonded_params.hpp"
 #include "pdyn/bonded_reference.hpp"
+#include "pdyn/domain.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/parallel.hpp"
@@ -109,18 +117,23 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
   /// Sum of the terms' energies, J.
   std::optional<double> potential_energy(const ParticleView& p) const override {
     double u = 0.0;
-    for (Index s = 0; s < term_count(); ++s) u += law_(point(p, s), coefficients(s)).energy;
+    Images images;
+    for (Index s = 0; s < term_count(); ++s) {
+      u += law_(point(p, s, images), coefficients(s)).energy;
+    }
     return u;
   }
 
   /// Sum over the terms of sum_a (x_a - x_0) . f_a (pdyn/thermo.hpp), J:
-  /// the positions as given, as the terms measure them.
+  /// the positions as the terms measure them (nearest images in a box).
   double virial(const ParticleView& p) const override {
     double w = 0.0;
+    Images images;
     for (Index s = 0; s < term_count(); ++s) {
-      const BondedTerm<N> t = law_(point(p, s), coefficients(s));
-      const Vec3 x0 = p.x.col(terms_[s][0]);
-      for (int a = 1; a < N; ++a) w += (p.x.col(terms_[s][a]) - x0).dot(t.force[a]);
+      const BondedPoint<N> q = point(p, s, images);
+      const BondedTerm<N> t = law_(q, coefficients(s));
+      const Vec3 x0 = q.position(0);
+      for (int a = 1; a < N; ++a) w += (q.position(a) - x0).dot(t.force[a]);
     }
     return w;
   }
@@ -132,10 +145,11 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
       // The blocks (a, b) of [k -k; -k k] in the order below, as the
       // general loop would report them: the same calls, the same bits.
       Eigen::Matrix3d k, d;
+      Images images;
       for (Index s = 0; s < term_count(); ++s) {
         k.setZero();
         d.setZero();
-        if (!law_.pair_jacobian(point(p, s), coefficients(s), k, d)) continue;
+        if (!law_.pair_jacobian(point(p, s, images), coefficients(s), k, d)) continue;
         const bool damped = !d.isZero(0.0);
         const Eigen::Matrix3d minus_k = -k, minus_d = -d;
         const Index ends[2] = {terms_[s][0], terms_[s][1]};
@@ -149,10 +163,11 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
       return true;
     } else if constexpr (kHasJacobian) {
       BondedMatrix<N> dfdx, dfdv;
+      Images images;
       for (Index s = 0; s < term_count(); ++s) {
         dfdx.setZero();
         dfdv.setZero();
-        if (!law_.jacobian(point(p, s), coefficients(s), dfdx, dfdv)) continue;
+        if (!law_.jacobian(point(p, s, images), coefficients(s), dfdx, dfdv)) continue;
         const bool damped = !dfdv.isZero(0.0);
         for (int a = 0; a < N; ++a) {
           for (int b = 0; b < N; ++b) {
@@ -178,24 +193,27 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
   }
   double bonded_term_forces(const ParticleView& p, Index s,
                             std::array<Vec3, 4>& force) const override {
-    const BondedTerm<N> t = law_(point(p, s), coefficients(s));
+    Images images;
+    const BondedTerm<N> t = law_(point(p, s, images), coefficients(s));
     for (int a = 0; a < 4; ++a) force[a] = a < N ? t.force[a] : Vec3::Zero();
     return t.energy;
   }
   bool bonded_term_jacobian(const ParticleView& p, Index s, bool exact, Eigen::MatrixXd& dfdx,
                             Eigen::MatrixXd& dfdv) const override {
     BondedMatrix<N> dx = BondedMatrix<N>::Zero(), dv = BondedMatrix<N>::Zero();
+    Images images;
+    const BondedPoint<N> q = point(p, s, images);
     if (exact) {
       if constexpr (kHasExactJacobian) {
-        law_.exact_jacobian(point(p, s), coefficients(s), dx, dv);
+        law_.exact_jacobian(q, coefficients(s), dx, dv);
       } else if constexpr (kHasJacobian) {
-        law_jacobian(point(p, s), coefficients(s), dx, dv);
+        law_jacobian(q, coefficients(s), dx, dv);
       } else {
         return false;
       }
     } else {
       if constexpr (kHasJacobian) {
-        law_jacobian(point(p, s), coefficients(s), dx, dv);
+        law_jacobian(q, coefficients(s), dx, dv);
       } else {
         return false;
       }
@@ -245,13 +263,31 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
     return coefficients_[types_.empty() ? 0 : static_cast<std::size_t>(types_[s])];
   }
   double rest(Index s) const { return uniform_rest_ ? rest0_ : rest_[static_cast<std::size_t>(s)]; }
-  BondedPoint<N> point(const ParticleView& p, Index s) const {
+  // Storage for a term's positions moved to their nearest images.
+  using Images = std::array<Vec3, N>;
+
+  // Points q's positions at each particle's image nearest the term's first
+  // particle (Domain::nearest_image), stored in `images`: a term across a
+  // periodic face then measures its true extent.
+  static void to_nearest_images(const Domain& domain, BondedPoint<N>& q, Images& images) {
+    images[0] = q.position(0);
+    q.x[0] = images[0].data();
+    for (int a = 1; a < N; ++a) {
+      images[a] = domain.nearest_image(q.position(a), images[0]);
+      q.x[a] = images[a].data();
+    }
+  }
+
+  // Term s as the law sees it; in a periodic box its positions are moved
+  // into `images`, which must outlive the returned point.
+  BondedPoint<N> point(const ParticleView& p, Index s, Images& images) const {
     BondedPoint<N> q;
     for (int a = 0; a < N; ++a) {
       q.x[a] = p.x.data() + 3 * static_cast<Index>(terms_[s][a]);
       q.v[a] = p.v.data() + 3 * static_cast<Index>(terms_[s][a]);
     }
     q.rest = rest(s);
+    if (p.domain.any_periodic()) to_nearest_images(p.domain, q, images);
     return q;
   }
 
@@ -259,16 +295,21 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
   // view, every store into f could alias them, and the compiler would
   // reload the pointers and coefficients once per term (issue 17: 20%
   // slower than the hand-fused reference at 10^6 particles).
-  template <bool Uniform, bool Typed>
+  //
+  // Periodic: the box's path, one instantiation for all terms (rest values
+  // and types chosen per term at run time, positions moved to their
+  // nearest images); the open-space paths stay as fast as before.
+  template <bool Uniform, bool Typed, bool Periodic>
   struct Kernel {
     Law law;
     const double* __restrict x;  // 3 x N, column-major, stride 3
     const double* __restrict v;
     const std::array<Id, N>* __restrict terms;
-    const double* __restrict rest;          // per term, or null if Uniform
-    const std::int32_t* __restrict types;   // per term, or null if !Typed
+    const double* __restrict rest;          // per term, or null if all are rest0
+    const std::int32_t* __restrict types;   // per term, or null if all are type 0
     const Coefficients* __restrict coeffs;  // per type
     double rest0;
+    Domain domain;  // read on the Periodic path only
 
     // `c0`: type 0's coefficients, copied by the caller into a local of its
     // loop, so that the compiler keeps them in registers.
@@ -277,6 +318,12 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
       for (int a = 0; a < N; ++a) {
         q.x[a] = x + 3 * static_cast<Index>(terms[s][a]);
         q.v[a] = v + 3 * static_cast<Index>(terms[s][a]);
+      }
+      if constexpr (Periodic) {
+        Images images;
+        to_nearest_images(domain, q, images);
+        q.rest = rest ? rest[s] : rest0;
+        return law(q, types ? coeffs[types[s]] : c0);
       }
       q.rest = Uniform ? rest0 : rest[s];
       if constexpr (Typed) {
@@ -289,26 +336,31 @@ class BondedForce : public Force, public BondedReference, public VirialSource {
 
   template <class Stride>
   void accumulate(const ParticleView& p, double* f, Stride fs) const {
+    if (p.domain.any_periodic()) {
+      accumulate<false, true, true>(p, f, fs);
+      return;
+    }
     const bool typed = !types_.empty();
     if (uniform_rest_) {
-      typed ? accumulate<true, true>(p, f, fs) : accumulate<true, false>(p, f, fs);
+      typed ? accumulate<true, true, false>(p, f, fs) : accumulate<true, false, false>(p, f, fs);
     } else {
-      typed ? accumulate<false, true>(p, f, fs) : accumulate<false, false>(p, f, fs);
+      typed ? accumulate<false, true, false>(p, f, fs) : accumulate<false, false, false>(p, f, fs);
     }
   }
 
-  template <bool Uniform, bool Typed, class Stride>
+  template <bool Uniform, bool Typed, bool Periodic, class Stride>
   void accumulate(const ParticleView& p, double* f, Stride fs) const {
     const Index n_blocks = static_cast<Index>(block_start_.size()) - 1;
     const bool parallel = max_threads() > 1 && term_count() >= kParallelMinElements;
-    const Kernel<Uniform, Typed> k{law_,
-                                   p.x.data(),
-                                   p.v.data(),
-                                   terms_.data(),
-                                   Uniform ? nullptr : rest_.data(),
-                                   Typed ? types_.data() : nullptr,
-                                   coefficients_.data(),
-                                   rest0_};
+    const Kernel<Uniform, Typed, Periodic> k{law_,
+                                             p.x.data(),
+                                             p.v.data(),
+                                             terms_.data(),
+                                             uniform_rest_ ? nullptr : rest_.data(),
+                                             types_.empty() ? nullptr : types_.data(),
+                                             coefficients_.data(),
+                                             rest0_,
+                                             p.domain};
     const Index* block_start = block_start_.data();
     // Terms [begin, end) scattered straight into f, in order.
     auto direct = [&](Index begin, Index end) {

@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "pdyn/domain.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/export.hpp"
 #include "pdyn/params.hpp"
@@ -53,7 +54,8 @@ PDYN_API double bonded_coefficient(const Params& params, std::string_view key, s
 /// 4; no particle twice in one term), `types` (IntegerList, optional: one
 /// type per term, each with coefficients in `coefficient_keys`) and `rest`
 /// (RealList, optional: one for all terms or one per term; default: each
-/// term's `measure` at the scene's initial positions). Throws ParamError
+/// term's `measure` at the scene's initial positions, each particle at its
+/// image nearest the term's first in a periodic box). Throws ParamError
 /// naming the key and element.
 template <int N, class Measure>
 BondedInput<N> read_bonded(const Params& params, const SceneContext& ctx,
@@ -102,9 +104,13 @@ BondedInput<N> read_bonded(const Params& params, const SceneContext& ctx,
     }
   }
   const auto& x = ctx.particles.x;
+  const Domain& box = ctx.particles.domain;
   in.rest = rest_values(params, "rest", in.terms.size(), terms_key, [&](std::size_t s) {
+    // As BondedForce measures a term: in a periodic box, each particle at
+    // its image nearest the first.
     std::array<Vec3, N> at;
-    for (int a = 0; a < N; ++a) at[a] = x.col(in.terms[s][a]);
+    at[0] = x.col(in.terms[s][0]);
+    for (int a = 1; a < N; ++a) at[a] = box.nearest_image(x.col(in.terms[s][a]), at[0]);
     return measure(at);
   });
   return in;

@@ -4,9 +4,10 @@
 // Along a periodic axis the system repeats with the box's length L: a
 // particle leaving through max re-enters at min (the kernel wraps positions
 // after each accepted step), and a force measures the separation of two
-// particles to the nearest image of the other (minimum_image). Forces that
-// join particles by index (springs) get separations right across the
-// boundary only if they use minimum_image too.
+// particles to the nearest image of the other (minimum_image). Bonded
+// terms (pdyn/bonded_force.hpp) place each particle of a term at its image
+// nearest the term's first particle (nearest_image), so a spring, angle or
+// dihedral may cross a periodic face.
 #pragma once
 
 #include <array>
@@ -41,6 +42,23 @@ struct PDYN_API Domain {
       }
     }
     return d;
+  }
+
+  /// The image of position x (m) nearest to position `ref` (m): x moved by
+  /// whole box lengths along periodic axes so that |x_k - ref_k| <= L_k / 2,
+  /// as LAMMPS's Domain::closest_image places a bond's partner. Unchanged,
+  /// bit for bit, along open axes and where x is the nearest image already,
+  /// so a bonded term away from the faces measures what it measured without
+  /// a box (ref + minimum_image(x - ref) would round differently).
+  Vec3 nearest_image(Vec3 x, const Vec3& ref) const {
+    for (int k = 0; k < 3; ++k) {
+      if (periodic[k]) {
+        const double L = max[k] - min[k];
+        const double n = std::round((x[k] - ref[k]) / L);
+        if (n != 0.0) x[k] -= n * L;
+      }
+    }
+    return x;
   }
 
   /// The position x (m) brought into [min, max) along periodic axes by a whole

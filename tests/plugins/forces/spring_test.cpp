@@ -20,44 +20,13 @@
 #include <vector>
 
 #include "pdyn/system.hpp"
+#include "plugins/forces/force_support.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
 namespace {
 
-std::string Num(double x) {
-  std::ostringstream s;
-  s << std::setprecision(17) << x;
-  return s.str();
-}
-
-std::string Vec(const Vec3& v) {
-  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
-}
-
-// A reproducible random cloud of particles (positions in [-1, 1]^3,
-// velocities in [-2, 2]^3, masses in [0.5, 2]) as a scene's particle list.
-struct Cloud {
-  explicit Cloud(int n, unsigned seed) : rng(seed) {
-    std::uniform_real_distribution<double> pos(-1.0, 1.0), vel(-2.0, 2.0), mass(0.5, 2.0);
-    for (int i = 0; i < n; ++i) {
-      x.emplace_back(pos(rng), pos(rng), pos(rng));
-      v.emplace_back(vel(rng), vel(rng), vel(rng));
-      m.push_back(mass(rng));
-    }
-  }
-  std::string Yaml() const {
-    std::string s = "simulation: { dt: 0.001, steps: 1 }\nparticles:\n";
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      s += "  - { position: " + Vec(x[i]) + ", velocity: " + Vec(v[i]) + ", mass: " + Num(m[i]) +
-           " }\n";
-    }
-    return s;
-  }
-  std::mt19937 rng;
-  std::vector<Vec3> x, v;
-  std::vector<double> m;
-};
+using test::Cloud;
 
 // The forces (3 x N) that force object `index` of `sys` alone adds to zero.
 Matrix3X ForcesOf(const System& sys, std::size_t index) {
@@ -99,10 +68,10 @@ std::string RandomSprings(Cloud& cloud, int count, double ks, double kd) {
     int i = pick(cloud.rng), j = pick(cloud.rng);
     while (j == i) j = pick(cloud.rng);
     pairs += (s ? ", [" : "[") + std::to_string(i) + ", " + std::to_string(j) + "]";
-    rests += (s ? ", " : "") + Num(rest(cloud.rng));
+    rests += (s ? ", " : "") + test::Num(rest(cloud.rng));
   }
-  return "  - { type: spring, pairs: [" + pairs + "], ks: " + Num(ks) + ", kd: " + Num(kd) +
-         ", rest: [" + rests + "] }\n";
+  return "  - { type: spring, pairs: [" + pairs + "], ks: " + test::Num(ks) +
+         ", kd: " + test::Num(kd) + ", rest: [" + rests + "] }\n";
 }
 
 TEST(SpringForce, ConservesMomentumAndAngularMomentum) {
@@ -193,7 +162,7 @@ TEST(GravityForce, IsMassTimesGAndMinusTheGradientOfItsPotential) {
   Cloud cloud(6, 7);
   const Vec3 g(0.3, -0.2, -9.81);
   Scene scene =
-      test::load_text(cloud.Yaml() + "forces:\n  - { type: gravity, g: " + Vec(g) + " }\n");
+      test::load_text(cloud.Yaml() + "forces:\n  - { type: gravity, g: " + test::Vec(g) + " }\n");
   System& sys = *scene.system;
   const Matrix3X f = ForcesOf(sys, 0);
   double u = 0.0;
@@ -211,7 +180,7 @@ TEST(DragForce, IsMinusKVAndNeverDoesPositiveWork) {
   Cloud cloud(6, 8);
   constexpr double kDrag = 0.7;
   Scene scene =
-      test::load_text(cloud.Yaml() + "forces:\n  - { type: drag, k: " + Num(kDrag) + " }\n");
+      test::load_text(cloud.Yaml() + "forces:\n  - { type: drag, k: " + test::Num(kDrag) + " }\n");
   const System& sys = *scene.system;
   const Matrix3X f = ForcesOf(sys, 0);
   for (Index i = 0; i < sys.size(); ++i) {
