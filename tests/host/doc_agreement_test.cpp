@@ -96,7 +96,8 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
       "  - { type: lennard_jones }\n"
       "  - { type: soft_contact }\n"
       "  - { type: nbody }\n"
-      "  - { type: dihedral, quads: [[0, 1, 2, 3]] }\n");
+      "  - { type: dihedral, quads: [[0, 1, 2, 3]] }\n"
+      "  - { type: fene, pairs: [[0, 1]], k: 30, r0: 1.5, epsilon: 1, sigma: 1 }\n");
   const auto start = doc.find("`potential` is the sum of the potential");
   ASSERT_NE(start, std::string::npos);
   const std::string sentence = doc.substr(start, doc.find("\n\n", start) - start);

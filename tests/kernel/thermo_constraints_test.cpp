@@ -122,26 +122,6 @@ TEST(ThermoConstraints, TheEnergyWritersColumnsCountTheRodAndItsVirial) {
   }
 }
 
-// A CSV of numbers with a header row, as column -> values.
-std::map<std::string, std::vector<double>> csv_columns(const fs::path& file) {
-  std::map<std::string, std::vector<double>> out;
-  const auto lines = test::split_lines(test::read_bytes(file));
-  std::vector<std::string> names;
-  for (std::size_t k = 0; k < lines.size(); ++k) {
-    if (lines[k].empty()) continue;
-    std::stringstream row(lines[k]);
-    std::string cell;
-    for (std::size_t c = 0; std::getline(row, cell, ','); ++c) {
-      if (k == 0) {
-        names.push_back(cell);
-      } else {
-        out[names.at(c)].push_back(std::stod(cell));
-      }
-    }
-  }
-  return out;
-}
-
 TEST(ThermoConstraints, TheDimerLiquidsTemperatureAndPressureAgreeWithLammps) {
   // tests/scenes/dimers: 256 rigid Lennard-Jones dimers, LAMMPS's fix
   // rattle state at step 0 continued by verlet's RATTLE; LAMMPS's temp and
@@ -156,8 +136,8 @@ TEST(ThermoConstraints, TheDimerLiquidsTemperatureAndPressureAgreeWithLammps) {
   }
   const auto run = test::pdyn_in(dir, {"run", "dimers.yaml", "-q"});
   ASSERT_EQ(run.status, 0) << run.err;
-  auto pdyn = csv_columns(dir / "out/dimers-energy.csv");
-  auto lammps = csv_columns(test::source_path("tests/scenes/dimers/reference.thermo"));
+  auto pdyn = test::csv_columns(dir / "out/dimers-energy.csv");
+  auto lammps = test::csv_columns(test::source_path("tests/scenes/dimers/reference.thermo"));
   ASSERT_EQ(lammps["step"], (std::vector<double>{0, 100, 200}));
   ASSERT_EQ(pdyn["step"], lammps["step"]);
   for (const double dof : pdyn["dof"]) EXPECT_EQ(dof, 3.0 * 512 - 3 - 256);
@@ -190,7 +170,7 @@ TEST(ThermoConstraints, ANoseHooverChainHoldsTheDimerLiquidAtItsKtCountedWithThe
             "simulation.solver={ type: nose_hoover, kT: 1.0, tdamp: 0.25 }", "--set",
             "output=[{ type: energy, path: e.csv, every: 10, columns: [step, kT, dof] }]"});
   ASSERT_EQ(run.status, 0) << run.err;
-  auto e = csv_columns(dir / "e.csv");
+  auto e = test::csv_columns(dir / "e.csv");
   double sum = 0.0;
   int n = 0;
   for (std::size_t k = 0; k < e["step"].size(); ++k) {

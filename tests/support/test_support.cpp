@@ -95,4 +95,23 @@ std::vector<std::string> split_lines(const std::string& text) {
   return lines;
 }
 
+std::map<std::string, std::vector<double>> csv_columns(const std::filesystem::path& file) {
+  std::map<std::string, std::vector<double>> out;
+  const auto lines = split_lines(read_bytes(file));
+  std::vector<std::string> names;
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    if (lines[k].empty()) continue;
+    std::stringstream row(lines[k]);
+    std::string cell;
+    for (std::size_t c = 0; std::getline(row, cell, ','); ++c) {
+      if (k == 0) {
+        names.push_back(cell);
+      } else {
+        out[names.at(c)].push_back(std::stod(cell));
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace pdyn::test

@@ -57,4 +57,8 @@ std::map<std::string, std::string> snapshot(const std::filesystem::path& dir);
 /// `text` split at newlines (without them).
 std::vector<std::string> split_lines(const std::string& text);
 
+/// A CSV file of numbers with a header row (an energy file, a LAMMPS
+/// reference.thermo), as column name -> values.
+std::map<std::string, std::vector<double>> csv_columns(const std::filesystem::path& file);
+
 }  // namespace pdyn::test
