@@ -97,6 +97,7 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
       "  - { type: soft_contact }\n"
       "  - { type: nbody }\n"
       "  - { type: dihedral, quads: [[0, 1, 2, 3]] }\n"
+      "  - { type: dihedral_opls, quads: [[0, 1, 2, 3]], k1: 1, k2: 0, k3: 0, k4: 0 }\n"
       "  - { type: fene, pairs: [[0, 1]], k: 30, r0: 1.5, epsilon: 1, sigma: 1 }\n");
   const auto start = doc.find("`potential` is the sum of the potential");
   ASSERT_NE(start, std::string::npos);

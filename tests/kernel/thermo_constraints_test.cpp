@@ -24,6 +24,7 @@
 #include "host/resume_support.hpp"
 #include "pdyn/system.hpp"
 #include "pdyn/thermo.hpp"
+#include "support/lammps_thermo.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
@@ -130,30 +131,11 @@ TEST(ThermoConstraints, TheDimerLiquidsTemperatureAndPressureAgreeWithLammps) {
   // pressure. Without the constraints' degrees of freedom kT was 17 % low
   // (3 N - 3 = 1533 against 1277), without their virial the pressure was off
   // by several times.
-  const fs::path dir = test::temp_dir("thermo-dimers");
-  for (const char* f : {"dimers.yaml", "dimers_start.data"}) {
-    fs::copy_file(test::source_path(std::string("tests/scenes/dimers/") + f), dir / f);
-  }
-  const auto run = test::pdyn_in(dir, {"run", "dimers.yaml", "-q"});
-  ASSERT_EQ(run.status, 0) << run.err;
-  auto pdyn = test::csv_columns(dir / "out/dimers-energy.csv");
-  auto lammps = test::csv_columns(test::source_path("tests/scenes/dimers/reference.thermo"));
-  ASSERT_EQ(lammps["step"], (std::vector<double>{0, 100, 200}));
-  ASSERT_EQ(pdyn["step"], lammps["step"]);
-  for (const double dof : pdyn["dof"]) EXPECT_EQ(dof, 3.0 * 512 - 3 - 256);
-  for (const auto& [ours, theirs] :
-       {std::pair<std::string, std::string>{"kT", "temp"}, {"pressure", "press"}}) {
-    double worst = 0.0;
-    for (std::size_t k = 0; k < lammps["step"].size(); ++k) {
-      const double a = pdyn.at(ours).at(k), b = lammps.at(theirs).at(k);
-      worst = std::max(worst, std::abs(a - b) / std::abs(b));
-      EXPECT_LE(std::abs(a - b), 1e-8 * std::abs(b))
-          << ours << " at step " << lammps["step"][k] << ": " << test::Num(a)
-          << " against LAMMPS's " << test::Num(b);
-    }
-    std::cout << "thermo constraints: dimers' " << ours << " vs LAMMPS " << theirs
-              << ": worst relative difference " << worst << " at steps 0, 100, 200\n";
-  }
+  // Every column to 1e-8 relative, the pressure too (no ideal-gas floor).
+  auto ours = test::expect_lammps_thermo("dimers", {"dimers.yaml", "dimers_start.data"},
+                                         "out/dimers-energy.csv", 1e-8, 0.0);
+  EXPECT_EQ(ours["step"], (std::vector<double>{0, 100, 200}));
+  for (const double dof : ours["dof"]) EXPECT_EQ(dof, 3.0 * 512 - 3 - 256);
 }
 
 TEST(ThermoConstraints, ANoseHooverChainHoldsTheDimerLiquidAtItsKtCountedWithTheRods) {

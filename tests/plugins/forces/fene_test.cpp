@@ -9,11 +9,11 @@
 
 #include <cmath>
 #include <filesystem>
-#include <iostream>
 #include <string>
 
 #include "host/resume_support.hpp"
 #include "pdyn/system.hpp"
+#include "support/lammps_thermo.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
@@ -60,32 +60,9 @@ TEST(FeneBond, EnergyAndForceAreKremerGrestsWithTheWcaPartInsideItsRange) {
 }
 
 TEST(FeneBond, BeadSpringChainsFollowLammpsStepForStep) {
-  const fs::path dir = test::temp_dir("fene-lammps");
-  for (const char* f : {"fene.yaml", "fene_start.data"}) {
-    fs::copy_file(test::source_path(std::string("tests/scenes/fene/") + f), dir / f);
-  }
-  const auto run = test::pdyn_in(dir, {"run", "fene.yaml", "-q"});
-  ASSERT_EQ(run.status, 0) << run.err;
-  auto ours = test::csv_columns(dir / "out/fene-energy.csv");
-  auto lammps = test::csv_columns(test::source_path("tests/scenes/fene/reference.thermo"));
-  ASSERT_EQ(lammps["step"].size(), 11u);
-  ASSERT_EQ(ours["step"], lammps["step"]);
-  for (const auto& [mine, theirs] : {std::pair<std::string, std::string>{"kT", "temp"},
-                                     {"pressure", "press"},
-                                     {"potential", "pe"},
-                                     {"kinetic", "ke"},
-                                     {"total", "etotal"}}) {
-    double worst = 0.0;
-    for (std::size_t s = 0; s < lammps["step"].size(); ++s) {
-      const double a = ours.at(mine).at(s), b = lammps.at(theirs).at(s);
-      worst = std::max(worst, std::abs(a - b) / std::abs(b));
-      EXPECT_LE(std::abs(a - b), 1e-10 * std::abs(b))
-          << mine << " at step " << lammps["step"][s] << ": " << test::Num(a)
-          << " against LAMMPS's " << test::Num(b);
-    }
-    std::cout << "fene chains: " << mine << " vs LAMMPS " << theirs
-              << ": worst relative difference " << worst << " over 11 thermo steps\n";
-  }
+  // 200 beads in a box of 1000: the ideal gas's pressure N kT / V is 0.2.
+  test::expect_lammps_thermo("fene", {"fene.yaml", "fene_start.data"}, "out/fene-energy.csv", 1e-10,
+                             0.2);
 }
 
 TEST(FeneBond, ABondStretchedToR0StopsTheRunNamingIt) {
