@@ -130,6 +130,13 @@ TEST(DataTopology, ChainsWithBondsAnglesAndOplsDihedralsFollowLammps) {
                              "out/molecular-energy.csv", 1e-8, 0.2);
 }
 
+TEST(DataTopology, ChainsWithCosineSquaredAnglesAndHarmonicDihedralsFollowLammps) {
+  // The same chains with LAMMPS's angle_style cosine/squared and
+  // dihedral_style harmonic (make_reference_cosine.lmp): about 1e-13.
+  test::expect_lammps_thermo("molecular", {"cosine.yaml", "cosine_start.data"},
+                             "out/cosine-energy.csv", 1e-10, 0.2, "cosine.thermo");
+}
+
 TEST(DataTopology, SectionsNoForceTakesAreNamedInAWarning) {
   const fs::path data = ChainFile("warn");
   const pdyn::Scene s = test::load_text(SceneText(

@@ -26,10 +26,12 @@ namespace pdyn::test {
 /// (the scene first) and checks every column at every thermo step to
 /// `tolerance` relative; the pressure, which passes through zero, relative
 /// to |press| + `pressure_scale` (Pa: N kT / V, the ideal gas's). Prints
-/// the worst difference of each column. Returns the energy file's columns.
+/// the worst difference of each column. `reference`: LAMMPS's thermo in the
+/// folder. Returns the energy file's columns.
 inline std::map<std::string, std::vector<double>> expect_lammps_thermo(
     const std::string& folder, const std::vector<std::string>& files,
-    const std::string& energy_file, double tolerance, double pressure_scale) {
+    const std::string& energy_file, double tolerance, double pressure_scale,
+    const std::string& reference = "reference.thermo") {
   namespace fs = std::filesystem;
   const fs::path dir = temp_dir("lammps-thermo-" + folder);
   for (const auto& f : files) {
@@ -38,7 +40,7 @@ inline std::map<std::string, std::vector<double>> expect_lammps_thermo(
   const auto run = pdyn_in(dir, {"run", files.front(), "-q"});
   EXPECT_EQ(run.status, 0) << run.err;
   auto ours = csv_columns(dir / energy_file);
-  auto lammps = csv_columns(source_path("tests/scenes/" + folder + "/reference.thermo"));
+  auto lammps = csv_columns(source_path("tests/scenes/" + folder + "/" + reference));
   EXPECT_FALSE(lammps["step"].empty());
   EXPECT_EQ(ours["step"], lammps["step"]);
   if (run.status != 0 || ours["step"] != lammps["step"]) return ours;
