@@ -17,6 +17,7 @@
 
 #include "host/resume_support.hpp"
 #include "pdyn/system.hpp"
+#include "support/lammps_thermo.hpp"
 #include "support/physics_support.hpp"
 #include "support/test_support.hpp"
 
@@ -25,54 +26,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A CSV of numbers with a header row, as column -> values.
-std::map<std::string, std::vector<double>> read_columns(const fs::path& file) {
-  std::map<std::string, std::vector<double>> out;
-  const auto lines = test::split_lines(test::read_bytes(file));
-  std::vector<std::string> names;
-  for (std::size_t k = 0; k < lines.size(); ++k) {
-    if (lines[k].empty()) continue;
-    std::stringstream row(lines[k]);
-    std::string cell;
-    for (std::size_t c = 0; std::getline(row, cell, ','); ++c) {
-      if (k == 0) {
-        names.push_back(cell);
-      } else {
-        out[names.at(c)].push_back(std::stod(cell));
-      }
-    }
-  }
-  return out;
-}
-
 TEST(Thermo, TheLjLiquidsTemperatureAndPressureAgreeWithLammpsToTenDigits) {
-  const fs::path dir = test::temp_dir("thermo-lammps");
-  for (const char* f : {"thermo.yaml", "thermo_start.data"}) {
-    fs::copy_file(test::source_path(std::string("tests/scenes/thermo/") + f), dir / f);
-  }
-  const auto run = test::pdyn_in(dir, {"run", "thermo.yaml", "-q"});
-  ASSERT_EQ(run.status, 0) << run.err;
-  auto pdyn = read_columns(dir / "out/thermo-energy.csv");
-  auto lammps = read_columns(test::source_path("tests/scenes/thermo/reference.thermo"));
-  ASSERT_EQ(pdyn["step"], lammps["step"]);
-  ASSERT_EQ(lammps["step"].size(), 11u);  // 0, 10, ..., 100
-  const std::vector<std::pair<std::string, std::string>> pairs = {{"kT", "temp"},
-                                                                  {"pressure", "press"},
-                                                                  {"potential", "pe"},
-                                                                  {"kinetic", "ke"},
-                                                                  {"total", "etotal"}};
-  for (const auto& [ours, theirs] : pairs) {
-    double worst = 0.0;
-    for (std::size_t k = 0; k < lammps["step"].size(); ++k) {
-      const double a = pdyn.at(ours).at(k), b = lammps.at(theirs).at(k);
-      worst = std::max(worst, std::abs(a - b) / std::abs(b));
-      EXPECT_LE(std::abs(a - b), 1e-10 * std::abs(b))
-          << ours << " at step " << lammps["step"][k] << ": " << test::Num(a)
-          << " against LAMMPS's " << test::Num(b);
-    }
-    std::cout << "thermo: " << ours << " vs LAMMPS " << theirs << ": worst relative difference "
-              << worst << " over steps 0-100\n";
-  }
+  // Every column at steps 0, 10, ..., 100 to 1e-10 relative.
+  const auto ours = test::expect_lammps_thermo("thermo", {"thermo.yaml", "thermo_start.data"},
+                                               "out/thermo-energy.csv", 1e-10, 0.0);
+  EXPECT_EQ(ours.at("step").size(), 11u);
 }
 
 TEST(Thermo, AnIdealGasHasTheKineticPressure) {
