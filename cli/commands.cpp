@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <ostream>
 
+#include "mpi_launch.hpp"
 #include "pdyn/host/crash_report.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/resolve.hpp"
@@ -525,6 +526,12 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
     return kOk;
   } catch (const CLI::ParseError& e) {
     err << "pdyn: " << e.what() << " (see pdyn --help)\n";
+    return kBadInput;
+  }
+  // Under mpirun with several ranks every rank would run the whole scene
+  // and overwrite the others' files: refused before anything is read.
+  if (const std::string why = several_mpi_ranks(); !why.empty()) {
+    err << "pdyn: " << why << "\n";
     return kBadInput;
   }
   try {
