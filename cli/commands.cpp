@@ -9,6 +9,7 @@
 #include <array>
 #include <chrono>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <ostream>
 
 #include "mpi_launch.hpp"
@@ -462,6 +463,39 @@ CLI::Validator at_least(double min) {
       fmt::format(">= {}", min));
 }
 
+namespace {
+
+// Parses `args` into `app`; an exit status when the command is done
+// already: help or the version printed, a bad command line, or several MPI
+// ranks (each would run the whole scene and overwrite the others' files:
+// refused before anything is read).
+std::optional<int> parse_command_line(CLI::App& app, const std::vector<std::string>& args,
+                                      std::ostream& out, std::ostream& err) {
+  std::vector<std::string> reversed(args.rbegin(), args.rend());
+  try {
+    app.parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    out << app.help();
+    return kOk;
+  } catch (const CLI::CallForAllHelp&) {
+    out << app.help("", CLI::AppFormatMode::All);
+    return kOk;
+  } catch (const CLI::CallForVersion& e) {
+    out << e.what() << "\n";
+    return kOk;
+  } catch (const CLI::ParseError& e) {
+    err << "pdyn: " << e.what() << " (see pdyn --help)\n";
+    return kBadInput;
+  }
+  if (const std::string why = several_mpi_ranks(); !why.empty()) {
+    err << "pdyn: " << why << "\n";
+    return kBadInput;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 int run_command(const std::vector<std::string>& args, std::ostream& out, std::ostream& err,
                 bool terminal) {
   CLI::App app{"pdyn: plugin-based particle dynamics (Witkin's particle systems)", "pdyn"};
@@ -512,28 +546,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   sdk.push_back(add_render_command(app));
   sdk.push_back(add_serve_command(app));
 
-  std::vector<std::string> reversed(args.rbegin(), args.rend());
-  try {
-    app.parse(reversed);
-  } catch (const CLI::CallForHelp&) {
-    out << app.help();
-    return kOk;
-  } catch (const CLI::CallForAllHelp&) {
-    out << app.help("", CLI::AppFormatMode::All);
-    return kOk;
-  } catch (const CLI::CallForVersion& e) {
-    out << e.what() << "\n";
-    return kOk;
-  } catch (const CLI::ParseError& e) {
-    err << "pdyn: " << e.what() << " (see pdyn --help)\n";
-    return kBadInput;
-  }
-  // Under mpirun with several ranks every rank would run the whole scene
-  // and overwrite the others' files: refused before anything is read.
-  if (const std::string why = several_mpi_ranks(); !why.empty()) {
-    err << "pdyn: " << why << "\n";
-    return kBadInput;
-  }
+  if (const auto stop = parse_command_line(app, args, out, err)) return *stop;
   try {
     run_args.argv = args;
     if (run->parsed()) return cmd_run(run_args, common, out, err, terminal);
