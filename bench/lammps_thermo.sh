@@ -12,7 +12,8 @@
 #
 #   bash bench/lammps_thermo.sh [--build DIR] [--write-reference] [CASE ...]
 #   cases: fene (bond_style fene), molecular (harmonic bonds and angles, OPLS
-#   dihedrals), cosine (angle cosine/squared, dihedral harmonic); default all
+#   dihedrals), cosine (angle cosine/squared, dihedral harmonic), improper
+#   (improper harmonic); default all
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=build
@@ -26,7 +27,7 @@ while (($#)); do
   esac
   shift
 done
-((${#cases[@]})) || cases=(fene molecular cosine)
+((${#cases[@]})) || cases=(fene molecular cosine improper)
 pdyn="$PWD/$build/bin/pdyn"
 [[ -x "$pdyn" ]] || { echo "lammps_thermo: no $pdyn (build pdyn first)" >&2; exit 2; }
 have_lmp=0
@@ -40,7 +41,8 @@ for c in "${cases[@]}"; do
     fene) set -- fene make_reference.lmp reference.thermo fene_start.data fene.yaml out/fene-energy.csv ;;
     molecular) set -- molecular make_reference.lmp reference.thermo molecular_start.data molecular.yaml out/molecular-energy.csv ;;
     cosine) set -- molecular make_reference_cosine.lmp cosine.thermo cosine_start.data cosine.yaml out/cosine-energy.csv ;;
-    *) echo "lammps_thermo: unknown case '$c' (expected fene, molecular or cosine)" >&2; exit 2 ;;
+    improper) set -- molecular make_reference_improper.lmp improper.thermo improper_start.data improper.yaml out/improper-energy.csv ;;
+    *) echo "lammps_thermo: unknown case '$c' (expected fene, molecular, cosine or improper)" >&2; exit 2 ;;
   esac
   scene=tests/scenes/$1
   out=out/lammps-thermo/$c

@@ -137,6 +137,14 @@ TEST(DataTopology, ChainsWithCosineSquaredAnglesAndHarmonicDihedralsFollowLammps
                              "out/cosine-energy.csv", 1e-10, 0.2, "cosine.thermo");
 }
 
+TEST(DataTopology, ChainsWithHarmonicImpropersFollowLammps) {
+  // The chains with LAMMPS's improper_style harmonic in place of dihedrals
+  // (make_reference_improper.lmp), the impropers taken with `section:
+  // Impropers`: about 1e-13.
+  test::expect_lammps_thermo("molecular", {"improper.yaml", "improper_start.data"},
+                             "out/improper-energy.csv", 1e-10, 0.2, "improper.thermo");
+}
+
 TEST(DataTopology, SectionsNoForceTakesAreNamedInAWarning) {
   const fs::path data = ChainFile("warn");
   const pdyn::Scene s = test::load_text(SceneText(

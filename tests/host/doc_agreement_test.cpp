@@ -100,6 +100,7 @@ TEST(DocAgreement, ScenesMdNamesThePluginsThatReportPotentialEnergyAndReadGroups
       "  - { type: dihedral_opls, quads: [[0, 1, 2, 3]], k1: 1, k2: 0, k3: 0, k4: 0 }\n"
       "  - { type: dihedral_harmonic, quads: [[0, 1, 2, 3]], k: 1, d: 1, n: 2 }\n"
       "  - { type: angle_cosine_squared, triples: [[0, 1, 2]], k: 1, theta0: 2 }\n"
+      "  - { type: improper_harmonic, quads: [[0, 1, 2, 3]], k: 1, chi0: 0.5 }\n"
       "  - { type: fene, pairs: [[0, 1]], k: 30, r0: 1.5, epsilon: 1, sigma: 1 }\n");
   const auto start = doc.find("`potential` is the sum of the potential");
   ASSERT_NE(start, std::string::npos);

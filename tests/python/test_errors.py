@@ -47,7 +47,8 @@ def test_unknown_plugin_and_keyword(fall):
     assert str(e.value).startswith(
         "add_force #1: force.type: unknown force type 'sprng' (did you mean 'spring'? expected "
         "one of: anchor, angle, angle_cosine_squared, area, attractor, dihedral, "
-        "dihedral_harmonic, dihedral_opls, drag, fene, field, gravity, langevin, lennard_jones, ")
+        "dihedral_harmonic, dihedral_opls, drag, fene, field, gravity, improper_harmonic, "
+        "langevin, lennard_jones, ")
     with pytest.raises(pdyn.SceneError, match=r"unknown key 'kd' in force \(did you mean 'k'\?"):
         fall.add_force("drag", kd=0.1)
     with pytest.raises(pdyn.PluginError, match=r"unknown plugin 'nope' \(expected one of: "):
