@@ -90,4 +90,43 @@ struct Dihedral {
   }
 };
 
+/// The energy of a torsion as a function of phi alone, U(phi) (J), and its
+/// derivative dU/dphi (J/rad): what a TorsionLaw's `Potential` returns.
+struct TorsionEnergy {
+  double u = 0.0;
+  double du = 0.0;
+};
+
+/// A bonded law (pdyn/bonded_law.hpp) for any potential of the dihedral
+/// angle alone (since 0.10.0): LAMMPS's dihedral styles opls and harmonic,
+/// the improper angle of improper_style harmonic. `Potential` has a
+/// `Coefficients` type and `TorsionEnergy operator()(double phi, const
+/// Coefficients&) const`; then f_a = -dU/dphi grad_a phi, and where phi
+/// has no gradient (a degenerate triangle or edge) the term adds its
+/// energy and no force, never NaN:
+///
+///   struct Opls { struct Coefficients { double k1, k2, k3, k4; };
+///                 pdyn::TorsionEnergy operator()(double phi, const Coefficients& c) const; };
+///   pdyn::BondedForce<pdyn::TorsionLaw<Opls>>(...)
+template <class Potential>
+struct TorsionLaw {
+  static constexpr int arity = 4;
+  using Coefficients = typename Potential::Coefficients;
+  Potential potential{};
+
+  BondedTerm<4> operator()(const BondedPoint<4>& p, const Coefficients& c) const {
+    BondedTerm<4> t;
+    const Coordinate<4> q = Dihedral{}(p.positions());
+    const TorsionEnergy e = potential(q.value, c);
+    t.energy = e.u;
+    if (!q.defined) return t;
+    for (int a = 0; a < 4; ++a) t.force[a] = -e.du * q.gradient[a];
+    return t;
+  }
+  /// phi (rad), for read_bonded's default rest values (unused by a
+  /// potential whose coefficients hold its rest angle).
+  double measure(const std::array<Vec3, 4>& x) const { return Dihedral{}(x).value; }
+  bool reads_velocity(const Coefficients&) const { return false; }
+};
+
 }  // namespace pdyn

@@ -7,8 +7,7 @@
 //   f_a = -dU/dphi grad_a phi,   dU/dphi = -K d n sin(n phi)
 //
 // (not pdyn's `dihedral`, a spring k/2 (phi - phi0)^2 on the angle itself).
-// Where phi has no gradient (collinear particles, an edge of no length) the
-// term adds its energy and no force, never NaN.
+// The loop over phi and its gradient is pdyn/dihedral.hpp's TorsionLaw.
 #include <array>
 #include <cmath>
 #include <pdyn/bonded_force.hpp>
@@ -17,37 +16,24 @@
 
 namespace {
 
-using pdyn::BondedPoint;
-using pdyn::BondedTerm;
-
 struct Periodic {
-  static constexpr int arity = 4;
   struct Coefficients {
     double k = 0.0;     // K, J
     double sign = 1.0;  // d: +1 or -1
     double n = 1.0;     // multiplicity, a whole number >= 0
   };
 
-  BondedTerm<4> operator()(const BondedPoint<4>& p, const Coefficients& c) const {
-    BondedTerm<4> t;
-    const auto q = pdyn::Dihedral{}(p.positions());
-    t.energy = c.k * (1.0 + c.sign * std::cos(c.n * q.value));
-    if (!q.defined) return t;
-    const double du = -c.k * c.sign * c.n * std::sin(c.n * q.value);
-    for (int a = 0; a < 4; ++a) t.force[a] = -du * q.gradient[a];
-    return t;
+  pdyn::TorsionEnergy operator()(double phi, const Coefficients& c) const {
+    return {c.k * (1.0 + c.sign * std::cos(c.n * phi)), -c.k * c.sign * c.n * std::sin(c.n * phi)};
   }
-
-  // No rest angle; read_bonded measures one it does not use.
-  double measure(const std::array<pdyn::Vec3, 4>& x) const { return pdyn::Dihedral{}(x).value; }
-  bool reads_velocity(const Coefficients&) const { return false; }
 };
+using PeriodicLaw = pdyn::TorsionLaw<Periodic>;
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  const Periodic law;
+  const PeriodicLaw law;
   const auto in = pdyn::read_bonded<4>(p, ctx, "quads", {"k", "d", "n"},
                                        [&](const auto& x) { return law.measure(x); });
-  std::vector<Periodic::Coefficients> c(static_cast<std::size_t>(in.n_types));
+  std::vector<PeriodicLaw::Coefficients> c(static_cast<std::size_t>(in.n_types));
   for (std::int32_t t = 0; t < in.n_types; ++t) {
     const double sign = pdyn::bonded_coefficient(p, "d", t);
     const double n = pdyn::bonded_coefficient(p, "n", t);
@@ -61,7 +47,8 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
     }
     c[static_cast<std::size_t>(t)] = {pdyn::bonded_coefficient(p, "k", t), sign, n};
   }
-  return std::make_unique<pdyn::BondedForce<Periodic>>(law, in, std::move(c), ctx.particles.size());
+  return std::make_unique<pdyn::BondedForce<PeriodicLaw>>(law, in, std::move(c),
+                                                          ctx.particles.size());
 }
 
 pdyn::PluginDescriptor describe() {

@@ -10,8 +10,8 @@
 //   dU/dphi = -K1/2 sin phi + K2 sin 2 phi - 3 K3/2 sin 3 phi + 2 K4 sin 4 phi
 //
 // Cosines only: U is even in phi, so the sign convention of phi does not
-// matter. Where phi has no gradient (collinear particles, an edge of no
-// length) the term adds its energy and no force, never NaN.
+// matter. The loop over phi and its gradient is pdyn/dihedral.hpp's
+// TorsionLaw.
 #include <array>
 #include <cmath>
 #include <pdyn/bonded_force.hpp>
@@ -21,35 +21,22 @@
 
 namespace {
 
-using pdyn::BondedPoint;
-using pdyn::BondedTerm;
-
 struct Opls {
-  static constexpr int arity = 4;
   struct Coefficients {
     double k1 = 0.0, k2 = 0.0, k3 = 0.0, k4 = 0.0;  // J
   };
 
-  BondedTerm<4> operator()(const BondedPoint<4>& p, const Coefficients& c) const {
-    BondedTerm<4> t;
-    const auto q = pdyn::Dihedral{}(p.positions());
-    const double phi = q.value;
-    t.energy = 0.5 * (c.k1 * (1.0 + std::cos(phi)) + c.k2 * (1.0 - std::cos(2.0 * phi)) +
-                      c.k3 * (1.0 + std::cos(3.0 * phi)) + c.k4 * (1.0 - std::cos(4.0 * phi)));
-    if (!q.defined) return t;
-    const double du = -0.5 * c.k1 * std::sin(phi) + c.k2 * std::sin(2.0 * phi) -
-                      1.5 * c.k3 * std::sin(3.0 * phi) + 2.0 * c.k4 * std::sin(4.0 * phi);
-    for (int a = 0; a < 4; ++a) t.force[a] = -du * q.gradient[a];
-    return t;
+  pdyn::TorsionEnergy operator()(double phi, const Coefficients& c) const {
+    return {0.5 * (c.k1 * (1.0 + std::cos(phi)) + c.k2 * (1.0 - std::cos(2.0 * phi)) +
+                   c.k3 * (1.0 + std::cos(3.0 * phi)) + c.k4 * (1.0 - std::cos(4.0 * phi))),
+            -0.5 * c.k1 * std::sin(phi) + c.k2 * std::sin(2.0 * phi) -
+                1.5 * c.k3 * std::sin(3.0 * phi) + 2.0 * c.k4 * std::sin(4.0 * phi)};
   }
-
-  // OPLS has no rest angle; read_bonded measures one it does not use.
-  double measure(const std::array<pdyn::Vec3, 4>& x) const { return pdyn::Dihedral{}(x).value; }
-  bool reads_velocity(const Coefficients&) const { return false; }
 };
+using OplsLaw = pdyn::TorsionLaw<Opls>;
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  const Opls law;
+  const OplsLaw law;
   const auto in = pdyn::read_bonded<4>(p, ctx, "quads", {"k1", "k2", "k3", "k4"},
                                        [&](const auto& x) { return law.measure(x); });
   std::vector<Opls::Coefficients> c(static_cast<std::size_t>(in.n_types));
@@ -58,7 +45,7 @@ std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneCont
         pdyn::bonded_coefficient(p, "k1", t), pdyn::bonded_coefficient(p, "k2", t),
         pdyn::bonded_coefficient(p, "k3", t), pdyn::bonded_coefficient(p, "k4", t)};
   }
-  return std::make_unique<pdyn::BondedForce<Opls>>(law, in, std::move(c), ctx.particles.size());
+  return std::make_unique<pdyn::BondedForce<OplsLaw>>(law, in, std::move(c), ctx.particles.size());
 }
 
 // A Fourier coefficient, required as LAMMPS's dihedral_coeff K1 K2 K3 K4

@@ -22,45 +22,31 @@
 
 namespace {
 
-using pdyn::BondedPoint;
-using pdyn::BondedTerm;
-
 struct Improper {
-  static constexpr int arity = 4;
   struct Coefficients {
     double k = 0.0;     // K, J/rad^2
     double chi0 = 0.0;  // rad, in [0, pi]
   };
 
-  BondedTerm<4> operator()(const BondedPoint<4>& p, const Coefficients& c) const {
-    BondedTerm<4> t;
-    const auto q = pdyn::Dihedral{}(p.positions());
-    const double d = std::abs(q.value) - c.chi0;
-    t.energy = c.k * d * d;
-    if (!q.defined) return t;
-    const double sign = q.value > 0.0 ? 1.0 : q.value < 0.0 ? -1.0 : 0.0;
-    const double du = 2.0 * c.k * d * sign;
-    for (int a = 0; a < 4; ++a) t.force[a] = -du * q.gradient[a];
-    return t;
+  pdyn::TorsionEnergy operator()(double phi, const Coefficients& c) const {
+    const double d = std::abs(phi) - c.chi0;
+    const double sign = phi > 0.0 ? 1.0 : phi < 0.0 ? -1.0 : 0.0;
+    return {c.k * d * d, 2.0 * c.k * d * sign};
   }
-
-  // chi (rad) for a default chi0 is not used: chi0 is a coefficient.
-  double measure(const std::array<pdyn::Vec3, 4>& x) const {
-    return std::abs(pdyn::Dihedral{}(x).value);
-  }
-  bool reads_velocity(const Coefficients&) const { return false; }
 };
+using ImproperLaw = pdyn::TorsionLaw<Improper>;
 
 std::unique_ptr<pdyn::Force> create(const pdyn::Params& p, const pdyn::SceneContext& ctx) {
-  const Improper law;
+  const ImproperLaw law;
   const auto in = pdyn::read_bonded<4>(p, ctx, "quads", {"k", "chi0"},
                                        [&](const auto& x) { return law.measure(x); });
-  std::vector<Improper::Coefficients> c(static_cast<std::size_t>(in.n_types));
+  std::vector<ImproperLaw::Coefficients> c(static_cast<std::size_t>(in.n_types));
   for (std::int32_t t = 0; t < in.n_types; ++t) {
     c[static_cast<std::size_t>(t)] = {pdyn::bonded_coefficient(p, "k", t),
                                       pdyn::bonded_coefficient(p, "chi0", t)};
   }
-  return std::make_unique<pdyn::BondedForce<Improper>>(law, in, std::move(c), ctx.particles.size());
+  return std::make_unique<pdyn::BondedForce<ImproperLaw>>(law, in, std::move(c),
+                                                          ctx.particles.size());
 }
 
 pdyn::PluginDescriptor describe() {
