@@ -384,7 +384,7 @@ void read_terms(const TopologySection& sec, const Line& title, const std::vector
   }
   for (const Line* r : rows) {
     const auto& f = r->fields;
-    if (f.size() != static_cast<std::size_t>(2 + sec.arity)) {
+    if (f.size() != 2 + static_cast<std::size_t>(sec.arity)) {
       problems.add(r->number, 1,
                    fmt::format("the row has {} (expected {} in {}: id, type and {} atom ids)",
                                count_of(static_cast<long long>(f.size()), "field"), 2 + sec.arity,

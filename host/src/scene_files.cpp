@@ -160,6 +160,7 @@ std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
 void Loader::warn_unread(const std::string& file,
                          const std::vector<import_files::Imported::Unread>& unread) {
   std::vector<std::string> parts;
+  parts.reserve(unread.size());
   for (const auto& u : unread) {
     parts.push_back(fmt::format("{} ({})", u.section, count_of(u.rows, "row")));
   }
