@@ -73,12 +73,10 @@ struct Imported {
   /// (1..types). A scene's bonded force or constraint takes one section as
   /// its term list (`pairs: { file: polymer.data }`).
   struct Terms {
-    std::string section;   ///< "Bonds", "Angles", "Dihedrals" or "Impropers"
-    int arity = 2;         ///< particles per term: 2, 3, 4, 4
-    long long types = 0;   ///< the header's "N bond types" (0 if it has none)
-    std::size_t line = 0;  ///< the section title's line
+    std::string section;  ///< "Bonds", "Angles", "Dihedrals" or "Impropers"
+    int arity = 2;        ///< particles per term: 2, 3, 4, 4
     std::vector<std::array<std::size_t, 4>> particles;  ///< the first `arity` used
-    std::vector<long long> type;                        ///< per term, 1..types
+    std::vector<long long> type;                        ///< per term, 1..the header's count
     std::vector<std::size_t> lines;                     ///< per term, its row's line
   };
   std::vector<Terms> topology;

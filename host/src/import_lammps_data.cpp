@@ -372,11 +372,10 @@ void read_terms(const TopologySection& sec, const Line& title, const std::vector
   DataFile::TermRows t;
   t.terms.section = sec.title;
   t.terms.arity = sec.arity;
-  t.terms.types = std::max(0LL, d.count(sec.types));
-  t.terms.line = title.number;
+  const long long types = std::max(0LL, d.count(sec.types));          // the header's count
   const std::string singular(sec.types, std::strlen(sec.types) - 1);  // "bond type"
   if (d.count(sec.count) < 0) return;  // section_rows said so: one problem is enough
-  if (t.terms.types == 0 && !rows.empty()) {
+  if (types == 0 && !rows.empty()) {
     problems.add(title.number, 1,
                  fmt::format("the header has no 'N {}' line (expected one before the {} section)",
                              sec.types, sec.title));
@@ -392,14 +391,14 @@ void read_terms(const TopologySection& sec, const Line& title, const std::vector
       continue;
     }
     const auto type = parse_whole(f[1], r->number, singular, problems, 1);
-    if (type && *type > t.terms.types) {
+    if (type && *type > types) {
       problems.add(r->number, f[1].column,
                    fmt::format("{} {} is above the header's {} (expected 1..{})", singular, *type,
-                               count_of(t.terms.types, singular), t.terms.types));
+                               count_of(types, singular), types));
     }
     std::array<long long, 4> ids{};
     std::array<std::size_t, 4> columns{};
-    bool ok = type && *type <= t.terms.types;
+    bool ok = type && *type <= types;
     for (int a = 0; a < sec.arity; ++a) {
       const auto id = parse_whole(f[2 + a], r->number, "atom id", problems, 1);
       ok = ok && id;
