@@ -13,7 +13,8 @@
 #   bash bench/lammps_thermo.sh [--build DIR] [--write-reference] [CASE ...]
 #   cases: fene (bond_style fene), molecular (harmonic bonds and angles, OPLS
 #   dihedrals), cosine (angle cosine/squared, dihedral harmonic), improper
-#   (improper harmonic); default all
+#   (improper harmonic), kg (the Kremer-Grest melt with special_bonds fene),
+#   scaled (special_bonds lj 0.2 0.5 0.25); default all
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=build
@@ -27,7 +28,7 @@ while (($#)); do
   esac
   shift
 done
-((${#cases[@]})) || cases=(fene molecular cosine improper)
+((${#cases[@]})) || cases=(fene molecular cosine improper kg scaled)
 pdyn="$PWD/$build/bin/pdyn"
 [[ -x "$pdyn" ]] || { echo "lammps_thermo: no $pdyn (build pdyn first)" >&2; exit 2; }
 have_lmp=0
@@ -42,7 +43,9 @@ for c in "${cases[@]}"; do
     molecular) set -- molecular make_reference.lmp reference.thermo molecular_start.data molecular.yaml out/molecular-energy.csv ;;
     cosine) set -- molecular make_reference_cosine.lmp cosine.thermo cosine_start.data cosine.yaml out/cosine-energy.csv ;;
     improper) set -- molecular make_reference_improper.lmp improper.thermo improper_start.data improper.yaml out/improper-energy.csv ;;
-    *) echo "lammps_thermo: unknown case '$c' (expected fene, molecular, cosine or improper)" >&2; exit 2 ;;
+    kg) set -- special make_reference_kg.lmp kg.thermo kg_start.data kg.yaml out/kg-energy.csv ;;
+    scaled) set -- special make_reference_scaled.lmp scaled.thermo scaled_start.data scaled.yaml out/scaled-energy.csv ;;
+    *) echo "lammps_thermo: unknown case '$c' (expected fene, molecular, cosine, improper, kg or scaled)" >&2; exit 2 ;;
   esac
   scene=tests/scenes/$1
   out=out/lammps-thermo/$c

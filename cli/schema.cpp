@@ -393,6 +393,25 @@ Json particle_items(const PluginRegistry& registry) {
   return items;
 }
 
+// `special_bonds:` (host/src/scene_special_bonds.cpp): a LAMMPS preset or
+// three weights.
+Json special_bonds_schema() {
+  const Json weight{{"type", "number"}, {"minimum", 0}, {"maximum", 1}};
+  return Json{
+      {"description",
+       "pair forces' weights of particles 1, 2 and 3 bonds apart (LAMMPS special_bonds lj); "
+       "bonds are every `pairs:` of the forces and constraints"},
+      {"oneOf",
+       Json::array(
+           {{{"enum", {"fene", "amber", "charmm", "dreiding"}}},
+            {{"type", "object"},
+             {"required", {"lj"}},
+             {"additionalProperties", false},
+             {"properties",
+              {{"lj",
+                {{"type", "array"}, {"items", weight}, {"minItems", 3}, {"maxItems", 3}}}}}}})}};
+}
+
 Json make_schema(const PluginRegistry& registry) {
   const Json defs = plugin_defs(registry);
   const Json simulation = simulation_schema();
@@ -421,7 +440,8 @@ Json make_schema(const PluginRegistry& registry) {
                 {"velocities", velocities},
                 {"forces", plugin_list("force")},
                 {"colliders", plugin_list("collider")},
-                {"constraints", plugin_list("constraint")}}},
+                {"constraints", plugin_list("constraint")},
+                {"special_bonds", special_bonds_schema()}}},
               {"additionalProperties", false},
               {"$defs", defs}};
   return schema;

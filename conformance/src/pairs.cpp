@@ -14,6 +14,10 @@
 //                            periodic, moved over several calls (list rebuilds)
 //   pair.continuous_at_cutoff U(rc^-) = 0 when the energy is declared
 //                            continuous (or with a boolean `shift` on)
+//   pair.special_bonds       with special bonds (pdyn/special_bonds.hpp)
+//                            on a bond graph of near neighbours, the list's
+//                            forces and energy equal the all-pairs sum with
+//                            the same weights, excluded and scaled
 //
 // Distances scale with the cutoff rc, so that one set of checks fits a
 // Lennard-Jones fluid (rc = 2.5 sigma) and a contact law (rc = a diameter).
@@ -28,6 +32,7 @@
 
 #include "checks.hpp"
 #include "pdyn/pair.hpp"
+#include "pdyn/special_bonds.hpp"
 #include "sample.hpp"
 
 namespace pdyn::conformance::detail {
@@ -201,7 +206,10 @@ struct Reference {
   double energy_scale = 0.0;
 };
 
-Reference reference_sum(const PairReference& ref, const State& s, double rc) {
+// `alone`: the object that evaluates one pair on its own (without special
+// bonds, which name the particles of `s`).
+Reference reference_sum(const PairReference& ref, const PairReference& alone_ref, const State& s,
+                        double rc) {
   Reference out;
   out.f = Matrix3X::Zero(3, s.size());
   out.energy = ref.add_forces_all_pairs(s.view(), out.f);
@@ -222,12 +230,62 @@ Reference reference_sum(const PairReference& ref, const State& s, double rc) {
         alone.radius[static_cast<std::size_t>(k)] = s.radius[static_cast<std::size_t>(p)];
       }
       f2.setZero();
-      out.energy_scale += std::abs(ref.add_forces_all_pairs(alone.view(), f2));
+      out.energy_scale += std::abs(alone_ref.add_forces_all_pairs(alone.view(), f2));
       out.force_scale(i) += f2.col(0).norm();
       out.force_scale(j) += f2.col(1).norm();
     }
   }
   return out;
+}
+
+// One evaluation of `force` at `s` against the all-pairs sum of `ref`:
+// raises `worst` (relative to sum_j |F_ij| per particle, sum |U_ij| for the
+// energy) and names the place in `where`.
+void compare_with_reference(Force& force, const PairReference& ref, const PairReference& alone_ref,
+                            const State& s, double rc, const std::string& label, double& worst,
+                            std::string& where) {
+  const Matrix3X f = forces_of(force, s);
+  const auto energy = force.potential_energy(s.view());
+  const Reference want = reference_sum(ref, alone_ref, s, rc);
+  for (Index i = 0; i < s.size(); ++i) {
+    const double e = (Vec3(f.col(i)) - Vec3(want.f.col(i))).norm() /
+                     (want.force_scale(i) + std::numeric_limits<double>::min());
+    if (e > worst) {
+      worst = e;
+      where = fmt::format("{}: force on particle {}", label, i);
+    }
+  }
+  if (energy) {
+    const double e =
+        std::abs(*energy - want.energy) / (want.energy_scale + std::numeric_limits<double>::min());
+    if (e > worst) {
+      worst = e;
+      where = fmt::format("{}: energy", label);
+    }
+  }
+}
+
+// `s` (b.n particles) with random velocities and masses, placed in the box
+// holding them at the density, larger if the force refuses it (a cutoff
+// plus skin that does not fit a periodic side); and the force made for it.
+std::shared_ptr<Force> placed_force(const PluginDescriptor& d, const Params& params, const Box& b,
+                                    double rc, State& s, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (Index i = 0; i < s.size(); ++i) {
+    s.v.col(i) = Vec3(u(rng), u(rng), u(rng));
+    s.mass(i) = 1.25 + 0.75 * u(rng);
+  }
+  double side = std::cbrt(static_cast<double>(b.n) / kDensity) * rc;
+  for (int attempt = 0;; ++attempt) {
+    s.domain = Domain{Vec3::Zero(), Vec3::Constant(side), b.periodic};
+    if (!place(s, rc, rng)) throw std::runtime_error("could not place the particles");
+    try {
+      return std::shared_ptr<Force>(d.create_force(params, context_of(s)));
+    } catch (const ParamError&) {
+      if (attempt == 3 || !s.domain.any_periodic()) throw;
+      side *= 1.5;
+    }
+  }
 }
 
 CheckResult matches_brute_force(const PluginDescriptor& d, const Params& params, double rc,
@@ -240,52 +298,17 @@ CheckResult matches_brute_force(const PluginDescriptor& d, const Params& params,
   // large ones (it must be rebuilt) and a fresh placement (everything moved).
   const double kSmall = 0.005, kLarge = 0.25;  // times rc
   const double moves[] = {kSmall, kLarge, kSmall, kLarge, -1.0, kSmall, kLarge};
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   double worst = 0.0;
   std::string where;
   int calls = 0;
   for (const Box& b : boxes) {
     State s = make_state(b.n);
-    for (Index i = 0; i < s.size(); ++i) {
-      s.v.col(i) = Vec3(u(rng), u(rng), u(rng));
-      s.mass(i) = 1.25 + 0.75 * u(rng);
-    }
-    // The box holding n particles at the density, larger if the force
-    // refuses it (a cutoff plus skin that does not fit a periodic side).
-    double side = std::cbrt(static_cast<double>(b.n) / kDensity) * rc;
-    std::shared_ptr<Force> force;
-    for (int attempt = 0; !force; ++attempt) {
-      s.domain = Domain{Vec3::Zero(), Vec3::Constant(side), b.periodic};
-      if (!place(s, rc, rng)) throw std::runtime_error("could not place the particles");
-      try {
-        force = std::shared_ptr<Force>(d.create_force(params, context_of(s)));
-      } catch (const ParamError&) {
-        if (attempt == 3 || !s.domain.any_periodic()) throw;
-        side *= 1.5;
-      }
-    }
+    const auto force = placed_force(d, params, b, rc, s, rng);
     const PairReference* ref = reference_of(*force);
     if (!ref) throw std::runtime_error("a second object offers no PairReference");
     for (std::size_t call = 0; call <= std::size(moves); ++call) {
-      const Matrix3X f = forces_of(*force, s);
-      const auto energy = force->potential_energy(s.view());
-      const Reference want = reference_sum(*ref, s, rc);
-      for (Index i = 0; i < s.size(); ++i) {
-        const double e = (Vec3(f.col(i)) - Vec3(want.f.col(i))).norm() /
-                         (want.force_scale(i) + std::numeric_limits<double>::min());
-        if (e > worst) {
-          worst = e;
-          where = fmt::format("{}, call {}: force on particle {}", b.label, call + 1, i);
-        }
-      }
-      if (energy) {
-        const double e = std::abs(*energy - want.energy) /
-                         (want.energy_scale + std::numeric_limits<double>::min());
-        if (e > worst) {
-          worst = e;
-          where = fmt::format("{}, call {}: energy", b.label, call + 1);
-        }
-      }
+      compare_with_reference(*force, *ref, *ref, s, rc,
+                             fmt::format("{}, call {}", b.label, call + 1), worst, where);
       ++calls;
       if (call == std::size(moves)) break;
       if (moves[call] < 0) {
@@ -304,6 +327,73 @@ CheckResult matches_brute_force(const PluginDescriptor& d, const Params& params,
                                   calls)
                     : fmt::format("the neighbor-list result differs from the all-pairs sum; "
                                   "worst: {}",
+                                  where));
+}
+
+// Each particle bonded to its nearest neighbour (to the nearest image): a
+// forest of short chains and branches whose 1-2, 1-3 and 1-4 pairs lie
+// mostly within the cutoff.
+std::vector<IndexPair> nearest_bonds(const State& s) {
+  std::vector<IndexPair> bonds;
+  for (Index i = 0; i < s.size(); ++i) {
+    Index best = -1;
+    double best2 = std::numeric_limits<double>::infinity();
+    for (Index j = 0; j < s.size(); ++j) {
+      const double r2 = s.domain.minimum_image(s.x.col(i) - s.x.col(j)).squaredNorm();
+      if (j != i && r2 < best2) {
+        best = j;
+        best2 = r2;
+      }
+    }
+    if (best >= 0) bonds.push_back({std::min(i, best), std::max(i, best)});
+  }
+  return bonds;
+}
+
+CheckResult special_bonds_check(const PluginDescriptor& d, const Params& params, double rc,
+                                std::mt19937_64& rng) {
+  const char* name = "pair.special_bonds";
+  const Box boxes[] = {{"open, 150 particles", 150, {false, false, false}},
+                       {"periodic, 150 particles", 150, {true, true, true}}};
+  // Excluded and scaled (LAMMPS's `special_bonds lj 0 0.5 0.25`), and
+  // excluded only (`special_bonds fene`, the loop without weights).
+  const std::array<double, 3> settings[] = {{0.0, 0.5, 0.25}, {0.0, 1.0, 1.0}};
+  double worst = 0.0;
+  std::string where;
+  int calls = 0;
+  for (const Box& b : boxes) {
+    State s = make_state(b.n);
+    const auto force = placed_force(d, params, b, rc, s, rng);
+    auto* target = dynamic_cast<SpecialBondsTarget*>(force.get());
+    if (!target) {
+      return skip(name,
+                  "built against an SDK without special bonds (before 0.10): a scene with "
+                  "special_bonds refuses this force");
+    }
+    const auto alone = std::shared_ptr<Force>(d.create_force(params, context_of(s)));
+    const std::vector<IndexPair> bonds = nearest_bonds(s);
+    for (const auto& w : settings) {
+      target->set_special_bonds(
+          std::make_shared<const SpecialBonds>(special_bonds(s.size(), bonds, w)));
+      for (int call = 0; call < 3; ++call) {  // the list built, reused, rebuilt
+        compare_with_reference(
+            *force, *reference_of(*force), *reference_of(*alone), s, rc,
+            fmt::format("{}, weights {} {} {}, call {}", b.label, w[0], w[1], w[2], call + 1),
+            worst, where);
+        ++calls;
+        move(s, call == 0 ? 0.005 * rc : 0.25 * rc, rc, rng);
+      }
+    }
+  }
+  const double bound = 1e-10;
+  return result(name, worst <= bound, worst, bound,
+                worst <= bound
+                    ? fmt::format("{} calls, open and periodic, each particle bonded to its "
+                                  "nearest: weights 0 0.5 0.25 and 0 1 1 for the 1-2, 1-3, 1-4 "
+                                  "pairs, max |f_i - f_i(all pairs)| / sum_j |F_ij|, and for U",
+                                  calls)
+                    : fmt::format("with special bonds the neighbor-list result differs from the "
+                                  "all-pairs sum; worst: {}",
                                   where));
 }
 
@@ -391,8 +481,9 @@ void pair_checks(const PluginDescriptor& d, const Params& params, const Force& f
   const PairReference* home = reference_of(force);
   if (!home) {
     const char* why = "not a pair force (offers no pdyn::PairReference, pdyn/pair.hpp)";
-    for (const char* name : {"pair.newton_third_law", "pair.gradient", "pair.matches_brute_force",
-                             "pair.continuous_at_cutoff", "pair.selecting_loop"}) {
+    for (const char* name :
+         {"pair.newton_third_law", "pair.gradient", "pair.matches_brute_force",
+          "pair.special_bonds", "pair.continuous_at_cutoff", "pair.selecting_loop"}) {
       out.push_back(skip(name, why));
     }
     return;
@@ -405,6 +496,8 @@ void pair_checks(const PluginDescriptor& d, const Params& params, const Force& f
   guarded(out, "pair.gradient", [&] { return gradient(make, usable_cutoff(*home), rng); });
   guarded(out, "pair.matches_brute_force",
           [&] { return matches_brute_force(d, params, usable_cutoff(*home), rng); });
+  guarded(out, "pair.special_bonds",
+          [&] { return special_bonds_check(d, params, usable_cutoff(*home), rng); });
   guarded(out, "pair.continuous_at_cutoff",
           [&] { return continuous_at_cutoff(d, params, *home, rng); });
   guarded(out, "pair.selecting_loop", [&] { return selecting_loop(force); });

@@ -64,6 +64,11 @@ struct PendingPlugin {
   double compliance = 0.0;  // a constraint's `compliance` key (0 = rigid)
 };
 
+/// Why `force` (a scene object labelled `label`, from `library`) cannot be
+/// given special bonds: a pair force built before them. Empty otherwise.
+std::string special_bonds_refusal(const Force& force, const std::string& label,
+                                  const fs::path& library);
+
 class Loader final : public BuilderHost {
  public:
   Loader(std::string file, const PluginRegistry& registry, std::vector<Override> overrides)
@@ -165,6 +170,11 @@ class Loader final : public BuilderHost {
   void read_solver(const YAML::Node& root, std::vector<PendingPlugin>& solvers);
   void assemble_system(Scene& scene);
   void read_constraint_force(const YAML::Node& n, Scene& scene);
+  // ---- special bonds (scene_special_bonds.cpp) ----
+  void read_special_bonds(const YAML::Node& n, Scene& scene);
+  /// Gives every pair force the special bonds of the scene's bonds, or
+  /// reports one that cannot take them (located at `special_bonds:`).
+  void apply_special_bonds(Scene& scene);
   void add_constraint_to(System& sys, PendingPlugin& p, const SceneContext& ctx,
                          const std::string& label);
   void create_plugins(Scene& scene, std::vector<PendingPlugin>& forces,
@@ -279,6 +289,7 @@ class Loader final : public BuilderHost {
   YAML::Node checkpoint_node_;
   std::string checkpoint_key_;
   std::optional<VelocitySpec> velocities_;  // `velocities:`, when given and valid
+  YAML::Node special_node_;                 // `special_bonds:`, where its problems are reported
   YAML::Node velocities_node_;
 };
 

@@ -827,7 +827,7 @@ Scene Loader::load(const std::string& text) {
 
   check_keys(root, "",
              {"simulation", "output", "checkpoint", "particles", "velocities", "forces",
-              "colliders", "constraints"});
+              "colliders", "constraints", "special_bonds"});
   read_simulation(root["simulation"], scene);
   read_particles(root["particles"]);
   check_inside_box();
@@ -838,6 +838,7 @@ Scene Loader::load(const std::string& text) {
   read_plugin_list(root["constraints"], "constraints", PluginKind::Constraint, constraints);
   read_solver(root, solvers);
   read_output(root["output"], root["checkpoint"], scene);
+  read_special_bonds(root["special_bonds"], scene);
   warn_unused_topology();
   if (!diags_.empty()) fail();
 
@@ -845,6 +846,8 @@ Scene Loader::load(const std::string& text) {
   // factories may still refuse values (ParamError), reported the same way.
   assemble_system(scene);
   create_plugins(scene, forces, colliders, constraints, solvers);
+  if (!diags_.empty()) fail();
+  apply_special_bonds(scene);
   if (!diags_.empty()) fail();
   scene.warnings = std::move(warnings_);
   return scene;
@@ -926,6 +929,11 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
     case PluginKind::Force: {
       auto f = create(p, [&] { return registry_.create_force(*rec, p.params, ctx); });
       if (!f) fail();
+      if (const std::string why = special_bonds_refusal(*f, label, rec->library);
+          scene.special_bonds && !why.empty()) {
+        diags_.push_back({file_, fmt::format("{}: {} (the scene has special_bonds)", path, why)});
+        fail();
+      }
       if (scene.solver) {
         const std::string why = fixed_step_conflict(*f, name, *scene.solver, scene.solver_name);
         if (!why.empty()) {
@@ -962,6 +970,8 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
   }
   scene.libraries[label] = rec->library;
   scene.uses.push_back({kind, name, label, std::move(p.params)});
+  // A new pair force takes the scene's special bonds; new bonds change them.
+  apply_special_bonds(scene);
   return label;
 }
 

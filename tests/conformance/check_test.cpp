@@ -65,6 +65,7 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, CheckBroken,
                                          BrokenCase{"lopsided_pair", "pair.newton_third_law"},
                                          BrokenCase{"stale_pair_list", "pair.matches_brute_force"},
                                          BrokenCase{"jumping_pair", "pair.continuous_at_cutoff"},
+                                         BrokenCase{"unscaled_pair", "pair.special_bonds"},
                                          BrokenCase{"bond_one_sided", "bonded.third_law"},
                                          BrokenCase{"bond_bad_energy", "bonded.gradient"},
                                          BrokenCase{"bond_bad_hessian", "bonded.jacobian_exact"},
@@ -93,11 +94,12 @@ TEST(Check, EachBrokenPairForceFailsOnlyItsOwnPairCheck) {
   const std::map<std::string, std::string> own = {{"bad_pair_gradient", "pair.gradient"},
                                                   {"lopsided_pair", "pair.newton_third_law"},
                                                   {"stale_pair_list", "pair.matches_brute_force"},
-                                                  {"jumping_pair", "pair.continuous_at_cutoff"}};
+                                                  {"jumping_pair", "pair.continuous_at_cutoff"},
+                                                  {"unscaled_pair", "pair.special_bonds"}};
   for (const auto& [plugin, check] : own) {
     const auto res = test::pdyn({"check", plugin, "--plugin-path", kBroken});
     const auto verdicts = pair_verdicts(res.out);
-    EXPECT_EQ(verdicts.size(), 5u) << res.out;
+    EXPECT_EQ(verdicts.size(), 6u) << res.out;
     for (const auto& [name, verdict] : verdicts) {
       EXPECT_EQ(verdict, name == check ? "FAIL" : (verdict == "skip" ? "skip" : "pass"))
           << plugin << ": " << name << "\n"
@@ -155,18 +157,21 @@ TEST(Check, PairForcesPassThePairChecks) {
        {{"pair.newton_third_law", conformance::Verdict::Pass},
         {"pair.gradient", conformance::Verdict::Pass},
         {"pair.matches_brute_force", conformance::Verdict::Pass},
+        {"pair.special_bonds", conformance::Verdict::Pass},
         {"pair.continuous_at_cutoff", conformance::Verdict::Pass},
         {"pair.selecting_loop", conformance::Verdict::Pass}}},
       {"soft_contact",  // a general law (radii, velocities): it branches
        {{"pair.newton_third_law", conformance::Verdict::Pass},
         {"pair.gradient", conformance::Verdict::Pass},
         {"pair.matches_brute_force", conformance::Verdict::Pass},
+        {"pair.special_bonds", conformance::Verdict::Pass},
         {"pair.continuous_at_cutoff", conformance::Verdict::Skip},
         {"pair.selecting_loop", conformance::Verdict::Skip}}},
       {"spring",  // not a pair force
        {{"pair.newton_third_law", conformance::Verdict::Skip},
         {"pair.gradient", conformance::Verdict::Skip},
         {"pair.matches_brute_force", conformance::Verdict::Skip},
+        {"pair.special_bonds", conformance::Verdict::Skip},
         {"pair.continuous_at_cutoff", conformance::Verdict::Skip},
         {"pair.selecting_loop", conformance::Verdict::Skip}}}};
   for (const auto& [plugin, verdicts] : expected) {

@@ -92,7 +92,7 @@ BASE_SCENE = {
     "forces": [{"type": "gravity"}],
 }
 SCENE_SECTIONS = {"simulation", "output", "particles", "forces", "colliders", "constraints",
-                  "checkpoint", "velocities"}
+                  "checkpoint", "velocities", "special_bonds"}
 
 # The fewest C++ blocks of one prelude worth precompiling it for (prelude_header).
 PCH_MIN_BLOCKS = 4

@@ -71,6 +71,13 @@
 // PairForce is PeriodicInvariant (pdyn/periodic_invariant.hpp): the wrap
 // after each step does not make velocity Verlet evaluate it again.
 //
+// Special bonds (pdyn/special_bonds.hpp). Given the scene's SpecialBonds,
+// the loops run over the neighbor list's rows with the pairs of weight 0
+// left out (copied after each list build, O(listed pairs)), and, only when
+// some weight lies strictly between 0 and 1, multiply each pair's energy
+// and force by its weight. Without special bonds, or with exclusions only
+// (LAMMPS's `special_bonds fene`), the loop is the one above.
+//
 // Checking (PairReference below). Every PairForce also offers the
 // conformance kit (`pdyn check`) what it needs to check the pair loop
 // against the law: the cutoff, a brute-force sum over all pairs (no
@@ -100,6 +107,7 @@
 #include "pdyn/neighbors.hpp"
 #include "pdyn/parallel.hpp"
 #include "pdyn/periodic_invariant.hpp"
+#include "pdyn/special_bonds.hpp"
 #include "pdyn/thermo.hpp"
 
 namespace pdyn {
@@ -181,7 +189,8 @@ class PairForce : public Force,
                   public PairReference,
                   public PairLoop,
                   public PeriodicInvariant,
-                  public VirialSource {
+                  public VirialSource,
+                  public SpecialBondsTarget {
  public:
   PairForce(Law law, double cutoff, double skin, std::vector<std::uint8_t> members = {})
       : law_(std::move(law)),
@@ -199,14 +208,20 @@ class PairForce : public Force,
       return;
     }
 #endif
-    range_forces(p, f, 0, n, 0);
+    const Rows r = rows();
+    if (r.which) {
+      range_forces<true>(p, f, 0, n, 0, r);
+    } else {
+      range_forces<false>(p, f, 0, n, 0, r);
+    }
   }
 
-  /// Sum of U over the pairs closer than the cutoff, J.
+  /// Sum of w U over the pairs closer than the cutoff (w: the pair's
+  /// special-bond weight, 1 without special bonds), J.
   std::optional<double> potential_energy(const ParticleView& p) const override {
     double u = 0.0;
-    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2) {
-      u += evaluate(p, i, j, d, r2).energy;
+    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2, double w) {
+      u += w * evaluate(p, i, j, d, r2).energy;
     });
     return u;
   }
@@ -215,8 +230,8 @@ class PairForce : public Force,
   /// separation to the nearest image (pdyn/thermo.hpp), J.
   double virial(const ParticleView& p) const override {
     double w = 0.0;
-    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2) {
-      w += d.dot(evaluate(p, i, j, d, r2).force);
+    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2, double wt) {
+      w += d.dot(wt * evaluate(p, i, j, d, r2).force);
     });
     return w;
   }
@@ -242,11 +257,12 @@ class PairForce : public Force,
                       l.force_over_r_slope(1.0, std::int32_t{}, std::int32_t{})
                       } -> std::convertible_to<double>;
                   }) {
-      for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2) {
+      for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2, double w) {
         const std::int32_t ti = type_of(p, i), tj = type_of(p, j);
         const double g = law_(r2, ti, tj).force_over_r;
-        const Eigen::Matrix3d k = g * Eigen::Matrix3d::Identity() +
-                                  (2.0 * law_.force_over_r_slope(r2, ti, tj)) * d * d.transpose();
+        const Eigen::Matrix3d k =
+            w * (g * Eigen::Matrix3d::Identity() +
+                 (2.0 * law_.force_over_r_slope(r2, ti, tj)) * d * d.transpose());
         sink.add_dfdx(i, i, k);
         sink.add_dfdx(i, j, -k);
         sink.add_dfdx(j, i, -k);
@@ -257,6 +273,15 @@ class PairForce : public Force,
       return Force::add_jacobians(p, sink);
     }
   }
+
+  // ---- SpecialBondsTarget ----
+  void set_special_bonds(std::shared_ptr<const SpecialBonds> special) override {
+    special_ = special && !special->empty() ? std::move(special) : nullptr;
+    scales_ = special_ && special_->scales();
+    rows_stamp_ = 0;  // rebuild the rows, and the threads' lists, at the next evaluation
+    cross_stamp_ = 0;
+  }
+  const SpecialBonds* special_bonds() const override { return special_.get(); }
 
   // ---- PairLoop ----
   bool central_law() const override { return kCentral; }
@@ -290,10 +315,12 @@ class PairForce : public Force,
         const Vec3 d = p.domain.minimum_image(p.x.col(i) - p.x.col(j));
         const double r2 = d.squaredNorm();
         if (!(r2 < cutoff2_)) continue;
+        const double w = special_ ? special_->weight(i, j) : 1.0;
+        if (w == 0.0) continue;
         const PairVector t = evaluate(p, i, j, d, r2);
-        f.col(i) += t.force;
-        f.col(j) -= t.force;
-        u += t.energy;
+        f.col(i) += w * t.force;
+        f.col(j) -= w * t.force;
+        u += w * t.energy;
       }
     }
     return u;
@@ -306,17 +333,41 @@ class PairForce : public Force,
     return shared_.update(p.x, p.domain, members_.empty() ? nullptr : &members_);
   }
 
-  // visit(i, j, d, r2) for every listed pair closer than the cutoff, in the
-  // one-thread loop's order (the serial paths: energy, Jacobians).
+  // The rows the loops run over (after update()): the neighbor list's, or
+  // with special bonds its copy without the excluded pairs, rebuilt after
+  // each list build. which (per listed pair, an index into scale) only when
+  // some pair is scaled rather than excluded.
+  struct Rows {
+    const Index* offsets = nullptr;
+    const Index* indices = nullptr;
+    const std::uint8_t* which = nullptr;
+    const double* scale = nullptr;
+  };
+  Rows rows() const {
+    const NeighborList& list = *shared_.list();
+    if (!special_) return {list.offsets().data(), list.indices().data(), nullptr, nullptr};
+    if (rows_stamp_ != list.stamp()) {
+      special_rows_.build(list.offsets(), list.indices(), *special_);
+      rows_stamp_ = list.stamp();
+    }
+    return {special_rows_.offsets(), special_rows_.indices(),
+            scales_ ? special_rows_.which() : nullptr, special_rows_.scale().data()};
+  }
+
+  // visit(i, j, d, r2, w) for every listed pair closer than the cutoff, w its
+  // special-bond weight, in the one-thread loop's order (the serial paths:
+  // energy, virial, Jacobians).
   template <class Visit>
   void for_each_pair(const ParticleView& p, Visit&& visit) const {
-    const NeighborList& list = update(p);
+    update(p);
+    const Rows r = rows();
     const Images im(p.domain);
     for (Index i = 0; i < p.size(); ++i) {
-      for (const Index j : list.neighbors(i)) {
+      for (Index k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
+        const Index j = r.indices[k];
         const Vec3 d = separation(p, im, i, j);
         const double r2 = d.squaredNorm();
-        if (r2 < cutoff2_) visit(i, j, d, r2);
+        if (r2 < cutoff2_) visit(i, j, d, r2, r.which ? r.scale[r.which[k]] : 1.0);
       }
     }
   }
@@ -396,27 +447,30 @@ class PairForce : public Force,
   // the pairs of earlier ranges that reach into it (cross_[0, owner)), then
   // its own rows. With [0, N) it is the one-thread loop. Raw pointers and
   // strides are read once: through the Ref and the span the compiler would
-  // reload them after every store to f.
+  // reload them after every store to f. Weighted: rows r give each pair's
+  // special-bond weight (r.which), which multiplies its force.
+  template <bool Weighted>
   void range_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f, Index begin, Index end,
-                    std::size_t owner) const {
+                    std::size_t owner, const Rows& r) const {
     const Images im(p.domain);
     const double* x = p.x.data();
     double* fd = f.data();
     const Index fs = f.outerStride();
     for (std::size_t t = 0; t < owner; ++t) {
-      for (const auto& [i, j] : cross_[t]) {
+      for (const auto& [i, j, which] : cross_[t]) {
         if (j < begin || j >= end) continue;
         const Vec3 d = separation(x + 3 * i, x + 3 * j, im);
         const double r2 = d.squaredNorm();
         if (!(r2 < cutoff2_)) continue;
-        Eigen::Map<Vec3>(fd + fs * j) -= evaluate(p, i, j, d, r2).force;
+        Vec3 fij = evaluate(p, i, j, d, r2).force;
+        if constexpr (Weighted) fij *= r.scale[which];
+        Eigen::Map<Vec3>(fd + fs * j) -= fij;
       }
     }
-    const NeighborList& list = *shared_.list();
-    const Index* offsets = list.offsets().data();
-    const Index* indices = list.indices().data();
+    const Index* offsets = r.offsets;
+    const Index* indices = r.indices;
     if constexpr (kSelect) {
-      range_forces_selected(p, fd, fs, offsets, indices, begin, end, im);
+      range_forces_selected<Weighted>(p, fd, fs, r, begin, end, im);
       return;
     }
     for (Index i = begin; i < end; ++i) {
@@ -427,7 +481,8 @@ class PairForce : public Force,
         const Vec3 d = separation(xi, x + 3 * j, im);
         const double r2 = d.squaredNorm();
         if (!(r2 < cutoff2_)) continue;
-        const Vec3 fij = evaluate(p, i, j, d, r2).force;
+        Vec3 fij = evaluate(p, i, j, d, r2).force;
+        if constexpr (Weighted) fij *= r.scale[r.which[k]];
         fi += fij;
         if (j < end) Eigen::Map<Vec3>(fd + fs * j) -= fij;
       }
@@ -443,9 +498,13 @@ class PairForce : public Force,
   // of a Verlet list (skin 0.3 at cutoff 2.5) lies beyond the cutoff, in no
   // predictable order: the branch on r2 mispredicts, the select does not,
   // and the law's arithmetic runs in vector registers. A pair beyond the
-  // cutoff adds 0 * d, which leaves every sum unchanged.
-  void range_forces_selected(const ParticleView& p, double* fd, Index fs, const Index* offsets,
-                             const Index* indices, Index begin, Index end, const Images& im) const {
+  // cutoff adds 0 * d, which leaves every sum unchanged. Weighted: each g
+  // is multiplied by its pair's special-bond weight.
+  template <bool Weighted>
+  void range_forces_selected(const ParticleView& p, double* fd, Index fs, const Rows& r,
+                             Index begin, Index end, const Images& im) const {
+    const Index* offsets = r.offsets;
+    const Index* indices = r.indices;
     constexpr Index kBlock = 64;
     alignas(64) double dx[kBlock], dy[kBlock], dz[kBlock], r2s[kBlock], g[kBlock];
     alignas(64) std::int32_t tj[kBlock];
@@ -473,6 +532,10 @@ class PairForce : public Force,
           const double v = law_(r2s[k], ti, tj[k]).force_over_r;
           g[k] = r2s[k] < cutoff2 ? v : 0.0;
         }
+        if constexpr (Weighted) {
+          const std::uint8_t* which = r.which + k0;
+          for (Index k = 0; k < m; ++k) g[k] *= r.scale[which[k]];
+        }
         for (Index k = 0; k < m; ++k) {
           const Index j = row[k];
           const Vec3 fij = g[k] * Vec3(dx[k], dy[k], dz[k]);
@@ -492,6 +555,7 @@ class PairForce : public Force,
   void parallel_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) {
     const Index n = p.size();
     const NeighborList& list = *shared_.list();
+    const Rows r = rows();
     const bool listed = cross_stamp_ == list.stamp() && cross_n_ == n;
 #pragma omp parallel
     {
@@ -511,13 +575,18 @@ class PairForce : public Force,
         auto& out = cross_[static_cast<std::size_t>(t)];
         out.clear();
         for (Index i = begin; i < end; ++i) {
-          for (const Index j : list.neighbors(i)) {
-            if (j >= end) out.push_back({i, j});
+          for (Index k = r.offsets[i]; k < r.offsets[i + 1]; ++k) {
+            const Index j = r.indices[k];
+            if (j >= end) out.push_back({i, j, r.which ? r.which[k] : std::uint8_t{0}});
           }
         }
 #pragma omp barrier
       }
-      range_forces(p, f, begin, end, static_cast<std::size_t>(t));
+      if (r.which) {
+        range_forces<true>(p, f, begin, end, static_cast<std::size_t>(t), r);
+      } else {
+        range_forces<false>(p, f, begin, end, static_cast<std::size_t>(t), r);
+      }
     }
   }
 #endif
@@ -526,11 +595,22 @@ class PairForce : public Force,
   double cutoff2_;
   mutable SharedNeighborList shared_;  // brought up to date by const potential_energy too
   mutable std::vector<std::uint8_t> members_;
+  // Special bonds (nullptr: none), whether some weight lies strictly
+  // between 0 and 1, and the rows without the excluded pairs, valid for the
+  // list build stamped rows_stamp_.
+  std::shared_ptr<const SpecialBonds> special_;
+  bool scales_ = false;
+  mutable SpecialRows special_rows_;
+  mutable std::uint64_t rows_stamp_ = 0;
   // The threaded path's pairs across ranges: cross_[t] holds, in row order,
-  // the listed (i, j) with i in thread t's range and j past it; valid for
-  // the list build stamped cross_stamp_, N = cross_n_ and cross_threads_
-  // threads.
-  std::vector<std::vector<std::pair<Index, Index>>> cross_;
+  // the listed (i, j) with i in thread t's range and j past it, and the
+  // pair's special-bond weight index; valid for the list build stamped
+  // cross_stamp_, N = cross_n_ and cross_threads_ threads.
+  struct Cross {
+    Index i, j;
+    std::uint8_t which;
+  };
+  std::vector<std::vector<Cross>> cross_;
   std::uint64_t cross_stamp_ = 0;
   Index cross_n_ = -1, cross_threads_ = 0;
 };

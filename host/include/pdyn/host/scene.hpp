@@ -1,10 +1,12 @@
 // Scenes: a YAML file assembled into a ready-to-run system.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -119,6 +121,10 @@ struct PDYN_HOST_API Scene {
   /// ("data.lmp:40:1: the file's Bonds (12 rows) are not read ..."): every
   /// host shows them (pdyn validate and run on stderr, Python as warnings).
   std::vector<std::string> warnings;
+  /// `special_bonds:`, the pair forces' weights w12, w13, w14 of particles
+  /// one, two and three bonds apart (pdyn/special_bonds.hpp); none: every
+  /// pair at full weight. Objects added later (add_plugin) follow it.
+  std::optional<std::array<double, 3>> special_bonds;
 };
 
 /// Reads, validates and assembles the scene in `file`, with `overrides`
