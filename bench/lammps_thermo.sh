@@ -14,7 +14,8 @@
 #   cases: fene (bond_style fene), molecular (harmonic bonds and angles, OPLS
 #   dihedrals), cosine (angle cosine/squared, dihedral harmonic), improper
 #   (improper harmonic), kg (the Kremer-Grest melt with special_bonds fene),
-#   scaled (special_bonds lj 0.2 0.5 0.25); default all
+#   scaled (special_bonds lj 0.2 0.5 0.25), trimers (fix rattle b 1 a 1);
+#   default all
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=build
@@ -28,7 +29,7 @@ while (($#)); do
   esac
   shift
 done
-((${#cases[@]})) || cases=(fene molecular cosine improper kg scaled)
+((${#cases[@]})) || cases=(fene molecular cosine improper kg scaled trimers)
 pdyn="$PWD/$build/bin/pdyn"
 [[ -x "$pdyn" ]] || { echo "lammps_thermo: no $pdyn (build pdyn first)" >&2; exit 2; }
 have_lmp=0
@@ -45,7 +46,8 @@ for c in "${cases[@]}"; do
     improper) set -- molecular make_reference_improper.lmp improper.thermo improper_start.data improper.yaml out/improper-energy.csv ;;
     kg) set -- special make_reference_kg.lmp kg.thermo kg_start.data kg.yaml out/kg-energy.csv ;;
     scaled) set -- special make_reference_scaled.lmp scaled.thermo scaled_start.data scaled.yaml out/scaled-energy.csv ;;
-    *) echo "lammps_thermo: unknown case '$c' (expected fene, molecular, cosine, improper, kg or scaled)" >&2; exit 2 ;;
+    trimers) set -- trimers make_reference.lmp reference.thermo trimers_start.data trimers.yaml out/trimers-energy.csv ;;
+    *) echo "lammps_thermo: unknown case '$c' (expected fene, molecular, cosine, improper, kg, scaled or trimers)" >&2; exit 2 ;;
   esac
   scene=tests/scenes/$1
   out=out/lammps-thermo/$c

@@ -502,12 +502,19 @@ void constraint_checks(const PluginDescriptor& d, const Options& o, std::vector<
   std::mt19937_64 rng(o.seed);
   const State home = random_state(rng);
   const Params params = sample_params(d, kParticles);
-  const Params defaults = default_params(d, kParticles);
+  Params defaults = default_params(d, kParticles);
   Maker make = [&](const Params& with, const State& at) {
     std::shared_ptr<Constraint> c(d.create_constraint(with, context_of(at)));
     if (!c) throw std::runtime_error("factory returned null");
     return c;
   };
+  // A plugin that needs one of two optional lists (distance: pairs or
+  // triples) refuses the bare defaults: its samples are then its defaults.
+  try {
+    make(defaults, home);
+  } catch (const ParamError&) {
+    defaults = params;
+  }
 
   std::shared_ptr<Constraint> constraint;
   guarded(out, "construct.defaults", [&] {

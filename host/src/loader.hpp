@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -118,6 +119,10 @@ class Loader final : public BuilderHost {
   template <std::size_t K>
   std::optional<std::vector<std::array<Index, K>>> read_data_terms(const YAML::Node& n,
                                                                    const std::string& path);
+  /// The LAMMPS types `types:` selects of a data file's section (empty: all).
+  std::optional<std::set<long long>> selected_types(const YAML::Node& n, const std::string& path,
+                                                    const import_files::Imported::Terms& terms,
+                                                    const std::string& file);
   /// After read_params read a term list from a data file: its types as the
   /// plugin's `types`, or the reason they cannot be.
   void apply_data_types(const YAML::Node& map, const std::string& path,

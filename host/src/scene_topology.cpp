@@ -3,9 +3,12 @@
 // file the scene's particles came from, `triples:` its Angles, `quads:` its
 // Dihedrals (or `section: Impropers`), with each term's type: LAMMPS's
 // type t is the plugin's term type t - 1, so that `ks: [K1, K2]` lists the
-// coefficients of bond types 1 and 2 in order (docs/bonded.md). Members of
-// Loader (loader.hpp), apart from scene_files.cpp for size.
+// coefficients of bond types 1 and 2 in order (docs/bonded.md). `types:
+// [1, 3]` takes only the terms of those LAMMPS types, as `fix shake ... b 1
+// 3` names the bonds it holds rigid (issue 44 item 4). Members of Loader
+// (loader.hpp), apart from scene_files.cpp for size.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -34,7 +37,7 @@ template <std::size_t K>
 std::optional<std::vector<std::array<Index, K>>> Loader::read_data_terms(const YAML::Node& n,
                                                                          const std::string& path) {
   const auto file = side_file(n, path, "{ file: NAME.data }, a data file of the scene's particles",
-                              {"file", "format", "section"});
+                              {"file", "format", "section", "types"});
   if (!file) return std::nullopt;
   const auto it = topology_.find(file->lexically_normal().string());
   if (it == topology_.end() || it->second.entries != 1) {
@@ -67,15 +70,52 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_data_terms(const Y
                       file->filename().string(), section, section));
     return std::nullopt;
   }
-  std::vector<std::array<Index, K>> out(terms->particles.size());
-  for (std::size_t s = 0; s < out.size(); ++s) {
+  const auto selected = selected_types(n, path, *terms, file->filename().string());
+  if (!selected) return std::nullopt;
+  std::vector<std::array<Index, K>> out;
+  std::vector<long long> types;
+  for (std::size_t s = 0; s < terms->particles.size(); ++s) {
+    if (!selected->empty() && selected->count(terms->type[s]) == 0) continue;
+    std::array<Index, K> term{};
     for (std::size_t a = 0; a < K; ++a) {
-      out[s][a] = t.first + static_cast<Index>(terms->particles[s][a]);
+      term[a] = t.first + static_cast<Index>(terms->particles[s][a]);
     }
+    out.push_back(term);
+    types.push_back(terms->type[s]);
   }
   if (std::find(t.used.begin(), t.used.end(), section) == t.used.end()) t.used.push_back(section);
-  data_types_ =
-      DataTypes{path.substr(path.rfind('.') + 1), section, file->filename().string(), terms->type};
+  data_types_ = DataTypes{path.substr(path.rfind('.') + 1), section, file->filename().string(),
+                          std::move(types)};
+  return out;
+}
+
+// The mapping's `types: [t, ...]` (LAMMPS's numbers), each a type some
+// term of the section has; empty: every term.
+std::optional<std::set<long long>> Loader::selected_types(
+    const YAML::Node& n, const std::string& path, const import_files::Imported::Terms& terms,
+    const std::string& file) {
+  std::set<long long> out;
+  const YAML::Node list = n["types"];
+  if (!list.IsDefined()) return out;
+  const std::set<long long> present(terms.type.begin(), terms.type.end());
+  const std::string expected = fmt::format("expected a list of the LAMMPS types of its {}: {}",
+                                           terms.section, fmt::join(present, ", "));
+  if (!list.IsSequence() || list.size() == 0) {
+    error(list, path + ".types",
+          fmt::format("{}.types: '{}' is not a list of types ({})", path, shown(list), expected));
+    return std::nullopt;
+  }
+  for (std::size_t k = 0; k < list.size(); ++k) {
+    long long t = 0;
+    if (!list[k].IsScalar() || !YAML::convert<long long>::decode(list[k], t) ||
+        present.count(t) == 0) {
+      error(list[k], path + ".types",
+            fmt::format("{}.types[{}]: '{}' is not a type of the {} of '{}' ({})", path, k,
+                        shown(list[k]), terms.section, file, expected));
+      return std::nullopt;
+    }
+    out.insert(t);
+  }
   return out;
 }
 

@@ -190,9 +190,13 @@ TEST(DataTopology, EachBadInputIsRefusedWhereItIsWritten) {
        "SCENE:6:39: forces[0].pairs.section: 'Angles' is not a section of 2-particle terms "
        "(expected Bonds)"},
       {"constraint-types", "", "",
-       "  - { type: gravity }\nconstraints:\n  - { type: distance, pairs: { file: DATA } }\n",
-       "SCENE:8:30: constraints[0].pairs: the Bonds of 'chain.data' are of 2 types and this "
-       "plugin takes no types (expected terms of one type)"},
+       "  - { type: gravity }\nconstraints:\n  - { type: distance, pairs: { file: DATA, types: "
+       "[3] } }\n",
+       "constraints[0].pairs.types[0]: '3' is not a type of the Bonds of 'chain.data' (expected "
+       "a list of the LAMMPS types of its Bonds: 1, 2)"},
+      {"types-not-list", "", "", "  - { type: spring, ks: 1, pairs: { file: DATA, types: 2 } }\n",
+       "forces[0].pairs.types: '2' is not a list of types (expected a list of the LAMMPS types "
+       "of its Bonds: 1, 2)"},
   };
   for (const Case& c : cases) {
     const fs::path data = ChainFile(c.name, c.from, c.to);

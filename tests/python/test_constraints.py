@@ -89,7 +89,7 @@ def test_bad_parameters_are_refused_as_in_a_scene(fall):
          "(expected 0..1: the scene has 2 particles)"),
         (("distance",), {"pairs": [[0, 1]], "lenght": 1.0},
          "add_constraint #4: unknown key 'lenght' in constraint (did you mean 'length'? "
-         "expected one of: pairs, length, type, compliance)"),
+         "expected one of: pairs, triples, length, types, type, compliance)"),
         # A factory's refusal (ParamError), located as the loader's own.
         (("on_sphere",), {"ids": [1], "center": [1, 0, 1]},
          "add_constraint #5: constraint.ids[0]: particle 1 is at the sphere's centre (expected "
