@@ -30,7 +30,10 @@
 // first particle (Domain::nearest_image), as LAMMPS computes a bond with
 // its partner's closest image: a term may cross a periodic face, and must
 // stay shorter than half the box along it. Particles away from the faces
-// are read as they are, bit for bit.
+// are read as they are, bit for bit. So moving particles by whole box
+// lengths changes no term beyond rounding: a BondedForce is
+// PeriodicInvariant (pdyn/periodic_invariant.hpp), and the wrap after each
+// step does not make velocity Verlet evaluate the forces a second time.
 #pragma once
 
 #include <Eigen/Core>
@@ -52,6 +55,7 @@
 #include "pdyn/error.hpp"
 #include "pdyn/force.hpp"
 #include "pdyn/parallel.hpp"
+#include "pdyn/periodic_invariant.hpp"
 #include "pdyn/thermo.hpp"
 #include "pdyn/types.hpp"
 
@@ -60,7 +64,10 @@ namespace pdyn {
 /// A force made of bonded terms with law `Law` (pdyn/bonded_law.hpp; its
 /// threads: the top of this file).
 template <class Law>
-class BondedForce : public Force, public BondedReference, public VirialSource {
+class BondedForce : public Force,
+                    public BondedReference,
+                    public VirialSource,
+                    public PeriodicInvariant {
  public:
   static constexpr int N = Law::arity;
   static_assert(N >= 2 && N <= 4, "a bonded term joins 2, 3 or 4 particles");

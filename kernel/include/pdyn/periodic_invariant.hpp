@@ -21,8 +21,10 @@
 //
 //   class Gravity final : public pdyn::Force, public pdyn::PeriodicInvariant { ... };
 //
-// Springs and other bonded terms measure x_i - x_j as given, so a term
-// across a periodic face is not invariant: they do not implement it.
+// Bonded terms (BondedForce, pdyn/bonded_force.hpp) measure each term at
+// its particles' nearest images since 0.10.0 and implement it too; a bonded
+// force written by hand that measures x_i - x_j as given is not invariant
+// and must not.
 #pragma once
 
 #include "pdyn/export.hpp"

@@ -147,6 +147,19 @@ TEST(VerletReuse, AWrapKeepsTheForcesOnlyWhenEveryForceIsPeriodicInvariant) {
   EXPECT_TRUE(wrapped);
 }
 
+// Bonded terms are measured at their particles' nearest images, so a
+// BondedForce is periodic-invariant too (pdyn/bonded_force.hpp): the
+// Kremer-Grest melt of tests/scenes/special (WCA pairs, FENE bonds across
+// the faces of its periodic box) evaluates once per step although beads
+// cross the faces, and still follows LAMMPS (tests/host/special_bonds_test.cpp).
+TEST(VerletReuse, BondedTermsAcrossWrapsKeepTheForces) {
+  Scene melt = load_scene(test::source_path("tests/scenes/special/kg.yaml"),
+                          test::shipped_plugins(), {{"output", "[]"}});
+  const auto images = melt.system->images();
+  EXPECT_EQ(run(melt, 100, 0.005), 101u);
+  EXPECT_NE(melt.system->images(), images);  // some bead crossed a face
+}
+
 // A force of time but not velocity: a1 is reused only if the next step
 // starts at exactly the time it was evaluated at. (The Stepper's step times
 // always match: t + (k dt - t) is k dt exactly when t is (k - 1) dt, by
