@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `pdyn run` against `lmp` on the Kremer-Grest bead-spring melt (issue 44's
 # speed target): 32,000 beads in 3200 FENE chains with WCA pairs and
-# `special_bonds fene`, LAMMPS's bench/in.chain model, from one state that
+# `special_bonds fene`, LAMMPS's own in.chain benchmark model, from one state that
 # LAMMPS writes (bench/lammps/in.kg_make), 1000 velocity Verlet steps of
 # 0.005, the neighbor list (skin 0.4) checked every step in both. It
 # alternates LAMMPS 1 rank, pdyn 1 thread, LAMMPS 2 ranks, pdyn 2 threads,

@@ -545,6 +545,7 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
   std::vector<SdkCommand> sdk = add_sdk_commands(app);
   sdk.push_back(add_render_command(app));
   sdk.push_back(add_serve_command(app));
+  sdk.push_back(add_convert_command(app));
 
   if (const auto stop = parse_command_line(app, args, out, err)) return *stop;
   try {

@@ -29,6 +29,9 @@ SdkCommand add_new_command(CLI::App& app);
 /// `pdyn schema [--plugin-path DIR] [--output FILE]`.
 SdkCommand add_schema_command(CLI::App& app);
 
+/// `pdyn convert IN [--output SCENE.yaml]` (convert.cpp).
+SdkCommand add_convert_command(CLI::App& app);
+
 /// `pdyn serve SCENE [--port N] [--host ADDR] [--viewer DIR]` (serve.cpp).
 SdkCommand add_serve_command(CLI::App& app);
 

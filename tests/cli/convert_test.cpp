@@ -1,0 +1,99 @@
+// `pdyn convert` (issue 44 item 6): LAMMPS input scripts converted and run.
+// The Kremer-Grest melt (special_bonds fene, fene bonds, WCA pairs, read
+// from its data file) and rigid trimers (fix rattle b 1 a 1, harmonic
+// bond and angle coefficients, LAMMPS's default special bonds) follow
+// LAMMPS's thermo to 1e-10 over 200 steps, as converted with no edit; the
+// script's variables and continued lines are LAMMPS's; and each thing the
+// converter does not know is refused at its word with the exact message.
+#include "pdyn/host/convert.hpp"
+
+#include <gtest/gtest.h>
+
+#include "host/resume_support.hpp"
+#include "support/lammps_thermo.hpp"
+#include "support/test_support.hpp"
+
+namespace pdyn {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Converts tests/scenes/FOLDER/INPUT beside a copy of its data file, runs
+// the scene, and compares its energy file with LAMMPS's thermo there.
+void ExpectConvertedRunFollowsLammps(const std::string& folder, const std::string& input,
+                                     const std::string& data, double pressure_scale,
+                                     const std::string& reference) {
+  const fs::path dir = test::temp_dir("convert-" + folder);
+  for (const auto& f : {input, data}) {
+    fs::copy_file(test::source_path("tests/scenes/" + folder + "/" + f), dir / f);
+  }
+  const auto converted = test::pdyn_in(dir, {"convert", input, "-o", "scene.yaml"});
+  ASSERT_EQ(converted.status, 0) << converted.err;
+  const auto run = test::pdyn_in(dir, {"run", "scene.yaml", "-q"});
+  ASSERT_EQ(run.status, 0) << run.err << test::read_bytes(dir / "scene.yaml");
+  test::expect_thermo_columns(folder, test::csv_columns(dir / (input + "-thermo.csv")), 1e-10,
+                              pressure_scale, reference);
+}
+
+TEST(Convert, KremerGrestInputFollowsLammps) {
+  ExpectConvertedRunFollowsLammps("special", "in.kg", "kg_start.data", 0.8, "kg.thermo");
+}
+
+TEST(Convert, RattleInputFollowsLammps) {
+  ExpectConvertedRunFollowsLammps("trimers", "in.trimers", "trimers_start.data", 0.3,
+                                  "reference.thermo");
+}
+
+// The script as LAMMPS reads it: `${name}` and `$x`, `&` continuing a
+// line, `#` comments.
+TEST(Convert, VariablesAndContinuedLinesAreLammps) {
+  const std::string scene = convert_lammps_input(
+      "variable steps index 50\nvariable c equal 2.5\n"
+      "units lj   # reduced units\natom_style atomic\npair_style lj/cut ${c}\n"
+      "read_data melt.data\npair_coeff * * &\n  1.0 1.0\nfix 1 all nve\nthermo 10\nrun ${steps}\n",
+      "in.melt");
+  EXPECT_NE(scene.find("steps: 50\n"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("{ type: lennard_jones, cutoff: 2.5, skin: 0.3, shift: false, epsilon: 1, "
+                       "sigma: 1 }"),
+            std::string::npos)
+      << scene;
+  EXPECT_EQ(scene.find("special_bonds"), std::string::npos);  // no bonds, no special bonds
+}
+
+std::string ConvertProblems(const std::string& script) {
+  try {
+    convert_lammps_input(script, "in.test");
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "(converted)";
+}
+
+TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
+  const std::string tail = "read_data x.data\nfix 1 all nve\nrun 10\n";
+  EXPECT_EQ(ConvertProblems("units real\n" + tail),
+            "in.test:1:7: units real: not converted yet (supported: lj)");
+  EXPECT_EQ(ConvertProblems("pair_style lj/cut/coul/long 10.0\n" + tail),
+            "in.test:1:12: pair_style lj/cut/coul/long: not converted yet (supported: lj/cut)");
+  EXPECT_EQ(ConvertProblems("fix 2 all nvt temp 1 1 0.1\n" + tail),
+            "in.test:1:11: fix nvt: not converted yet (supported: nve, rattle, shake)");
+  EXPECT_EQ(ConvertProblems("run ${n}\n" + tail),
+            "in.test:1:5: variable 'n' is not defined (expected a `variable n "
+            "index|equal|string VALUE` before it)\n"
+            "in.test:1:1: run: 0 arguments (expected run N)");
+  EXPECT_EQ(ConvertProblems("timestep 0.005\n  dump 1 all atom 50 dump.melt\n" + tail),
+            "in.test:2:3: 'dump' is not a command pdyn convert knows (supported: units, "
+            "atom_style, boundary, variable, special_bonds, read_data, pair_style, pair_coeff, "
+            "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, neighbor, "
+            "neigh_modify, comm_modify, timestep, fix nve, fix rattle, fix shake, thermo, "
+            "thermo_style, thermo_modify, run)");
+  EXPECT_EQ(ConvertProblems("atom_style full\n"),
+            "in.test:1:12: atom_style full: not converted (supported: atomic, bond, angle, "
+            "molecular; pdyn has no charges)\n"
+            "in.test:1:1: no read_data (expected the particles from a data file)\n"
+            "in.test:1:1: no run command (expected run N)\n"
+            "in.test:1:1: no fix nve (expected fix ID all nve: the converter's solver)");
+}
+
+}  // namespace
+}  // namespace pdyn
