@@ -11,6 +11,10 @@
 # compare with).
 #
 #   bash bench/lammps_thermo.sh [--build DIR] [--write-reference] [CASE ...]
+#
+# tests/cli/convert_test.cpp runs the same states from LAMMPS input
+# scripts converted by `pdyn convert` (in.kg, in.trimers, in.molecular,
+# in.cosine, in.improper beside the data files).
 #   cases: fene (bond_style fene), molecular (harmonic bonds and angles, OPLS
 #   dihedrals), cosine (angle cosine/squared, dihedral harmonic), improper
 #   (improper harmonic), kg (the Kremer-Grest melt with special_bonds fene),

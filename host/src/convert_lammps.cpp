@@ -32,6 +32,12 @@ struct Command {
   const std::string& name() const { return words.front().text; }
 };
 
+// `fix nvt temp T T DAMP [tchain N]`.
+struct Nvt {
+  double kT = 1.0, tdamp = 0.1;
+  long chain = 3;
+};
+
 // `fix rattle`'s rods: bond and angle types.
 struct Rigid {
   std::vector<long> bonds, angles;
@@ -67,6 +73,7 @@ class Converter {
   void neighbor(const Command& c);
   void fix(const Command& c);
   void rattle(const Command& c);
+  void nvt(const Command& c);
   void thermo_style(const Command& c);
   void thermo_modify(const Command& c);
   void run(const Command& c);
@@ -89,12 +96,14 @@ class Converter {
   std::vector<std::string> pair_rows_;             // pair_coeff I J eps sigma [rc]
   std::optional<std::array<double, 2>> pair_all_;  // pair_coeff * * eps sigma
   bool shift_ = false;
+  bool zero_pair_ = false;  // pair_style zero
   std::string mix_;
   double skin_ = 0.3;  // LAMMPS's default skin in lj units
   // bond/angle style and coefficients by type (1-based), as given.
   std::map<std::string, std::string> style_;  // "bond" -> "fene"
   std::map<std::string, std::map<long, std::vector<double>>> coeffs_;
   std::optional<Rigid> rigid_;
+  std::optional<Nvt> nvt_;
   long thermo_every_ = 0;
   std::vector<std::string> columns_{"step", "kT", "potential", "total", "pressure"};
   bool normalized_ = true;  // LAMMPS's thermo_modify norm in lj units
@@ -102,9 +111,80 @@ class Converter {
 
 constexpr const char* kCommands =
     "units, atom_style, boundary, variable, special_bonds, read_data, pair_style, pair_coeff, "
-    "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, neighbor, neigh_modify, "
-    "comm_modify, timestep, fix nve, fix rattle, fix shake, thermo, thermo_style, thermo_modify, "
-    "run";
+    "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
+    "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, comm_modify, "
+    "timestep, fix nve, fix nvt, fix rattle, fix shake, thermo, thermo_style, thermo_modify, run";
+
+// LAMMPS's bonded styles and the plugins that run them: each coefficient of
+// `KIND_coeff TYPE C1 C2 ...` becomes a per-type list of the plugin's, times
+// a factor (LAMMPS's harmonic E = K x^2 is the plugins' k = 2 K; degrees to
+// radians).
+struct Coefficient {
+  const char* key;
+  std::size_t index;  // in the coeff command, after the type
+  double scale;
+};
+struct BondedStyle {
+  const char* kind;  // bond, angle, dihedral, improper
+  const char* style;
+  const char* plugin;
+  const char* form;  // the coeff command's arguments
+  std::vector<Coefficient> coefficients;
+  const char* note;
+};
+constexpr double kDegree = M_PI / 180.0;
+const std::vector<BondedStyle>& bonded_styles() {
+  static const std::vector<BondedStyle> kStyles = {
+      {"bond",
+       "fene",
+       "fene",
+       "TYPE K R0 EPSILON SIGMA",
+       {{"k", 0, 1.0}, {"r0", 1, 1.0}, {"epsilon", 2, 1.0}, {"sigma", 3, 1.0}},
+       "bond_style fene"},
+      {"bond",
+       "harmonic",
+       "spring",
+       "TYPE K R0",
+       {{"ks", 0, 2.0}, {"rest", 1, 1.0}},
+       "bond_style harmonic, E = K (r - r0)^2: ks = 2 K"},
+      {"angle",
+       "harmonic",
+       "angle",
+       "TYPE K THETA0",
+       {{"k", 0, 2.0}, {"rest", 1, kDegree}},
+       "angle_style harmonic, E = K (theta - theta0)^2: k = 2 K, rest in radians"},
+      {"angle",
+       "cosine/squared",
+       "angle_cosine_squared",
+       "TYPE K THETA0",
+       {{"k", 0, 1.0}, {"theta0", 1, kDegree}},
+       "angle_style cosine/squared, theta0 in radians"},
+      {"dihedral",
+       "opls",
+       "dihedral_opls",
+       "TYPE K1 K2 K3 K4",
+       {{"k1", 0, 1.0}, {"k2", 1, 1.0}, {"k3", 2, 1.0}, {"k4", 3, 1.0}},
+       "dihedral_style opls"},
+      {"dihedral",
+       "harmonic",
+       "dihedral_harmonic",
+       "TYPE K D N",
+       {{"k", 0, 1.0}, {"d", 1, 1.0}, {"n", 2, 1.0}},
+       "dihedral_style harmonic"},
+      {"improper",
+       "harmonic",
+       "improper_harmonic",
+       "TYPE K CHI0",
+       {{"k", 0, 1.0}, {"chi0", 1, kDegree}},
+       "improper_style harmonic, chi0 in radians"}};
+  return kStyles;
+}
+const BondedStyle* find_style(const std::string& kind, const std::string& style) {
+  for (const auto& b : bonded_styles()) {
+    if (kind == b.kind && style == b.style) return &b;
+  }
+  return nullptr;
+}
 
 // ---------------------------------------------------------------------------
 // Reading
@@ -241,6 +321,10 @@ void Converter::command(const Command& c) {
       {"angle_style", &Converter::bonded_style},
       {"bond_coeff", &Converter::bonded_coeff},
       {"angle_coeff", &Converter::bonded_coeff},
+      {"dihedral_style", &Converter::bonded_style},
+      {"dihedral_coeff", &Converter::bonded_coeff},
+      {"improper_style", &Converter::bonded_style},
+      {"improper_coeff", &Converter::bonded_coeff},
       {"neighbor", &Converter::neighbor},
       {"fix", &Converter::fix},
       {"thermo_style", &Converter::thermo_style},
@@ -321,16 +405,22 @@ void Converter::read_data(const Command& c) {
 }
 
 void Converter::pair_style(const Command& c) {
-  if (!arity(c, 2, 2, "pair_style lj/cut CUTOFF")) return;
-  if (c.words[1].text != "lj/cut") {
-    fail(c, 1,
-         fmt::format("pair_style {}: not converted yet (supported: lj/cut)", c.words[1].text));
+  if (!arity(c, 1, 2, "pair_style lj/cut CUTOFF, or zero [CUTOFF]")) return;
+  if (c.words[1].text == "zero") {  // no pair force
+    zero_pair_ = true;
+    return;
+  }
+  if (c.words.size() != 3 || c.words[1].text != "lj/cut") {
+    fail(
+        c, 1,
+        fmt::format("pair_style {}: not converted yet (supported: lj/cut, zero)", c.words[1].text));
     return;
   }
   cutoff_ = number(c, 2, "the global cutoff");
 }
 
 void Converter::pair_coeff(const Command& c) {
+  if (zero_pair_ && c.words.size() == 3) return;  // pair_style zero's pair_coeff * *
   if (!arity(c, 4, 5, "pair_coeff I J EPSILON SIGMA [CUTOFF]")) return;
   const auto eps = number(c, 3, "epsilon"), sigma = number(c, 4, "sigma");
   std::optional<double> rc;
@@ -368,11 +458,13 @@ void Converter::pair_modify(const Command& c) {
 }
 
 void Converter::bonded_style(const Command& c) {
-  const std::string kind = c.name().substr(0, c.name().find('_'));  // bond, angle
-  const std::set<std::string> known = kind == "bond" ? std::set<std::string>{"fene", "harmonic"}
-                                                     : std::set<std::string>{"harmonic"};
+  const std::string kind = c.name().substr(0, c.name().find('_'));  // bond, angle, ...
   if (!arity(c, 1, 1, "one style")) return;
-  if (known.count(c.words[1].text) == 0) {
+  if (!find_style(kind, c.words[1].text)) {
+    std::vector<std::string> known;
+    for (const auto& b : bonded_styles()) {
+      if (kind == b.kind) known.push_back(b.style);
+    }
     fail(c, 1,
          fmt::format("{} {}: not converted yet (supported: {})", c.name(), c.words[1].text,
                      fmt::join(known, ", ")));
@@ -383,13 +475,13 @@ void Converter::bonded_style(const Command& c) {
 
 void Converter::bonded_coeff(const Command& c) {
   const std::string kind = c.name().substr(0, c.name().find('_'));
-  const std::string style = style_.count(kind) ? style_.at(kind) : std::string();
-  const std::size_t n = style == "fene" ? 4 : 2;
-  if (style.empty()) {
+  const BondedStyle* b = style_.count(kind) ? find_style(kind, style_.at(kind)) : nullptr;
+  if (!b) {
     fail(c, 0, fmt::format("{}: before {}_style (expected the style first)", c.name(), kind));
     return;
   }
-  if (!arity(c, n + 1, n + 1, style == "fene" ? "TYPE K R0 EPSILON SIGMA" : "TYPE K R0")) return;
+  const std::size_t n = b->coefficients.size();
+  if (!arity(c, n + 1, n + 1, b->form)) return;
   const auto type = number(c, 1, "a type number");
   std::vector<double> values;
   for (std::size_t k = 2; k < c.words.size(); ++k) {
@@ -415,11 +507,43 @@ void Converter::fix(const Command& c) {
   const std::string& style = c.words[3].text;
   if (style == "nve" && c.words.size() == 4) {
     nve_ = true;
+  } else if (style == "nvt") {
+    nvt(c);
   } else if (style == "rattle" || style == "shake") {
     rattle(c);
   } else {
-    fail(c, 3, fmt::format("fix {}: not converted yet (supported: nve, rattle, shake)", style));
+    fail(c, 3,
+         fmt::format("fix {}: not converted yet (supported: nve, nvt, rattle, shake)", style));
   }
+}
+
+// fix ID all nvt temp TSTART TSTOP TDAMP [tchain N]: nose_hoover, which
+// follows LAMMPS's fix nvt step for step (its chain and dof defaults).
+void Converter::nvt(const Command& c) {
+  if (c.words.size() < 8 || c.words[4].text != "temp") {
+    fail(c, std::min<std::size_t>(4, c.words.size() - 1),
+         "fix nvt: expected temp TSTART TSTOP TDAMP [tchain N]");
+    return;
+  }
+  const auto start = number(c, 5, "TSTART"), stop = number(c, 6, "TSTOP"),
+             damp = number(c, 7, "TDAMP");
+  if (!start || !stop || !damp) return;
+  if (*start != *stop) {
+    fail(c, 6, "fix nvt: a ramped temperature is not converted yet (expected TSTOP = TSTART)");
+    return;
+  }
+  Nvt t{*start, *damp, 3};
+  for (std::size_t k = 8; k < c.words.size(); k += 2) {
+    const auto v =
+        c.words[k].text == "tchain" ? number(c, k + 1, "the chain length") : std::nullopt;
+    if (!v) {
+      fail(c, k,
+           fmt::format("fix nvt: '{}' is not converted (supported: tchain N)", c.words[k].text));
+      return;
+    }
+    t.chain = static_cast<long>(*v);
+  }
+  nvt_ = t;
 }
 
 // fix ID all rattle TOL ITER N b T... a T...
@@ -501,50 +625,44 @@ std::string Converter::convert(const std::string& text) {
   if (data_.empty()) fail(end, 0, "no read_data (expected the particles from a data file)");
   if (!steps_) fail(end, 0, "no run command (expected run N)");
   if (!dt_) dt_ = 0.005;  // LAMMPS's default in lj units
-  if (!nve_) fail(end, 0, "no fix nve (expected fix ID all nve: the converter's solver)");
+  if (nve_ == nvt_.has_value()) {
+    fail(end, 0, "no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all nvt)");
+  }
+  if (nvt_ && rigid_) fail(end, 0, "fix nvt with fix rattle is not converted yet (expected nve)");
   if (!diags_.empty()) throw SceneError(diags_);
   return yaml();
 }
 
 std::string Converter::bonded_entries() const {
+  static const std::map<std::string, std::string> kTerms = {
+      {"bond", "pairs: { file: DATA"},
+      {"angle", "triples: { file: DATA"},
+      {"dihedral", "quads: { file: DATA"},
+      {"improper", "quads: { file: DATA, section: Impropers"}};
   std::string out;
-  std::set<long> rigid_bonds, rigid_angles;
-  if (rigid_) {
-    rigid_bonds.insert(rigid_->bonds.begin(), rigid_->bonds.end());
-    rigid_angles.insert(rigid_->angles.begin(), rigid_->angles.end());
-  }
   for (const auto& [kind, style] : style_) {
+    const BondedStyle& b = *find_style(kind, style);
     const auto& by_type =
         coeffs_.count(kind) ? coeffs_.at(kind) : std::map<long, std::vector<double>>{};
+    // The bonds and angles fix rattle holds are SHAKE's, not the force's.
     std::vector<long> free_types;
     for (const auto& [t, v] : by_type) {
-      if ((kind == "bond" ? rigid_bonds : rigid_angles).count(t) == 0) free_types.push_back(t);
+      const auto& rigid = kind == "bond"
+                              ? (rigid_ ? rigid_->bonds : std::vector<long>{})
+                              : (kind == "angle" && rigid_ ? rigid_->angles : std::vector<long>{});
+      if (std::find(rigid.begin(), rigid.end(), t) == rigid.end()) free_types.push_back(t);
     }
     if (free_types.empty()) continue;
-    auto list = [&](std::size_t k, double scale) {
+    std::string terms = kTerms.at(kind);
+    terms.replace(terms.find("DATA"), 4, data_);
+    out += fmt::format("  # {}, {}_coeff\n  - {{ type: {}, {}, types: [{}] }}", b.note, kind,
+                       b.plugin, terms, fmt::join(free_types, ", "));
+    for (const Coefficient& k : b.coefficients) {
       std::vector<double> v;
-      for (const auto& [t, c] : by_type) v.push_back(scale * c[k]);
-      return fmt::format("[{}]", fmt::join(v, ", "));
-    };
-    const std::string key = kind == "bond" ? "pairs" : "triples";
-    const std::string terms =
-        fmt::format("{}: {{ file: {}, types: [{}] }}", key, data_, fmt::join(free_types, ", "));
-    if (style == "fene") {
-      out += fmt::format(
-          "  # bond_style fene, bond_coeff\n  - {{ type: fene, {}, k: {}, r0: {}, "
-          "epsilon: {}, sigma: {} }}\n",
-          terms, list(0, 1), list(1, 1), list(2, 1), list(3, 1));
-    } else if (kind == "bond") {
-      out += fmt::format(
-          "  # bond_style harmonic, E = K (r - r0)^2: ks = 2 K\n  - {{ type: spring, "
-          "{}, ks: {}, rest: {} }}\n",
-          terms, list(0, 2), list(1, 1));
-    } else {
-      out += fmt::format(
-          "  # angle_style harmonic, E = K (theta - theta0)^2: k = 2 K, rest in "
-          "radians\n  - {{ type: angle, {}, k: {}, rest: {} }}\n",
-          terms, list(0, 2), list(1, M_PI / 180.0));
+      for (const auto& [t, c] : by_type) v.push_back(k.scale * c[k.index]);
+      out += fmt::format(", {}: [{}]", k.key, fmt::join(v, ", "));
     }
+    out += " }\n";
   }
   return out;
 }
@@ -554,9 +672,15 @@ std::string Converter::yaml() const {
       "# Converted by `pdyn convert` from the LAMMPS input script {}.\n"
       "simulation:\n  dt: {}\n  steps: {}\n",
       file_, *dt_, *steps_);
-  out += fmt::format("  solver: {{ type: verlet{} }}  # fix nve{}\n",
-                     rigid_ ? fmt::format(", rattle_tolerance: {}", rigid_->tolerance) : "",
-                     rigid_ ? ", fix rattle" : "");
+  if (nvt_) {
+    out +=
+        fmt::format("  solver: {{ type: nose_hoover, kT: {}, tdamp: {}, chain: {} }}  # fix nvt\n",
+                    nvt_->kT, nvt_->tdamp, nvt_->chain);
+  } else {
+    out += fmt::format("  solver: {{ type: verlet{} }}  # fix nve{}\n",
+                       rigid_ ? fmt::format(", rattle_tolerance: {}", rigid_->tolerance) : "",
+                       rigid_ ? ", fix rattle" : "");
+  }
   out += fmt::format("  box: {{ file: {} }}\nparticles:\n  - file: {}\n", data_, data_);
   if (!style_.empty()) {
     out += fmt::format("special_bonds: {{ lj: [{}] }}  # LAMMPS's special_bonds (default 0 0 0)\n",

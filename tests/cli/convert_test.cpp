@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 // the scene, and compares its energy file with LAMMPS's thermo there.
 void ExpectConvertedRunFollowsLammps(const std::string& folder, const std::string& input,
                                      const std::string& data, double pressure_scale,
-                                     const std::string& reference) {
+                                     const std::string& reference, double tolerance = 1e-10) {
   const fs::path dir = test::temp_dir("convert-" + folder);
   for (const auto& f : {input, data}) {
     fs::copy_file(test::source_path("tests/scenes/" + folder + "/" + f), dir / f);
@@ -31,12 +31,25 @@ void ExpectConvertedRunFollowsLammps(const std::string& folder, const std::strin
   ASSERT_EQ(converted.status, 0) << converted.err;
   const auto run = test::pdyn_in(dir, {"run", "scene.yaml", "-q"});
   ASSERT_EQ(run.status, 0) << run.err << test::read_bytes(dir / "scene.yaml");
-  test::expect_thermo_columns(folder, test::csv_columns(dir / (input + "-thermo.csv")), 1e-10,
+  test::expect_thermo_columns(folder, test::csv_columns(dir / (input + "-thermo.csv")), tolerance,
                               pressure_scale, reference);
 }
 
 TEST(Convert, KremerGrestInputFollowsLammps) {
   ExpectConvertedRunFollowsLammps("special", "in.kg", "kg_start.data", 0.8, "kg.thermo");
+}
+
+// Harmonic bonds and angles with OPLS dihedrals; cosine/squared angles with
+// harmonic dihedrals; harmonic impropers: LAMMPS's bonded styles from their
+// coeff commands (the reference runs of tests/scenes/molecular).
+TEST(Convert, BondedStylesInputsFollowLammps) {
+  // OPLS: 2.6e-10 against LAMMPS, as the scene written by hand (data_topology_test.cpp).
+  ExpectConvertedRunFollowsLammps("molecular", "in.molecular", "molecular_start.data", 0.2,
+                                  "reference.thermo", 1e-8);
+  ExpectConvertedRunFollowsLammps("molecular", "in.cosine", "cosine_start.data", 0.2,
+                                  "cosine.thermo");
+  ExpectConvertedRunFollowsLammps("molecular", "in.improper", "improper_start.data", 0.2,
+                                  "improper.thermo");
 }
 
 TEST(Convert, RattleInputFollowsLammps) {
@@ -60,6 +73,20 @@ TEST(Convert, VariablesAndContinuedLinesAreLammps) {
   EXPECT_EQ(scene.find("special_bonds"), std::string::npos);  // no bonds, no special bonds
 }
 
+// fix nvt is nose_hoover, which follows LAMMPS's fix nvt step for step
+// (docs/solvers.md), with LAMMPS's chain length unless tchain says.
+TEST(Convert, FixNvtIsNoseHoover) {
+  const std::string scene = convert_lammps_input(
+      "units lj\natom_style atomic\npair_style lj/cut 2.5\nread_data melt.data\n"
+      "pair_coeff 1 1 1.0 1.0\nfix 1 all nvt temp 1.5 1.5 0.5 tchain 5\nrun 100\n",
+      "in.nvt");
+  EXPECT_NE(
+      scene.find("  solver: { type: nose_hoover, kT: 1.5, tdamp: 0.5, chain: 5 }  # fix nvt\n"),
+      std::string::npos)
+      << scene;
+  EXPECT_NE(scene.find("pair_coeff: [\"1 1 1 1\"]"), std::string::npos) << scene;
+}
+
 std::string ConvertProblems(const std::string& script) {
   try {
     convert_lammps_input(script, "in.test");
@@ -73,10 +100,11 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
   const std::string tail = "read_data x.data\nfix 1 all nve\nrun 10\n";
   EXPECT_EQ(ConvertProblems("units real\n" + tail),
             "in.test:1:7: units real: not converted yet (supported: lj)");
-  EXPECT_EQ(ConvertProblems("pair_style lj/cut/coul/long 10.0\n" + tail),
-            "in.test:1:12: pair_style lj/cut/coul/long: not converted yet (supported: lj/cut)");
-  EXPECT_EQ(ConvertProblems("fix 2 all nvt temp 1 1 0.1\n" + tail),
-            "in.test:1:11: fix nvt: not converted yet (supported: nve, rattle, shake)");
+  EXPECT_EQ(
+      ConvertProblems("pair_style lj/cut/coul/long 10.0\n" + tail),
+      "in.test:1:12: pair_style lj/cut/coul/long: not converted yet (supported: lj/cut, zero)");
+  EXPECT_EQ(ConvertProblems("fix 2 all npt temp 1 1 0.1 iso 1 1 1\n" + tail),
+            "in.test:1:11: fix npt: not converted yet (supported: nve, nvt, rattle, shake)");
   EXPECT_EQ(ConvertProblems("run ${n}\n" + tail),
             "in.test:1:5: variable 'n' is not defined (expected a `variable n "
             "index|equal|string VALUE` before it)\n"
@@ -84,15 +112,17 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
   EXPECT_EQ(ConvertProblems("timestep 0.005\n  dump 1 all atom 50 dump.melt\n" + tail),
             "in.test:2:3: 'dump' is not a command pdyn convert knows (supported: units, "
             "atom_style, boundary, variable, special_bonds, read_data, pair_style, pair_coeff, "
-            "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, neighbor, "
-            "neigh_modify, comm_modify, timestep, fix nve, fix rattle, fix shake, thermo, "
+            "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
+            "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, "
+            "comm_modify, timestep, fix nve, fix nvt, fix rattle, fix shake, thermo, "
             "thermo_style, thermo_modify, run)");
   EXPECT_EQ(ConvertProblems("atom_style full\n"),
             "in.test:1:12: atom_style full: not converted (supported: atomic, bond, angle, "
             "molecular; pdyn has no charges)\n"
             "in.test:1:1: no read_data (expected the particles from a data file)\n"
             "in.test:1:1: no run command (expected run N)\n"
-            "in.test:1:1: no fix nve (expected fix ID all nve: the converter's solver)");
+            "in.test:1:1: no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all "
+            "nvt)");
 }
 
 }  // namespace
