@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
@@ -423,6 +425,25 @@ int report_error(const std::exception_ptr& error, std::ostream& err) {
     err << "pdyn: internal error: a non-standard exception\n";
     return kFailure;
   }
+}
+
+int write_text_output(const std::string& text, const std::string& output, std::ostream& out,
+                      std::ostream& err) {
+  if (output.empty()) {
+    out << text;
+    return kOk;
+  }
+  const fs::path target(output), tmp = fs::path(output + ".tmp");
+  std::ofstream file(tmp, std::ios::binary);
+  file << text;
+  file.close();
+  std::error_code ec;
+  if (!file || (fs::rename(tmp, target, ec), ec)) {
+    fs::remove(tmp, ec);
+    err << fmt::format("pdyn: cannot write {}\n", output);
+    return kFailure;
+  }
+  return kOk;
 }
 
 void add_plugin_path_option(CLI::App* sub, std::vector<std::string>& plugin_path,

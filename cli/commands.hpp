@@ -30,6 +30,12 @@ enum Exit : int {
 /// a CheckpointError (2), anything else (1).
 int report_error(const std::exception_ptr& error, std::ostream& err);
 
+/// Writes `text` to `output` (beside it under a temporary name, then
+/// renamed: never a half-written file), or to `out` when `output` is empty.
+/// Returns kOk, or kFailure after saying on `err` that it cannot write.
+int write_text_output(const std::string& text, const std::string& output, std::ostream& out,
+                      std::ostream& err);
+
 /// Adds `--plugin-path DIR` to `sub`: repeatable, one folder per occurrence
 /// (so that `--plugin-path DIR scene.yaml` leaves the scene to the positional
 /// argument), and refused unless DIR is an existing folder, since a

@@ -1,13 +1,12 @@
 // `pdyn convert IN [-o SCENE.yaml]`: a LAMMPS input script as a scene
 // (issue 44 item 6; the converter is the host's, pdyn/host/convert.hpp).
-// The scene goes to standard output, or is written beside SCENE.yaml under
-// a temporary name and renamed: never a half-written scene.
+// The scene goes to standard output, or to SCENE.yaml through
+// write_text_output: never a half-written scene.
 #include "pdyn/host/convert.hpp"
 
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -17,8 +16,6 @@
 namespace pdyn::cli {
 
 namespace {
-
-namespace fs = std::filesystem;
 
 struct ConvertArgs {
   std::string input, output;
@@ -32,22 +29,7 @@ int cmd_convert(const ConvertArgs& a, std::ostream& out, std::ostream& err) {
   }
   std::stringstream text;
   text << in.rdbuf();
-  const std::string scene = convert_lammps_input(text.str(), a.input);
-  if (a.output.empty()) {
-    out << scene;
-    return kOk;
-  }
-  const fs::path target(a.output), tmp = fs::path(a.output + ".tmp");
-  std::ofstream file(tmp, std::ios::binary);
-  file << scene;
-  file.close();
-  std::error_code ec;
-  if (!file || (fs::rename(tmp, target, ec), ec)) {
-    fs::remove(tmp, ec);
-    err << fmt::format("pdyn: cannot write {}\n", a.output);
-    return kFailure;
-  }
-  return kOk;
+  return write_text_output(convert_lammps_input(text.str(), a.input), a.output, out, err);
 }
 
 }  // namespace

@@ -11,7 +11,6 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <ostream>
@@ -456,23 +455,7 @@ int cmd_schema(const SchemaArgs& a, std::ostream& out, std::ostream& err) {
     err << fmt::format("pdyn: warning: {}: plugin '{}' left out of the schema: {}\n",
                        f.library.string(), f.plugin, f.message);
   }
-  const std::string text = make_schema(registry).dump(2) + "\n";
-  if (a.output.empty()) {
-    out << text;
-    return kOk;
-  }
-  // Written beside the target and renamed: never a half-written schema.
-  const fs::path target(a.output), tmp = fs::path(a.output + ".tmp");
-  std::ofstream file(tmp, std::ios::binary);
-  file << text;
-  file.close();
-  std::error_code ec;
-  if (!file || (fs::rename(tmp, target, ec), ec)) {
-    fs::remove(tmp, ec);
-    err << fmt::format("pdyn: cannot write {}\n", a.output);
-    return kFailure;
-  }
-  return kOk;
+  return write_text_output(make_schema(registry).dump(2) + "\n", a.output, out, err);
 }
 
 }  // namespace
