@@ -12,6 +12,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <optional>
 
 #include "pdyn/host/crash_report.hpp"
@@ -23,6 +24,20 @@ namespace pdyn::conformance::detail {
 namespace {
 
 thread_local Worker* t_worker = nullptr;
+// Whether the process forked from had a single thread (threads_usable()).
+bool g_parent_single_threaded = true;
+
+// The threads of this process, from /proc/self/task (Linux): a pool that
+// libgomp started stays there, idle, for the life of the process.
+int thread_count() {
+  int n = 0;
+  std::error_code ec;
+  for (auto it = std::filesystem::directory_iterator("/proc/self/task", ec);
+       !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
+    ++n;
+  }
+  return n;
+}
 
 // ---- wire format ----
 //
@@ -235,6 +250,8 @@ void Worker::finish(const std::vector<CheckResult>& out) {
 
 Worker* current_worker() noexcept { return t_worker; }
 
+bool threads_usable() noexcept { return t_worker == nullptr || g_parent_single_threaded; }
+
 std::vector<CheckResult> run_isolated(
     const std::function<void(std::vector<CheckResult>&)>& sequence, double timeout) {
   std::vector<CheckResult> report;
@@ -251,6 +268,7 @@ std::vector<CheckResult> run_isolated(
       return report;
     }
     std::fflush(nullptr);  // or the child's exit could print the parent's buffered output twice
+    g_parent_single_threaded = thread_count() <= 1;
     const pid_t pid = ::fork();
     if (pid < 0) {
       ::close(fds[0]);

@@ -50,6 +50,12 @@ class Worker {
 /// the checks run in-process.
 Worker* current_worker() noexcept;
 
+/// False in a child forked from a process that already ran threads (a
+/// Python session that stepped a simulation, a test program): GNU libgomp
+/// cannot start a team there (the child hangs), so a check that compares
+/// thread counts compares one only and says so. True otherwise.
+bool threads_usable() noexcept;
+
 /// Runs `sequence` in child processes as described above, each check with
 /// `timeout` seconds, and returns the report it filled.
 std::vector<CheckResult> run_isolated(

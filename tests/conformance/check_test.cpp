@@ -149,6 +149,22 @@ TEST(Check, EachBrokenBondedForceFailsOnlyItsOwnBondedCheck) {
   }
 }
 
+// A process that already ran threads (a Python session after a run, this
+// test program) forks the checks' child: libgomp cannot start a team there,
+// and bonded.matches_terms used to hang until its 10 s limit and fail a
+// correct plugin. It now compares one thread only and says why.
+TEST(Check, ChecksForkedFromAThreadedProcessDoNotHang) {
+  // The in-process checks of spring run its 2-thread loop here first.
+  const auto* spring = test::shipped_plugins().find(PluginKind::Force, "spring");
+  ASSERT_NE(spring, nullptr);
+  ASSERT_TRUE(conformance::all_passed(conformance::run_checks(*spring->descriptor, {.seed = 7})));
+  const auto res = test::pdyn({"check", "spring"});
+  EXPECT_EQ(res.status, 0) << res.out << res.err;
+  EXPECT_NE(res.out.find("1 and 2 threads not compared (a child of a threaded process"),
+            std::string::npos)
+      << res.out;
+}
+
 TEST(Check, PairForcesPassThePairChecks) {
   // lennard_jones declares its energy continuous with shift: true (the kit
   // turns its boolean `shift` on); soft_contact declares nothing there.
