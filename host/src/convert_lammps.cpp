@@ -621,14 +621,15 @@ void Converter::run(const Command& c) {
 std::string Converter::convert(const std::string& text) {
   const std::vector<Command> commands = split(text);
   for (const Command& c : commands) command(c);
-  const Command end{1, {{"end", 1}}};
-  if (data_.empty()) fail(end, 0, "no read_data (expected the particles from a data file)");
-  if (!steps_) fail(end, 0, "no run command (expected run N)");
+  // What the whole script lacks is located at the script, not at a line.
+  auto lacks = [&](const char* what) { diags_.push_back({file_, what}); };
+  if (data_.empty()) lacks("no read_data (expected the particles from a data file)");
+  if (!steps_) lacks("no run command (expected run N)");
   if (!dt_) dt_ = 0.005;  // LAMMPS's default in lj units
   if (nve_ == nvt_.has_value()) {
-    fail(end, 0, "no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all nvt)");
+    lacks("no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all nvt)");
   }
-  if (nvt_ && rigid_) fail(end, 0, "fix nvt with fix rattle is not converted yet (expected nve)");
+  if (nvt_ && rigid_) lacks("fix nvt with fix rattle is not converted yet (expected nve)");
   if (!diags_.empty()) throw SceneError(diags_);
   return yaml();
 }

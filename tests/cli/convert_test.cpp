@@ -119,9 +119,9 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
   EXPECT_EQ(ConvertProblems("atom_style full\n"),
             "in.test:1:12: atom_style full: not converted (supported: atomic, bond, angle, "
             "molecular; pdyn has no charges)\n"
-            "in.test:1:1: no read_data (expected the particles from a data file)\n"
-            "in.test:1:1: no run command (expected run N)\n"
-            "in.test:1:1: no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all "
+            "in.test: no read_data (expected the particles from a data file)\n"
+            "in.test: no run command (expected run N)\n"
+            "in.test: no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all "
             "nvt)");
 }
 
