@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -74,6 +75,7 @@ class Converter {
   void fix(const Command& c);
   void rattle(const Command& c);
   void nvt(const Command& c);
+  void langevin(const Command& c);
   void thermo_style(const Command& c);
   void thermo_modify(const Command& c);
   void run(const Command& c);
@@ -104,6 +106,7 @@ class Converter {
   std::map<std::string, std::map<long, std::vector<double>>> coeffs_;
   std::optional<Rigid> rigid_;
   std::optional<Nvt> nvt_;
+  std::string langevin_;  // the langevin force's entry, or empty
   long thermo_every_ = 0;
   std::vector<std::string> columns_{"step", "kT", "potential", "total", "pressure"};
   bool normalized_ = true;  // LAMMPS's thermo_modify norm in lj units
@@ -113,7 +116,8 @@ constexpr const char* kCommands =
     "units, atom_style, boundary, variable, special_bonds, read_data, pair_style, pair_coeff, "
     "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
     "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, comm_modify, "
-    "timestep, fix nve, fix nvt, fix rattle, fix shake, thermo, thermo_style, thermo_modify, run";
+    "timestep, fix nve, fix nvt, fix langevin, fix rattle, fix shake, thermo, thermo_style, "
+    "thermo_modify, run";
 
 // LAMMPS's bonded styles and the plugins that run them: each coefficient of
 // `KIND_coeff TYPE C1 C2 ...` becomes a per-type list of the plugin's, times
@@ -375,6 +379,13 @@ void Converter::boundary(const Command& c) {
 }
 
 void Converter::special_bonds(const Command& c) {
+  // LAMMPS's older form, three bare weights, is lj/coul (bench/in.chain).
+  if (c.words.size() == 4 && std::isdigit(static_cast<unsigned char>(c.words[1].text[0])) != 0) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (const auto v = number(c, 1 + a, "a weight from 0 to 1")) special_[a] = *v;
+    }
+    return;
+  }
   for (std::size_t k = 1; k < c.words.size(); ++k) {
     const std::string& w = c.words[k].text;
     if (w == "fene") {
@@ -509,11 +520,14 @@ void Converter::fix(const Command& c) {
     nve_ = true;
   } else if (style == "nvt") {
     nvt(c);
+  } else if (style == "langevin") {
+    langevin(c);
   } else if (style == "rattle" || style == "shake") {
     rattle(c);
   } else {
     fail(c, 3,
-         fmt::format("fix {}: not converted yet (supported: nve, nvt, rattle, shake)", style));
+         fmt::format("fix {}: not converted yet (supported: nve, nvt, langevin, rattle, shake)",
+                     style));
   }
 }
 
@@ -544,6 +558,29 @@ void Converter::nvt(const Command& c) {
     t.chain = static_cast<long>(*v);
   }
   nvt_ = t;
+}
+
+// fix ID all langevin TSTART TSTOP DAMP SEED: the langevin force, LAMMPS's
+// drag m v / DAMP and random force of the same variance; its random
+// numbers are pdyn's (counter-based), not LAMMPS's, so a run agrees with
+// LAMMPS's in distribution, not step for step.
+void Converter::langevin(const Command& c) {
+  if (c.words.size() != 8) {
+    fail(c, std::min<std::size_t>(8, c.words.size() - 1),
+         "fix langevin: expected TSTART TSTOP DAMP SEED and no keywords");
+    return;
+  }
+  const auto start = number(c, 4, "TSTART"), stop = number(c, 5, "TSTOP"),
+             damp = number(c, 6, "DAMP"), seed = number(c, 7, "SEED");
+  if (!start || !stop || !damp || !seed) return;
+  if (*start != *stop) {
+    fail(c, 5, "fix langevin: a ramped temperature is not converted yet (expected TSTOP = TSTART)");
+    return;
+  }
+  langevin_ = fmt::format(
+      "  # fix langevin: the same drag and noise variance, pdyn's random numbers (not LAMMPS's)\n"
+      "  - {{ type: langevin, kT: {}, damp: {}, seed: {} }}\n",
+      *start, *damp, static_cast<long>(*seed));
 }
 
 // fix ID all rattle TOL ITER N b T... a T...
@@ -701,6 +738,7 @@ std::string Converter::yaml() const {
     out += " }\n";
   }
   out += bonded_entries();
+  out += langevin_;
   out += rigid_entries();
   out += output_entry();
   return out;

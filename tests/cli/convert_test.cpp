@@ -87,6 +87,31 @@ TEST(Convert, FixNvtIsNoseHoover) {
   EXPECT_NE(scene.find("pair_coeff: [\"1 1 1 1\"]"), std::string::npos) << scene;
 }
 
+// LAMMPS's own bead-spring benchmark script (bench/in.chain in LAMMPS's
+// sources, its data file left out of Debian's package): the old form of
+// special_bonds (three bare weights) and fix langevin.
+TEST(Convert, LammpsChainBenchmarkScriptConverts) {
+  const std::string scene = convert_lammps_input(
+      "# FENE beadspring benchmark\n\nunits\t\tlj\natom_style\tbond\n"
+      "special_bonds   0.0 1.0 1.0\n\nread_data\tdata.chain\n\nneighbor\t0.4 bin\n"
+      "neigh_modify\tevery 1 delay 1\n\nbond_style      fene\nbond_coeff\t1 30.0 1.5 1.0 1.0\n\n"
+      "pair_style\tlj/cut 1.12\npair_modify\tshift yes\npair_coeff\t1 1 1.0 1.0 1.12\n\n"
+      "fix\t\t1 all nve\nfix\t\t2 all langevin 1.0 1.0 10.0 904297\n\nthermo          100\n"
+      "timestep\t0.012\n\nrun\t\t100\n",
+      "in.chain");
+  for (const char* entry :
+       {"  dt: 0.012\n  steps: 100\n", "special_bonds: { lj: [0, 1, 1] }",
+        "{ type: lennard_jones, cutoff: 1.12, skin: 0.4, shift: true, pair_coeff: [\"1 1 1 1 "
+        "1.12\"] }",
+        "{ type: fene, pairs: { file: data.chain, types: [1] }, k: [30], r0: [1.5], epsilon: [1], "
+        "sigma: [1] }",
+        "{ type: langevin, kT: 1, damp: 10, seed: 904297 }",
+        "{ type: energy, path: in.chain-thermo.csv, every: 100, columns: [step, kT, potential, "
+        "total, pressure] }"}) {
+    EXPECT_NE(scene.find(entry), std::string::npos) << entry << "\n" << scene;
+  }
+}
+
 std::string ConvertProblems(const std::string& script) {
   try {
     convert_lammps_input(script, "in.test");
@@ -103,8 +128,9 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
   EXPECT_EQ(
       ConvertProblems("pair_style lj/cut/coul/long 10.0\n" + tail),
       "in.test:1:12: pair_style lj/cut/coul/long: not converted yet (supported: lj/cut, zero)");
-  EXPECT_EQ(ConvertProblems("fix 2 all npt temp 1 1 0.1 iso 1 1 1\n" + tail),
-            "in.test:1:11: fix npt: not converted yet (supported: nve, nvt, rattle, shake)");
+  EXPECT_EQ(
+      ConvertProblems("fix 2 all npt temp 1 1 0.1 iso 1 1 1\n" + tail),
+      "in.test:1:11: fix npt: not converted yet (supported: nve, nvt, langevin, rattle, shake)");
   EXPECT_EQ(ConvertProblems("run ${n}\n" + tail),
             "in.test:1:5: variable 'n' is not defined (expected a `variable n "
             "index|equal|string VALUE` before it)\n"
@@ -114,8 +140,8 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
             "atom_style, boundary, variable, special_bonds, read_data, pair_style, pair_coeff, "
             "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
             "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, "
-            "comm_modify, timestep, fix nve, fix nvt, fix rattle, fix shake, thermo, "
-            "thermo_style, thermo_modify, run)");
+            "comm_modify, timestep, fix nve, fix nvt, fix langevin, fix rattle, fix shake, "
+            "thermo, thermo_style, thermo_modify, run)");
   EXPECT_EQ(ConvertProblems("atom_style full\n"),
             "in.test:1:12: atom_style full: not converted (supported: atomic, bond, angle, "
             "molecular; pdyn has no charges)\n"
