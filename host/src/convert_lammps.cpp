@@ -379,7 +379,7 @@ void Converter::boundary(const Command& c) {
 }
 
 void Converter::special_bonds(const Command& c) {
-  // LAMMPS's older form, three bare weights, is lj/coul (bench/in.chain).
+  // LAMMPS's older form, three bare weights, is lj/coul (LAMMPS's in.chain benchmark).
   if (c.words.size() == 4 && std::isdigit(static_cast<unsigned char>(c.words[1].text[0])) != 0) {
     for (std::size_t a = 0; a < 3; ++a) {
       if (const auto v = number(c, 1 + a, "a weight from 0 to 1")) special_[a] = *v;

@@ -87,8 +87,8 @@ TEST(Convert, FixNvtIsNoseHoover) {
   EXPECT_NE(scene.find("pair_coeff: [\"1 1 1 1\"]"), std::string::npos) << scene;
 }
 
-// LAMMPS's own bead-spring benchmark script (bench/in.chain in LAMMPS's
-// sources, its data file left out of Debian's package): the old form of
+// LAMMPS's own bead-spring benchmark script (in.chain in the bench folder
+// of LAMMPS's sources, its data file left out of Debian's package): the old form of
 // special_bonds (three bare weights) and fix langevin.
 TEST(Convert, LammpsChainBenchmarkScriptConverts) {
   const std::string scene = convert_lammps_input(
