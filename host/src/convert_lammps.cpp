@@ -11,7 +11,6 @@
 
 #include <cctype>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <optional>
 #include <set>
@@ -19,6 +18,7 @@
 #include <vector>
 
 #include "pdyn/host/convert.hpp"
+#include "text_file.hpp"
 
 namespace pdyn {
 namespace {
@@ -43,6 +43,7 @@ struct Nvt {
 struct Rigid {
   std::vector<long> bonds, angles;
   double tolerance = 1e-12;
+  Command at;  // the fix command, where its problems are located
 };
 
 class Converter {
@@ -84,6 +85,8 @@ class Converter {
   std::string bonded_entries() const;
   std::string rigid_entries() const;
   std::string output_entry() const;
+  const std::map<long, std::vector<double>>& coeffs_of(const std::string& kind) const;
+  void check_coefficients();
 
   std::string file_;
   std::vector<Diagnostic> diags_;
@@ -103,6 +106,7 @@ class Converter {
   double skin_ = 0.3;  // LAMMPS's default skin in lj units
   // bond/angle style and coefficients by type (1-based), as given.
   std::map<std::string, std::string> style_;  // "bond" -> "fene"
+  std::map<std::string, Command> style_at_;   // "bond" -> its bond_style command
   std::map<std::string, std::map<long, std::vector<double>>> coeffs_;
   std::optional<Rigid> rigid_;
   std::optional<Nvt> nvt_;
@@ -239,14 +243,8 @@ std::vector<Command> Converter::split(const std::string& text) {
       more = true;
     }
     if (pending.words.empty()) pending.line = number;
-    for (std::size_t k = 0; k < line.size();) {
-      if (line[k] == ' ' || line[k] == '\t' || line[k] == '\r') {
-        ++k;
-        continue;
-      }
-      const std::size_t end = line.find_first_of(" \t\r", k);
-      pending.words.push_back({line.substr(k, end - k), static_cast<int>(k) + 1});
-      k = end == std::string::npos ? line.size() : end;
+    for (const text_file::Field& f : text_file::split_blanks(line)) {
+      pending.words.push_back({std::string(f.text), static_cast<int>(f.column)});
     }
     if (!more && !pending.words.empty()) {
       if (pending.name() == "variable") {
@@ -286,14 +284,8 @@ std::optional<double> Converter::number(const Command& c, std::size_t word, cons
     return std::nullopt;
   }
   const std::string& t = c.words[word].text;
-  std::size_t used = 0;
-  double v = 0.0;
-  try {
-    v = std::stod(t, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != t.size() || !std::isfinite(v)) {
+  const auto v = text_file::to_number<double>(t);  // exact, whatever the locale
+  if (!v || !std::isfinite(*v)) {
     fail(c, word, fmt::format("{}: '{}' is not a number (expected {})", c.name(), t, what));
     return std::nullopt;
   }
@@ -482,6 +474,7 @@ void Converter::bonded_style(const Command& c) {
     return;
   }
   style_[kind] = c.words[1].text;
+  style_at_[kind] = c;
 }
 
 void Converter::bonded_coeff(const Command& c) {
@@ -499,6 +492,10 @@ void Converter::bonded_coeff(const Command& c) {
     const auto v = number(c, k, "a coefficient");
     if (!v) return;
     values.push_back(*v);
+  }
+  if (type && (*type < 1 || *type != std::floor(*type))) {
+    fail(c, 1, fmt::format("{}: type {} (expected a whole type number from 1)", c.name(), *type));
+    return;
   }
   if (type) coeffs_[kind][static_cast<long>(*type)] = values;
 }
@@ -600,6 +597,7 @@ void Converter::rattle(const Command& c) {
                        c.words[3].text, w));
     }
   }
+  r.at = c;
   rigid_ = r;
 }
 
@@ -667,6 +665,7 @@ std::string Converter::convert(const std::string& text) {
     lacks("no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all nvt)");
   }
   if (nvt_ && rigid_) lacks("fix nvt with fix rattle is not converted yet (expected nve)");
+  check_coefficients();
   if (!diags_.empty()) throw SceneError(diags_);
   return yaml();
 }
@@ -680,14 +679,15 @@ std::string Converter::bonded_entries() const {
   std::string out;
   for (const auto& [kind, style] : style_) {
     const BondedStyle& b = *find_style(kind, style);
-    const auto& by_type =
-        coeffs_.count(kind) ? coeffs_.at(kind) : std::map<long, std::vector<double>>{};
+    const auto& by_type = coeffs_of(kind);
     // The bonds and angles fix rattle holds are SHAKE's, not the force's.
+    const std::vector<long> none;
+    const std::vector<long>& rigid = !rigid_           ? none
+                                     : kind == "bond"  ? rigid_->bonds
+                                     : kind == "angle" ? rigid_->angles
+                                                       : none;
     std::vector<long> free_types;
     for (const auto& [t, v] : by_type) {
-      const auto& rigid = kind == "bond"
-                              ? (rigid_ ? rigid_->bonds : std::vector<long>{})
-                              : (kind == "angle" && rigid_ ? rigid_->angles : std::vector<long>{});
       if (std::find(rigid.begin(), rigid.end(), t) == rigid.end()) free_types.push_back(t);
     }
     if (free_types.empty()) continue;
@@ -747,11 +747,10 @@ std::string Converter::yaml() const {
 std::string Converter::rigid_entries() const {
   if (!rigid_) return {};
   std::string out = "constraints:\n";
-  const auto bonds =
-      coeffs_.count("bond") ? coeffs_.at("bond") : std::map<long, std::vector<double>>{};
-  const auto angles =
-      coeffs_.count("angle") ? coeffs_.at("angle") : std::map<long, std::vector<double>>{};
-  auto r0 = [&](long t) { return bonds.count(t) ? bonds.at(t)[1] : 0.0; };
+  // check_coefficients() saw every type 1..T of each given.
+  const auto& bonds = coeffs_of("bond");
+  const auto& angles = coeffs_of("angle");
+  auto r0 = [&](long t) { return bonds.at(t)[1]; };
   if (!rigid_->bonds.empty()) {
     std::vector<double> lengths;
     for (long t = 1; t <= bonds.rbegin()->first; ++t) lengths.push_back(r0(t));
@@ -763,10 +762,10 @@ std::string Converter::rigid_entries() const {
   if (!rigid_->angles.empty()) {
     // The ends of an angle theta0 between two bonds of r0 (the rigid bonds'
     // length: every rigid bond type has the first's).
-    const double b = r0(rigid_->bonds.empty() ? 1 : rigid_->bonds.front());
+    const double b = r0(rigid_->bonds.front());
     std::vector<double> lengths;
     for (long t = 1; t <= angles.rbegin()->first; ++t) {
-      const double theta = angles.count(t) ? angles.at(t)[1] * M_PI / 180.0 : 0.0;
+      const double theta = angles.at(t)[1] * M_PI / 180.0;
       lengths.push_back(std::sqrt(2.0 * b * b - 2.0 * b * b * std::cos(theta)));
     }
     out += fmt::format(
@@ -776,6 +775,56 @@ std::string Converter::rigid_entries() const {
         data_, fmt::join(rigid_->angles, ", "), fmt::join(lengths, ", "));
   }
   return out;
+}
+
+const std::map<long, std::vector<double>>& Converter::coeffs_of(const std::string& kind) const {
+  static const std::map<long, std::vector<double>> kNone;
+  const auto it = coeffs_.find(kind);
+  return it == coeffs_.end() ? kNone : it->second;
+}
+
+// Every bonded style has coefficients for its types 1..T, without a gap
+// (the plugins' per-type lists are indexed by t - 1), and fix rattle's
+// types have theirs: a style without them would drop its terms from the
+// scene, and a rod its length.
+void Converter::check_coefficients() {
+  for (const auto& [kind, at] : style_at_) {
+    const auto& by_type = coeffs_of(kind);
+    if (by_type.empty()) {
+      fail(at, 1,
+           fmt::format("{}_style {}: no {}_coeff (expected one per {} type; pdyn convert does "
+                       "not read a data file's Coeffs sections yet)",
+                       kind, style_.at(kind), kind, kind));
+      continue;
+    }
+    for (long t = 1; t <= by_type.rbegin()->first; ++t) {
+      if (by_type.count(t) == 0) {
+        fail(at, 1,
+             fmt::format("{}_style {}: no {}_coeff for type {} (expected coefficients for "
+                         "every type 1..{})",
+                         kind, style_.at(kind), kind, t, by_type.rbegin()->first));
+        break;
+      }
+    }
+  }
+  if (!rigid_) return;
+  if (!rigid_->angles.empty() && rigid_->bonds.empty()) {
+    fail(rigid_->at, 3,
+         "fix rattle: angles without bonds (expected b TYPES too: SHAKE holds an angle's two "
+         "bonds with it)");
+  }
+  for (const auto& [kind, types] :
+       {std::pair<std::string, const std::vector<long>&>{"bond", rigid_->bonds},
+        {"angle", rigid_->angles}}) {
+    for (const long t : types) {
+      if (coeffs_of(kind).count(t) == 0) {
+        fail(rigid_->at, 3,
+             fmt::format("fix rattle: {} type {} has no {}_coeff (expected its {} to hold it "
+                         "at)",
+                         kind, t, kind, kind == "bond" ? "r0" : "theta0"));
+      }
+    }
+  }
 }
 
 std::string Converter::output_entry() const {

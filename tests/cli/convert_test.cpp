@@ -151,5 +151,28 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
             "nvt)");
 }
 
+// A bonded style without its coefficients would drop its terms from the
+// scene, and a rod without its length crashed the converter: both refused.
+TEST(Convert, MissingCoefficientsAreRefusedNotDropped) {
+  const std::string head = "units lj\natom_style bond\nread_data x.data\nfix 1 all nve\nrun 10\n";
+  EXPECT_EQ(ConvertProblems(head + "bond_style fene\n"),
+            "in.test:6:12: bond_style fene: no bond_coeff (expected one per bond type; pdyn "
+            "convert does not read a data file's Coeffs sections yet)");
+  EXPECT_EQ(ConvertProblems(head + "bond_style harmonic\nbond_coeff 1 100 1\nbond_coeff 3 100 1\n"),
+            "in.test:6:12: bond_style harmonic: no bond_coeff for type 2 (expected coefficients "
+            "for every type 1..3)");
+  EXPECT_EQ(ConvertProblems(head + "bond_style harmonic\nbond_coeff 0 100 1\n"),
+            "in.test:7:12: bond_coeff: type 0 (expected a whole type number from 1)\n"
+            "in.test:6:12: bond_style harmonic: no bond_coeff (expected one per bond type; pdyn "
+            "convert does not read a data file's Coeffs sections yet)");
+  EXPECT_EQ(ConvertProblems(head + "fix 2 all rattle 1e-4 20 0 b 1\n"),
+            "in.test:6:11: fix rattle: bond type 1 has no bond_coeff (expected its r0 to hold it "
+            "at)");
+  EXPECT_EQ(ConvertProblems(head + "bond_style harmonic\nbond_coeff 1 100 1\nangle_style harmonic\n"
+                                   "angle_coeff 1 50 109.47\nfix 2 all rattle 1e-4 20 0 a 1\n"),
+            "in.test:10:11: fix rattle: angles without bonds (expected b TYPES too: SHAKE holds "
+            "an angle's two bonds with it)");
+}
+
 }  // namespace
 }  // namespace pdyn
