@@ -509,11 +509,18 @@ void constraint_checks(const PluginDescriptor& d, const Options& o, std::vector<
     return c;
   };
   // A plugin that needs one of two optional lists (distance: pairs or
-  // triples) refuses the bare defaults: its samples are then its defaults.
+  // triples) refuses the bare defaults by naming an optional parameter
+  // that declares a sample and that default_params left out: its samples
+  // are then its defaults. Any other refusal keeps the bare defaults, and
+  // the checks that build with them report it.
   try {
     make(defaults, home);
-  } catch (const ParamError&) {
-    defaults = params;
+  } catch (const ParamError& e) {
+    const auto spec = std::find_if(d.params.begin(), d.params.end(),
+                                   [&](const ParamSpec& s) { return s.name == e.param(); });
+    if (spec != d.params.end() && !spec->required && spec->sample && !defaults.has(e.param())) {
+      defaults = params;
+    }
   }
 
   std::shared_ptr<Constraint> constraint;
