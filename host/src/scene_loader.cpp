@@ -970,8 +970,9 @@ std::string Loader::add_to(Scene& scene, PluginKind kind, const std::string& tex
   }
   scene.libraries[label] = rec->library;
   scene.uses.push_back({kind, name, label, std::move(p.params)});
-  // A new pair force takes the scene's special bonds; new bonds change them.
-  apply_special_bonds(scene);
+  // A new pair force takes the scene's special bonds; new bonds (a force's
+  // or a constraint's pairs) change them. A collider changes neither.
+  if (kind == PluginKind::Force || kind == PluginKind::Constraint) apply_special_bonds(scene);
   return label;
 }
 
