@@ -697,6 +697,7 @@ std::string Converter::bonded_entries() const {
                        b.plugin, terms, fmt::join(free_types, ", "));
     for (const Coefficient& k : b.coefficients) {
       std::vector<double> v;
+      v.reserve(by_type.size());
       for (const auto& [t, c] : by_type) v.push_back(k.scale * c[k.index]);
       out += fmt::format(", {}: [{}]", k.key, fmt::join(v, ", "));
     }
