@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -16,6 +17,8 @@
 namespace pdyn::cli {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 struct ConvertArgs {
   std::string input, output;
@@ -29,7 +32,23 @@ int cmd_convert(const ConvertArgs& a, std::ostream& out, std::ostream& err) {
   }
   std::stringstream text;
   text << in.rdbuf();
-  return write_text_output(convert_lammps_input(text.str(), a.input), a.output, out, err);
+  // The files the scene reads are written before it, beside it: a scene
+  // that exists finds them.
+  const fs::path scene(a.output);
+  const ConvertedScene converted = convert_lammps_script(
+      text.str(), a.input, a.output.empty() ? std::string() : scene.stem().string());
+  if (!converted.files.empty() && a.output.empty()) {
+    err << fmt::format(
+        "pdyn: {} makes its own atoms, which go to a data file beside the scene (expected pdyn "
+        "convert {} -o SCENE.yaml)\n",
+        a.input, a.input);
+    return kBadInput;
+  }
+  for (const auto& [name, contents] : converted.files) {
+    const int status = write_text_output(contents, (scene.parent_path() / name).string(), out, err);
+    if (status != kOk) return status;
+  }
+  return write_text_output(converted.scene, a.output, out, err);
 }
 
 }  // namespace

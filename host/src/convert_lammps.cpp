@@ -6,6 +6,8 @@
 // came from. What this converter does not know is refused at the word,
 // "IN:LINE:COLUMN: what (supported: ...)", never dropped: a converted scene
 // either runs what the script runs or does not exist.
+#include "convert_lammps.hpp"
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -20,104 +22,12 @@
 #include "pdyn/host/convert.hpp"
 #include "text_file.hpp"
 
-namespace pdyn {
+namespace pdyn::lammps {
 namespace {
 
-struct Word {
-  std::string text;
-  int column = 1;  // 1-based, in the line the word starts on
-};
-struct Command {
-  int line = 1;  // 1-based, where the command starts
-  std::vector<Word> words;
-  const std::string& name() const { return words.front().text; }
-};
-
-// `fix nvt temp T T DAMP [tchain N]`.
-struct Nvt {
-  double kT = 1.0, tdamp = 0.1;
-  long chain = 3;
-};
-
-// `fix rattle`'s rods: bond and angle types.
-struct Rigid {
-  std::vector<long> bonds, angles;
-  double tolerance = 1e-12;
-  Command at;  // the fix command, where its problems are located
-};
-
-class Converter {
- public:
-  explicit Converter(std::string file) : file_(std::move(file)) {}
-  std::string convert(const std::string& text);
-
- private:
-  // ---- reading ----
-  std::vector<Command> split(const std::string& text);
-  std::string substitute(const std::string& line, int number);
-  void define_variable(const Command& c);
-  // ---- diagnostics ----
-  void fail(const Command& c, std::size_t word, const std::string& what);
-  std::optional<double> number(const Command& c, std::size_t word, const char* what);
-  bool arity(const Command& c, std::size_t least, std::size_t most, const char* form);
-  // ---- the commands ----
-  void command(const Command& c);
-  void units(const Command& c);
-  void atom_style(const Command& c);
-  void boundary(const Command& c);
-  void special_bonds(const Command& c);
-  void read_data(const Command& c);
-  void pair_style(const Command& c);
-  void pair_coeff(const Command& c);
-  void pair_modify(const Command& c);
-  void bonded_style(const Command& c);
-  void bonded_coeff(const Command& c);
-  void neighbor(const Command& c);
-  void fix(const Command& c);
-  void rattle(const Command& c);
-  void nvt(const Command& c);
-  void langevin(const Command& c);
-  void thermo_style(const Command& c);
-  void thermo_modify(const Command& c);
-  void run(const Command& c);
-  // ---- writing ----
-  std::string yaml() const;
-  std::string bonded_entries() const;
-  std::string rigid_entries() const;
-  std::string output_entry() const;
-  const std::map<long, std::vector<double>>& coeffs_of(const std::string& kind) const;
-  void check_coefficients();
-
-  std::string file_;
-  std::vector<Diagnostic> diags_;
-  std::map<std::string, std::string> variables_;
-  // What the script set.
-  std::string data_;                               // read_data's file
-  std::optional<double> dt_;                       // timestep
-  std::optional<long> steps_;                      // run
-  bool nve_ = false;                               // fix nve
-  std::array<double, 3> special_{0.0, 0.0, 0.0};   // LAMMPS's default special_bonds
-  std::optional<double> cutoff_;                   // pair_style lj/cut
-  std::vector<std::string> pair_rows_;             // pair_coeff I J eps sigma [rc]
-  std::optional<std::array<double, 2>> pair_all_;  // pair_coeff * * eps sigma
-  bool shift_ = false;
-  bool zero_pair_ = false;  // pair_style zero
-  std::string mix_;
-  double skin_ = 0.3;  // LAMMPS's default skin in lj units
-  // bond/angle style and coefficients by type (1-based), as given.
-  std::map<std::string, std::string> style_;  // "bond" -> "fene"
-  std::map<std::string, Command> style_at_;   // "bond" -> its bond_style command
-  std::map<std::string, std::map<long, std::vector<double>>> coeffs_;
-  std::optional<Rigid> rigid_;
-  std::optional<Nvt> nvt_;
-  std::string langevin_;  // the langevin force's entry, or empty
-  long thermo_every_ = 0;
-  std::vector<std::string> columns_{"step", "kT", "potential", "total", "pressure"};
-  bool normalized_ = true;  // LAMMPS's thermo_modify norm in lj units
-};
-
 constexpr const char* kCommands =
-    "units, atom_style, boundary, variable, special_bonds, read_data, pair_style, pair_coeff, "
+    "units, atom_style, boundary, variable, lattice, region, create_box, create_atoms, mass, "
+    "velocity, special_bonds, read_data, pair_style, pair_coeff, "
     "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
     "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, comm_modify, "
     "timestep, fix nve, fix nvt, fix langevin, fix rattle, fix shake, thermo, thermo_style, "
@@ -193,6 +103,8 @@ const BondedStyle* find_style(const std::string& kind, const std::string& style)
   }
   return nullptr;
 }
+
+}  // namespace
 
 // ---------------------------------------------------------------------------
 // Reading
@@ -322,6 +234,13 @@ void Converter::command(const Command& c) {
       {"improper_style", &Converter::bonded_style},
       {"improper_coeff", &Converter::bonded_coeff},
       {"neighbor", &Converter::neighbor},
+      {"neigh_modify", &Converter::neigh_modify},
+      {"lattice", &Converter::lattice},
+      {"region", &Converter::region},
+      {"create_box", &Converter::create_box},
+      {"create_atoms", &Converter::create_atoms},
+      {"mass", &Converter::mass},
+      {"velocity", &Converter::velocity},
       {"fix", &Converter::fix},
       {"thermo_style", &Converter::thermo_style},
       {"thermo_modify", &Converter::thermo_modify},
@@ -335,10 +254,8 @@ void Converter::command(const Command& c) {
     if (const auto n = arity(c, 1, 1, "thermo N") ? number(c, 1, "a step count") : std::nullopt) {
       thermo_every_ = static_cast<long>(*n);
     }
-  } else if (name == "neigh_modify" || name == "comm_modify") {
-    // pdyn rebuilds its list when a particle has moved half the skin, which
-    // gives the same forces as any schedule LAMMPS checks; ghosts are
-    // LAMMPS's own.
+  } else if (name == "comm_modify") {
+    // Ghost atoms are LAMMPS's own: nothing in the scene.
   } else {
     fail(c, 0,
          fmt::format("'{}' is not a command pdyn convert knows (supported: {})", name, kCommands));
@@ -506,6 +423,40 @@ void Converter::neighbor(const Command& c) {
   if (c.words[2].text != "bin") fail(c, 2, "neighbor: not converted (supported: bin)");
 }
 
+// neigh_modify every N delay D check yes|no: the scene's simulation.neighbor,
+// so that the lists are rebuilt at LAMMPS's steps and miss what LAMMPS's
+// miss. `one` and `page` size LAMMPS's memory, which pdyn sizes itself.
+void Converter::neigh_modify(const Command& c) {
+  for (std::size_t k = 1; k < c.words.size(); k += 2) {
+    const std::string& key = c.words[k].text;
+    if (k + 1 >= c.words.size()) {
+      fail(c, k, fmt::format("neigh_modify {}: no value (expected {} VALUE)", key, key));
+      break;
+    }
+    if (key == "every" || key == "delay") {
+      const auto v = number(c, k + 1, key == "every" ? "a step count >= 1" : "a step count >= 0");
+      if (v && (*v != std::floor(*v) || *v < (key == "every" ? 1 : 0))) {
+        fail(c, k + 1,
+             fmt::format("neigh_modify {}: {} (expected a whole number of steps, >= {})", key,
+                         c.words[k + 1].text, key == "every" ? 1 : 0));
+      } else if (v) {
+        (key == "every" ? rebuild_.every : rebuild_.delay) = static_cast<std::int64_t>(*v);
+      }
+    } else if (key == "check") {
+      const std::string& v = c.words[k + 1].text;
+      if (v != "yes" && v != "no") {
+        fail(c, k + 1, fmt::format("neigh_modify check {}: (expected yes or no)", v));
+      }
+      rebuild_.check = v == "yes";
+    } else if (key != "one" && key != "page") {
+      fail(c, k,
+           fmt::format("neigh_modify {}: not converted (supported: every, delay, check, one, "
+                       "page)",
+                       key));
+    }
+  }
+}
+
 void Converter::fix(const Command& c) {
   if (!arity(c, 3, 64, "fix ID GROUP STYLE ...")) return;
   if (c.words[2].text != "all") {
@@ -603,8 +554,9 @@ void Converter::rattle(const Command& c) {
 
 void Converter::thermo_style(const Command& c) {
   static const std::map<std::string, std::string> kColumns = {
-      {"step", "step"},    {"temp", "kT"},    {"press", "pressure"},
-      {"pe", "potential"}, {"ke", "kinetic"}, {"etotal", "total"}};
+      {"step", "step"},    {"temp", "kT"},     {"press", "pressure"},
+      {"pe", "potential"}, {"ke", "kinetic"},  {"etotal", "total"},
+      {"epair", "pair"},   {"emol", "bonded"}, {"vol", "volume"}};
   if (!arity(c, 1, 64, "thermo_style custom KEYWORDS")) return;
   if (c.words[1].text != "custom") {
     if (c.words[1].text != "one")
@@ -617,7 +569,7 @@ void Converter::thermo_style(const Command& c) {
     if (it == kColumns.end()) {
       fail(c, k,
            fmt::format("thermo_style custom: '{}' is not converted yet (supported: step, "
-                       "temp, press, pe, ke, etotal)",
+                       "temp, press, pe, ke, etotal, epair, emol, vol)",
                        c.words[k].text));
     } else {
       columns_.push_back(it->second);
@@ -653,12 +605,16 @@ void Converter::run(const Command& c) {
 // ---------------------------------------------------------------------------
 // Writing
 
-std::string Converter::convert(const std::string& text) {
+ConvertedScene Converter::convert(const std::string& text, const std::string& stem) {
   const std::vector<Command> commands = split(text);
   for (const Command& c : commands) command(c);
   // What the whole script lacks is located at the script, not at a line.
   auto lacks = [&](const char* what) { diags_.push_back({file_, what}); };
-  if (data_.empty()) lacks("no read_data (expected the particles from a data file)");
+  if (data_.empty() == (x_.cols() == 0)) {
+    lacks(data_.empty() ? "no read_data or create_atoms (expected the particles from a data file "
+                          "or a lattice)"
+                        : "both read_data and create_atoms (expected one of them)");
+  }
   if (!steps_) lacks("no run command (expected run N)");
   if (!dt_) dt_ = 0.005;  // LAMMPS's default in lj units
   if (nve_ == nvt_.has_value()) {
@@ -666,8 +622,20 @@ std::string Converter::convert(const std::string& text) {
   }
   if (nvt_ && rigid_) lacks("fix nvt with fix rattle is not converted yet (expected nve)");
   check_coefficients();
+  ConvertedScene out;
+  for (long t = 1; x_.cols() > 0 && t <= types_; ++t) {
+    if (mass_.count(t) == 0) {
+      lacks("atom types without a mass (expected mass TYPE VALUE for each type)");
+      break;
+    }
+  }
+  if (x_.cols() > 0) {
+    data_ = stem + ".data";
+    out.files.emplace_back(data_, data_file());
+  }
   if (!diags_.empty()) throw SceneError(diags_);
-  return yaml();
+  out.scene = yaml();
+  return out;
 }
 
 std::string Converter::bonded_entries() const {
@@ -711,6 +679,9 @@ std::string Converter::yaml() const {
       "# Converted by `pdyn convert` from the LAMMPS input script {}.\n"
       "simulation:\n  dt: {}\n  steps: {}\n",
       file_, *dt_, *steps_);
+  out += fmt::format("  neighbor: {{ every: {}, delay: {}, check: {} }}  # neigh_modify{}\n",
+                     rebuild_.every, rebuild_.delay, rebuild_.check ? "true" : "false",
+                     rebuild_ == RebuildSchedule{1, 10, true} ? " (LAMMPS's default)" : "");
   if (nvt_) {
     out +=
         fmt::format("  solver: {{ type: nose_hoover, kT: {}, tdamp: {}, chain: {} }}  # fix nvt\n",
@@ -830,22 +801,31 @@ void Converter::check_coefficients() {
 
 std::string Converter::output_entry() const {
   if (thermo_every_ <= 0) return {};
-  std::string out = "output:\n";
-  if (normalized_) {
-    out +=
-        "  # LAMMPS normalizes its energies per atom here (thermo_modify norm yes); pdyn "
-        "writes totals\n";
-  }
   const std::string stem = std::filesystem::path(file_).filename().string();
-  out += fmt::format("  - {{ type: energy, path: {}-thermo.csv, every: {}, columns: [{}] }}\n",
-                     stem, thermo_every_, fmt::join(columns_, ", "));
-  return out;
+  return fmt::format(
+      "output:\n  # thermo, thermo_style, thermo_modify: LAMMPS's columns, names and "
+      "normalization\n  - {{ type: energy, path: {}-thermo.csv, every: {}, columns: [{}], header: "
+      "lammps, per_particle: {} }}\n",
+      stem, thermo_every_, fmt::join(columns_, ", "), normalized_ ? "true" : "false");
 }
 
-}  // namespace
+}  // namespace pdyn::lammps
+
+namespace pdyn {
+
+ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
+                                     const std::string& stem) {
+  return lammps::Converter(file).convert(text, stem);
+}
 
 std::string convert_lammps_input(const std::string& text, const std::string& file) {
-  return Converter(file).convert(text);
+  ConvertedScene out = convert_lammps_script(text, file, "scene");
+  if (!out.files.empty()) {
+    throw SceneError({{file,
+                       "the script makes its own atoms, which go to a data file beside the scene "
+                       "(expected pdyn convert IN -o SCENE.yaml)"}});
+  }
+  return std::move(out.scene);
 }
 
 }  // namespace pdyn

@@ -6,10 +6,29 @@
 #include <limits>
 #include <type_traits>
 
+#include "pdyn/bonded_reference.hpp"
 #include "pdyn/error.hpp"
+#include "pdyn/kernel/plugin_call.hpp"
 #include "pdyn/thermo.hpp"
 
 namespace pdyn {
+
+namespace {
+
+// LAMMPS's E_mol: the potential energy of the bonded terms' forces (those
+// with pdyn/bonded_reference.hpp's hook), summed in the System's order.
+double bonded_potential(const System& sys) {
+  const ParticleView p = sys.view();
+  double u = 0.0;
+  for (const auto& entry : sys.force_objects()) {
+    if (dynamic_cast<const BondedReference*>(entry.force.get()) == nullptr) continue;
+    const crash::CallScope scope(entry.label, "potential_energy");
+    if (const auto e = entry.force->potential_energy(p)) u += *e;
+  }
+  return u;
+}
+
+}  // namespace
 
 void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_t frame_step,
                             bool with_force, bool with_energy, double h,
@@ -33,6 +52,7 @@ void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_
   virial_missing.clear();
   reservoir_energy = 0.0;
   constraint_dof = 0.0;
+  bonded_energy = 0.0;
   if (with_energy) {
     VirialSum w = with_constraint_virial ? total_virial(sys, solver, h) : total_virial(sys);
     if (!with_constraint_virial && sys.constraint_rows() > 0) {
@@ -43,6 +63,7 @@ void FrameSnapshot::capture(const System& sys, const Solver* solver, std::int64_
     virial_missing = std::move(w.missing);
     reservoir_energy = total_reservoir_energy(sys, solver);
     constraint_dof = pdyn::constraint_dof(sys);
+    bonded_energy = bonded_potential(sys);
   }
 }
 
@@ -62,6 +83,7 @@ Frame FrameSnapshot::frame(bool with_force, bool with_energy) const {
     f.virial_missing = virial_missing;
     f.reservoir_energy = reservoir_energy;
     f.constraint_dof = constraint_dof;
+    f.bonded_energy = bonded_energy;
   }
   return f;
 }
@@ -74,9 +96,10 @@ namespace {
 // f64[3N] force if has_force, f64 kinetic, f64 potential.
 // Version 2 (pdyn 0.8.0) appends f64 virial, f64 reservoir energy, u64 n +
 // char[n] virial_missing. Version 3 (pdyn 0.10.0) appends f64
-// constraint_dof. Versions 1 and 2 are still read (0.7's and 0.8's to 0.9's
-// checkpoints; they had no constraint count: 0).
-constexpr std::uint32_t kVersion = 3;
+// constraint_dof. Version 4 (pdyn 0.10.0, later) appends f64
+// bonded_energy. Earlier versions are still read (0.7's to 0.9's
+// checkpoints; what they lack is 0).
+constexpr std::uint32_t kVersion = 4;
 
 struct Out {
   std::vector<std::uint8_t> bytes;
@@ -157,6 +180,7 @@ std::vector<std::uint8_t> FrameSnapshot::encode() const {
   o.pod(reservoir_energy);
   o.array(virial_missing.data(), virial_missing.size());
   o.pod(constraint_dof);
+  o.pod(bonded_energy);
   return std::move(o.bytes);
 }
 
@@ -204,6 +228,7 @@ FrameSnapshot FrameSnapshot::decode(std::span<const std::uint8_t> data) {
     s.virial_missing = "(a frame from pdyn 0.7)";
   }
   if (version >= 3) s.constraint_dof = in.pod<double>();
+  if (version >= 4) s.bonded_energy = in.pod<double>();
   if (in.at != data.size()) {
     throw Error(fmt::format("a pending output frame has {} unexpected bytes at its end",
                             data.size() - in.at));

@@ -37,6 +37,7 @@ struct FrameSnapshot {
   std::string virial_missing;     ///< the first force without a virial
   double reservoir_energy = 0.0;  ///< J, when asked for
   double constraint_dof = 0.0;    ///< Frame::constraint_dof, when asked for
+  double bonded_energy = 0.0;     ///< Frame::bonded_energy, J, when asked for
 
   /// Copies the System's current state as the frame of `step`, with its total
   /// forces (the caller has computed them) and energies, virial and the

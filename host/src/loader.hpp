@@ -175,6 +175,7 @@ class Loader final : public BuilderHost {
   void read_solver(const YAML::Node& root, std::vector<PendingPlugin>& solvers);
   void assemble_system(Scene& scene);
   void read_constraint_force(const YAML::Node& n, Scene& scene);
+  void read_neighbor(const YAML::Node& n, Scene& scene);
   // ---- special bonds (scene_special_bonds.cpp) ----
   void read_special_bonds(const YAML::Node& n, Scene& scene);
   /// Gives every pair force the special bonds of the scene's bonds, or
@@ -294,6 +295,7 @@ class Loader final : public BuilderHost {
   YAML::Node checkpoint_node_;
   std::string checkpoint_key_;
   std::optional<VelocitySpec> velocities_;  // `velocities:`, when given and valid
+  YAML::Node neighbor_node_;                // simulation.neighbor
   YAML::Node special_node_;                 // `special_bonds:`, where its problems are reported
   YAML::Node velocities_node_;
 };

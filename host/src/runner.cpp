@@ -516,7 +516,7 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
       result.message = failure;
     }
   }
-  Stepper stepper(sys, *scene.solver, scene.solver_label);
+  Stepper stepper(sys, *scene.solver, scene.solver_label, scene.neighbor_schedule);
   Loop loop{scene, out, progress, signals, result, stepper};
   EnergyWatch energy(scene);
   loop.energy = &energy;

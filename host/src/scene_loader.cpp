@@ -61,9 +61,10 @@ void Loader::read_simulation(const YAML::Node& n, Scene& scene) {
   if (!check_map(n, "simulation", "simulation: { dt: ..., steps: ..., solver: { type: ... } }")) {
     return;
   }
-  auto p =
-      read_params(n, "simulation", simulation_specs(), {"solver", "box", "constraint_force"}, -1);
+  auto p = read_params(n, "simulation", simulation_specs(),
+                       {"solver", "box", "constraint_force", "neighbor"}, -1);
   if (n["box"].IsDefined() && !n["box"].IsNull()) read_box(n["box"]);
+  if (n["neighbor"].IsDefined() && !n["neighbor"].IsNull()) read_neighbor(n["neighbor"], scene);
   if (n["constraint_force"].IsDefined() && !n["constraint_force"].IsNull()) {
     read_constraint_force(n["constraint_force"], scene);
   }
@@ -120,6 +121,25 @@ void Loader::read_constraint_force(const YAML::Node& n, Scene& scene) {
   scene.constraint_feedback.kd = p->real("kd");
   scene.constraint_feedback.tolerance = p->real("tolerance");
   scene.constraint_feedback.max_iterations = p->integer("max_iterations");
+}
+
+// LAMMPS's neigh_modify every / delay / check, to reproduce a LAMMPS run's
+// rebuilds (and the pairs they miss) exactly.
+void Loader::read_neighbor(const YAML::Node& n, Scene& scene) {
+  const std::string path = "simulation.neighbor";
+  if (!check_map(n, path, "neighbor: { every: N, delay: D, check: true }")) return;
+  auto p = read_params(n, path, neighbor_specs(), {}, -1);
+  if (!p) return;
+  neighbor_node_ = n;
+  scene.neighbor_schedule = {p->integer("every"), p->integer("delay"), p->boolean("check")};
+  if (!scene.neighbor_schedule.check) {
+    warnings_.push_back(fmt::format(
+        "{}: simulation.neighbor.check: false rebuilds the neighbor lists only every {} "
+        "steps whatever the particles do; pairs that come within the cutoff between "
+        "rebuilds are missed (LAMMPS's neigh_modify check no: to reproduce a LAMMPS "
+        "run)",
+        where(n["check"], path + ".check"), scene.neighbor_schedule.every));
+  }
 }
 
 void Loader::read_particles(const YAML::Node& n) {
@@ -846,6 +866,12 @@ Scene Loader::load(const std::string& text) {
   // factories may still refuse values (ParamError), reported the same way.
   assemble_system(scene);
   create_plugins(scene, forces, colliders, constraints, solvers);
+  if (scene.solver && scene.solver->adaptive() && scene.neighbor_schedule != RebuildSchedule{}) {
+    error(neighbor_node_, "simulation.neighbor",
+          fmt::format("simulation.neighbor: a rebuild schedule counts fixed steps; {} chooses its "
+                      "own step lengths (expected a fixed-step solver: verlet, rk4, euler, ...)",
+                      scene.solver_label));
+  }
   if (!diags_.empty()) fail();
   apply_special_bonds(scene);
   if (!diags_.empty()) fail();

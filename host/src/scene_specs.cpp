@@ -41,6 +41,17 @@ std::vector<ParamSpec> constraint_force_specs() {
   };
 }
 
+std::vector<ParamSpec> neighbor_specs() {
+  return {
+      param::integer("every", 1, "steps between rebuild decisions (LAMMPS's neigh_modify every)")
+          .at_least(1),
+      param::integer("delay", 0, "steps after a rebuild before the first decision").at_least(0),
+      param::boolean("check", true,
+                     "at a decision, rebuild only if a particle moved more than skin / 2 (false: "
+                     "always; pairs that come within the cutoff between rebuilds are then missed)"),
+  };
+}
+
 std::vector<ParamSpec> particle_specs() {
   std::vector<ParamSpec> specs = {
       param::required_vec3("position", "m", "initial position"),

@@ -47,7 +47,8 @@ Simulation::Simulation(Scene scene, int threads)
                : scene_.threads > 0 ? scene_.threads
                                     : default_threads(scene_.system->size())) {
   set_threads(threads_);
-  stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
+  stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label,
+                                       scene_.neighbor_schedule);
 }
 
 template <class Take>
@@ -140,7 +141,8 @@ void Simulation::set_dt(double dt) {
 }
 
 void Simulation::solver_changed() {
-  stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
+  stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label,
+                                       scene_.neighbor_schedule);
   has_dense_ = false;
   restart_clock();
 }
@@ -201,7 +203,8 @@ std::unique_ptr<System> Simulation::add_particles(const Matrix3X& x, const Matri
   for (const auto& e : old.force_objects()) assembly.add_force(e.force, e.label);
   for (const auto& c : old.collider_objects()) assembly.add_collider(c.collider, c.label);
   std::swap(scene_.system, sys);
-  stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label);
+  stepper_ = std::make_unique<Stepper>(*scene_.system, *scene_.solver, scene_.solver_label,
+                                       scene_.neighbor_schedule);
   return sys;
 }
 

@@ -179,8 +179,9 @@ void begin_step(System& sys, double h) {
 // The state buffers are allocated and their pages touched here, before the
 // first step: at 10^6 particles that is 48 MB of page faults a timed loop
 // would otherwise pay in its first step.
-Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label)
-    : sys_(sys), solver_(solver), label_(&solver_label) {
+Stepper::Stepper(System& sys, Solver& solver, const std::string& solver_label,
+                 const RebuildSchedule& neighbors)
+    : sys_(sys), solver_(solver), label_(&solver_label), neighbors_(neighbors) {
   // A solver that projects onto the constraints itself (RATTLE, XPBD) must
   // not see Witkin's constraint force in its force evaluations as well.
   const auto* projecting = dynamic_cast<const ConstraintSolver*>(&solver);
@@ -197,6 +198,9 @@ std::optional<double> Stepper::step_to(double t_end) {
   return guarded([&] {
     const double h = t_end - sys_.time();
     begin_step(sys_, h);
+    if (neighbors_ != RebuildSchedule{}) {
+      begin_neighbor_step(std::as_const(sys_).positions().data(), sys_.time(), neighbors_);
+    }
     const crash::CallScope call(*label_, "step");
     solver_.step(sys_, h);
     sys_.set_time(t_end);

@@ -16,9 +16,20 @@
 // member mask. An address can be reused by another system once the first is
 // gone; its list is then still right (validity depends on the positions
 // alone: NeighborList::update() checks them at every call), only shared.
-#include <algorithm>
-#include <mutex>
+//
+// A rebuild schedule (RebuildSchedule, LAMMPS's neigh_modify) is kept by
+// the same key: the host names the step under way by its start time, and
+// each shared list counts the steps since its own last build.
+#include <fmt/format.h>
 
+#include <algorithm>
+#include <atomic>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+
+#include "pdyn/kernel/neighbor_schedule.hpp"
 #include "pdyn/neighbors.hpp"
 
 namespace pdyn {
@@ -31,6 +42,10 @@ struct SharedNeighborList::Entry {
   std::vector<std::uint8_t> mask;  // empty: every particle
   double cutoff = 0, reach = 0;    // the largest asked for, m
   NeighborList list;
+  // Under a rebuild schedule: the start time of the last step this list
+  // counted, and the steps counted since its last build.
+  double step_time = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t ago = 0;
 
   Entry(const double* x_, Index n_, const Domain& d, NeighborList::Kind k,
         const std::vector<std::uint8_t>* members, double c, double s)
@@ -65,7 +80,66 @@ Registry& registry() {
   return r;
 }
 
+// The rebuild schedules the host gave, by positions array, with the start
+// time of the step under way. Most processes have none, and then update()
+// takes no lock for them.
+struct StepClock {
+  RebuildSchedule schedule;
+  double time = 0.0;
+};
+struct Schedules {
+  std::mutex mutex;
+  std::vector<std::pair<const double*, StepClock>> clocks;
+  std::atomic<bool> any{false};
+};
+
+Schedules& schedules() {
+  static Schedules s;
+  return s;
+}
+
+std::optional<StepClock> clock_of(const double* x) {
+  Schedules& s = schedules();
+  if (!s.any.load(std::memory_order_acquire)) return std::nullopt;
+  const std::lock_guard lock(s.mutex);
+  for (const auto& [key, clock] : s.clocks) {
+    if (key == x) return clock;
+  }
+  return std::nullopt;
+}
+
+// LAMMPS's Neighbor::decide(): a step counts once; at a decision step the
+// list rebuilds always (check no) or if a particle moved beyond skin / 2.
+NeighborList::Rebuild decide(SharedNeighborList::Entry& e, const StepClock& clock) {
+  if (clock.time == e.step_time) return NeighborList::Rebuild::IfForced;
+  e.step_time = clock.time;
+  ++e.ago;
+  const RebuildSchedule& s = clock.schedule;
+  if (e.ago < s.delay || e.ago % s.every != 0) return NeighborList::Rebuild::IfForced;
+  return s.check ? NeighborList::Rebuild::IfMoved : NeighborList::Rebuild::Always;
+}
+
 }  // namespace
+
+void begin_neighbor_step(const double* x, double t, const RebuildSchedule& schedule) {
+  if (schedule.every < 1 || schedule.delay < 0) {
+    throw std::invalid_argument(fmt::format(
+        "neighbor rebuild schedule: every = {}, delay = {} (expected every >= 1, delay >= 0)",
+        schedule.every, schedule.delay));
+  }
+  Schedules& s = schedules();
+  const std::lock_guard lock(s.mutex);
+  auto it =
+      std::find_if(s.clocks.begin(), s.clocks.end(), [&](const auto& c) { return c.first == x; });
+  if (schedule == RebuildSchedule{}) {
+    if (it != s.clocks.end()) s.clocks.erase(it);
+  } else if (it == s.clocks.end()) {
+    s.clocks.emplace_back(x, StepClock{schedule, t});
+  } else {
+    it->second = StepClock{schedule, t};
+  }
+  s.any.store(!s.clocks.empty(), std::memory_order_release);
+}
 
 SharedNeighborList::SharedNeighborList(double cutoff, double skin, NeighborList::Kind kind)
     : cutoff_(cutoff), skin_(skin), kind_(kind) {
@@ -104,7 +178,11 @@ const NeighborList& SharedNeighborList::update(const Eigen::Ref<const Matrix3X>&
     e.reach = std::max(e.reach, cutoff_ + skin_);
     e.list.set_range(e.cutoff, e.reach - e.cutoff);
   }
-  e.list.update(x, domain, members);
+  if (const auto clock = clock_of(key)) {
+    if (e.list.update(x, domain, members, decide(e, *clock))) e.ago = 0;
+  } else {
+    e.list.update(x, domain, members);
+  }
   return e.list;
 }
 

@@ -142,6 +142,15 @@ bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& dom
   return true;
 }
 
+bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+                          const std::vector<std::uint8_t>* members, Rebuild when) {
+  if (when == Rebuild::IfMoved) return update(x, domain, members);
+  check(x, domain, members);
+  if (when == Rebuild::IfForced && !must_rebuild(x, domain, members)) return false;
+  build(x, domain, members);
+  return true;
+}
+
 void NeighborList::check(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
                          const std::vector<std::uint8_t>* members) const {
   for (int k = 0; k < 3; ++k) {
@@ -169,14 +178,18 @@ void NeighborList::check(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
   }
 }
 
+// A list for other particles, another box or another selection.
+bool NeighborList::must_rebuild(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+                                const std::vector<std::uint8_t>* members) const {
+  if (!built_ || x.cols() != size() || !(domain == domain_)) return true;
+  return members ? !std::equal(members->begin(), members->end(), mask_.begin(), mask_.end())
+                 : !mask_.empty();
+}
+
 bool NeighborList::stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
                          const std::vector<std::uint8_t>* members) const {
   const Index n = x.cols();
-  if (!built_ || n != size() || !(domain == domain_)) return true;
-  if (members ? !std::equal(members->begin(), members->end(), mask_.begin(), mask_.end())
-              : !mask_.empty()) {
-    return true;
-  }
+  if (must_rebuild(x, domain, members)) return true;
   // Verlet's criterion: no listed particle has moved more than skin / 2.
   // Particles that were not finite and still are not have no pairs to lose;
   // one that changed between finite and not must be (un)listed.

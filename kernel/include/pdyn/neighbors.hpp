@@ -106,6 +106,18 @@ class PDYN_API NeighborList {
   bool update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
               const std::vector<std::uint8_t>* members = nullptr);
 
+  /// What update() may rebuild for besides a list that must be rebuilt
+  /// (never built; N, the domain or the member mask changed).
+  enum class Rebuild {
+    IfMoved,   ///< a listed particle moved more than skin / 2 (update()'s rule)
+    Always,    ///< rebuild whatever the particles did
+    IfForced,  ///< only when the list must be rebuilt
+  };
+  /// As update(), with the displacement rule replaced by `when` (since pdyn
+  /// 0.10.0; a host's rebuild schedule, pdyn/kernel/neighbor_schedule.hpp).
+  bool update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+              const std::vector<std::uint8_t>* members, Rebuild when);
+
   /// Rebuilds unconditionally (same arguments and errors as update()). O(N):
   /// bins the particles into cells of side >= reach() / 2 (a counting sort),
   /// then lists each particle's partners within reach() from the cells up to
@@ -202,6 +214,8 @@ class PDYN_API NeighborList {
              const std::vector<std::uint8_t>* members) const;
   bool stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
              const std::vector<std::uint8_t>* members) const;
+  bool must_rebuild(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+                    const std::vector<std::uint8_t>* members) const;
   void make_grid(const Domain& domain, const std::array<double, 3>& lo,
                  const std::array<double, 3>& hi, Index listed);
   void make_stencil();

@@ -96,6 +96,11 @@ struct Frame {
   /// temperature's N_f is 3 N_free - extra - constraint_dof. `virial` then
   /// includes the constraint forces' (total_virial(sys, solver, h)).
   double constraint_dof = 0.0;
+  /// The part of potential_energy from bonded terms (forces implementing
+  /// pdyn/bonded_reference.hpp: bonds, angles, dihedrals, impropers), J:
+  /// LAMMPS's E_mol; the rest is E_pair and any other force's. Appended
+  /// since pdyn 0.10.0.
+  double bonded_energy = 0.0;
 };
 
 /// What a writer tells the host before it is created.

@@ -36,30 +36,48 @@ enum class Column {
   Volume,
   Dof,
   Reservoir,
-  Conserved
+  Conserved,
+  Pair,
+  Bonded
 };
 
+// Each column with its LAMMPS thermo header (`header: lammps`) and whether
+// it is extensive (divided by N with `per_particle: true`, as LAMMPS's
+// thermo_modify norm yes divides its energies).
 struct ColumnInfo {
   const char* name;
   Column column;
   const char* meaning;
+  const char* lammps;
+  bool extensive;
 };
 
-constexpr std::array<ColumnInfo, 13> kColumns = {{
-    {"t", Column::Time, "time, s"},
-    {"step", Column::Step, "step"},
-    {"kinetic", Column::Kinetic, "kinetic energy K, J"},
-    {"potential", Column::Potential, "potential energy U, J"},
-    {"total", Column::Total, "K + U, J"},
-    {"kT", Column::KT, "k_B T = 2 K / N_f, J (reduced units: T*)"},
-    {"temperature", Column::Temperature, "T, K"},
-    {"pressure", Column::Pressure, "virial pressure (2 K + W) / (3 V), Pa (needs a box)"},
-    {"virial", Column::Virial, "W = sum r . f, J (constraint forces included)"},
-    {"volume", Column::Volume, "box volume V, m^3 (needs a box)"},
-    {"dof", Column::Dof, "degrees of freedom N_f (less one per independent constraint row)"},
-    {"reservoir", Column::Reservoir, "energy taken out by thermostats, J"},
-    {"conserved", Column::Conserved, "K + U + reservoir, J"},
+constexpr std::array<ColumnInfo, 15> kColumns = {{
+    {"t", Column::Time, "time, s", "Time", false},
+    {"step", Column::Step, "step", "Step", false},
+    {"kinetic", Column::Kinetic, "kinetic energy K, J", "KinEng", true},
+    {"potential", Column::Potential, "potential energy U, J", "PotEng", true},
+    {"total", Column::Total, "K + U, J", "TotEng", true},
+    {"kT", Column::KT, "k_B T = 2 K / N_f, J (reduced units: T*)", "Temp", false},
+    {"temperature", Column::Temperature, "T, K", "Temp", false},
+    {"pressure", Column::Pressure, "virial pressure (2 K + W) / (3 V), Pa (needs a box)", "Press",
+     false},
+    {"virial", Column::Virial, "W = sum r . f, J (constraint forces included)", "Virial", true},
+    {"volume", Column::Volume, "box volume V, m^3 (needs a box)", "Volume", false},
+    {"dof", Column::Dof, "degrees of freedom N_f (less one per independent constraint row)", "Dof",
+     false},
+    {"reservoir", Column::Reservoir, "energy taken out by thermostats, J", "Reservoir", true},
+    {"conserved", Column::Conserved, "K + U + reservoir, J", "Conserved", true},
+    {"pair", Column::Pair, "U of every force but the bonded terms, J (LAMMPS's E_pair)", "E_pair",
+     true},
+    {"bonded", Column::Bonded, "U of the bonded terms (bonds, angles, dihedrals, impropers), J",
+     "E_mol", true},
 }};
+
+const ColumnInfo& info(Column c) {
+  return *std::find_if(kColumns.begin(), kColumns.end(),
+                       [&](const ColumnInfo& i) { return i.column == c; });
+}
 
 std::vector<Column> read_columns(const pdyn::Params& p, const pdyn::Domain& domain) {
   std::vector<Column> out;
@@ -88,14 +106,32 @@ std::vector<Column> read_columns(const pdyn::Params& p, const pdyn::Domain& doma
   return out;
 }
 
+bool lammps_header(const pdyn::Params& p) {
+  const std::string& header = p.string("header");
+  if (header != "pdyn" && header != "lammps") {
+    throw pdyn::ParamError("header",
+                           fmt::format("'{}' is not a header (expected pdyn or lammps)", header));
+  }
+  return header == "lammps";
+}
+
 class Energy final : public pdyn::Writer {
  public:
   Energy(const pdyn::Params& p, const pdyn::WriterContext& ctx)
       : columns_(read_columns(p, ctx.particles.domain)),
         extra_dof_(p.real("extra_dof")),
+        per_particle_(p.boolean("per_particle")),
+        lammps_header_(lammps_header(p)),
         resume_(ctx.resuming ? std::optional(pdyn::FileMark::decode(ctx.resume)) : std::nullopt),
         file_(ctx.path, resume_ ? &*resume_ : nullptr) {
-    if (!ctx.resuming) file_.write(fmt::format("{}\n", fmt::join(p.strings("columns"), ",")));
+    if (ctx.resuming) return;
+    if (lammps_header_) {
+      std::vector<std::string> names;
+      for (const Column c : columns_) names.emplace_back(info(c).lammps);
+      file_.write(fmt::format("{}\n", fmt::join(names, ",")));
+    } else {
+      file_.write(fmt::format("{}\n", fmt::join(p.strings("columns"), ",")));
+    }
   }
 
   void write(const pdyn::Frame& frame) override {
@@ -141,7 +177,12 @@ class Energy final : public pdyn::Writer {
         default:
           break;
       }
-      row += fmt::format("{:.17g}", value(columns_[c], frame, k, u, state));
+      double x = value(columns_[c], frame, k, u, state);
+      // LAMMPS's thermo_modify norm yes: extensive values per particle.
+      if (per_particle_ && info(columns_[c]).extensive && frame.particles.x.cols() > 0) {
+        x /= static_cast<double>(frame.particles.x.cols());
+      }
+      row += fmt::format("{:.17g}", x);
     }
     row += '\n';
     file_.write(row);
@@ -180,6 +221,10 @@ class Energy final : public pdyn::Writer {
         return frame.reservoir_energy;
       case Column::Conserved:
         return k + u + frame.reservoir_energy;
+      case Column::Pair:
+        return u - frame.bonded_energy;
+      case Column::Bonded:
+        return frame.bonded_energy;
       case Column::Step:
         break;
     }
@@ -188,6 +233,8 @@ class Energy final : public pdyn::Writer {
 
   std::vector<Column> columns_;
   double extra_dof_;
+  bool per_particle_;
+  bool lammps_header_;  // checked before the file is opened
   std::optional<pdyn::FileMark> resume_;
   pdyn::OutputFile file_;
 };
@@ -196,7 +243,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Writer;
   d.name = "energy";
-  d.version = "1.2.0";
+  d.version = "1.3.0";
   d.description =
       "energy log: a row per frame of t,kinetic,potential,total (J), or the columns asked for "
       "(temperature, pressure, ...), 17 significant digits";
@@ -213,6 +260,13 @@ pdyn::PluginDescriptor describe() {
                         "degrees of freedom removed from 3 N_free for the temperature (3: the "
                         "total momentum, as LAMMPS), besides one per independent constraint row")
           .at_least(0),
+      pdyn::param::string(
+          "header", "pdyn",
+          "pdyn or lammps: the header line: the column names, or LAMMPS's thermo names (Step, "
+          "Temp, E_pair, E_mol, TotEng, Press, ...)"),
+      pdyn::param::boolean("per_particle", false,
+                           "divide the energies and the virial by the number of particles, as "
+                           "LAMMPS's thermo_modify norm yes (its default in lj units)"),
   };
   d.writer_traits.energy = true;
   d.create_writer = [](const pdyn::Params& p, const pdyn::WriterContext& ctx) {

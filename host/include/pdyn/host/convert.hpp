@@ -3,6 +3,8 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "pdyn/host/export.hpp"
 #include "pdyn/host/scene.hpp"
@@ -15,6 +17,23 @@ namespace pdyn {
 /// a simple input uses (docs/lammps.md lists the commands); anything else
 /// throws SceneError with one diagnostic per problem, located
 /// "FILE:LINE:COLUMN" at the word, "what (supported: ...)".
+/// When the script makes its atoms itself (lattice, create_atoms), this
+/// throws SceneError: they go to a data file, which convert_lammps_script
+/// writes.
 PDYN_HOST_API std::string convert_lammps_input(const std::string& text, const std::string& file);
+
+/// A converted scene and the files it reads that the conversion made.
+struct PDYN_HOST_API ConvertedScene {
+  std::string scene;  ///< commented YAML
+  /// Name (in the scene's folder) and contents of each file the scene
+  /// reads that the script made: the atoms of create_atoms and velocity
+  /// create, as a LAMMPS data file `STEM.data`.
+  std::vector<std::pair<std::string, std::string>> files;
+};
+
+/// As convert_lammps_input; files the conversion makes are named after
+/// `stem` (the scene's file name without its extension).
+PDYN_HOST_API ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
+                                                   const std::string& stem);
 
 }  // namespace pdyn

@@ -12,6 +12,7 @@
 
 #include "pdyn/host/export.hpp"
 #include "pdyn/host/registry.hpp"
+#include "pdyn/kernel/neighbor_schedule.hpp"
 #include "pdyn/system.hpp"
 
 namespace pdyn {
@@ -117,6 +118,9 @@ struct PDYN_HOST_API Scene {
   std::map<std::string, ForceTraits> force_traits;
   /// simulation.constraint_force: Witkin's feedback terms and CG settings.
   ConstraintFeedback constraint_feedback;
+  /// simulation.neighbor: when the pair forces' neighbor lists are rebuilt
+  /// (LAMMPS's neigh_modify every / delay / check); default Verlet's rule.
+  RebuildSchedule neighbor_schedule;
   /// What the scene loaded but will not use, one line each, located
   /// ("data.lmp:40:1: the file's Bonds (12 rows) are not read ..."): every
   /// host shows them (pdyn validate and run on stderr, Python as warnings).

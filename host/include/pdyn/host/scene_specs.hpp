@@ -21,6 +21,8 @@ PDYN_HOST_API std::vector<ParamSpec> simulation_specs();
 PDYN_HOST_API std::vector<ParamSpec> box_specs();
 /// `simulation.constraint_force:` (Witkin's constraint force, pdyn::ConstraintFeedback).
 PDYN_HOST_API std::vector<ParamSpec> constraint_force_specs();
+/// simulation.neighbor: the neighbor lists' rebuild schedule.
+PDYN_HOST_API std::vector<ParamSpec> neighbor_specs();
 /// One `particles:` entry that is a single particle.
 PDYN_HOST_API std::vector<ParamSpec> particle_specs();
 /// `output:` (besides `checkpoint:`).

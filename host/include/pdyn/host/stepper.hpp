@@ -24,6 +24,7 @@
 #include <string>
 
 #include "pdyn/host/export.hpp"
+#include "pdyn/kernel/neighbor_schedule.hpp"
 #include "pdyn/types.hpp"
 
 namespace pdyn {
@@ -73,7 +74,11 @@ class PDYN_HOST_API Stepper {
   /// `solver_label` names the solver in faults and crash reports ("rk4
   /// (scene.yaml:3:11)"); it is referenced, not copied, and must outlive the
   /// stepper.
-  Stepper(System& sys, Solver& solver, const std::string& solver_label);
+  /// `neighbors`: when the system's shared neighbor lists are rebuilt
+  /// (pdyn/neighbors.hpp; a scene's simulation.neighbor), counted in the
+  /// fixed steps step_to() takes.
+  Stepper(System& sys, Solver& solver, const std::string& solver_label,
+          const RebuildSchedule& neighbors = {});
 
   /// One fixed step from time() to `t_end` (h = t_end - time()); on success
   /// the time is exactly `t_end`. Returns h, or nothing after a fault.
@@ -105,6 +110,7 @@ class PDYN_HOST_API Stepper {
   System& sys_;
   Solver& solver_;
   const std::string* label_;
+  RebuildSchedule neighbors_;
   Eigen::VectorXd previous_;  // the last good state: where the current step started
   Eigen::VectorXd next_;      // a small state's end, copied there while it is checked
   std::uint64_t version_ = ~std::uint64_t{0};  // System::state_version() when previous_ was kept
