@@ -81,6 +81,16 @@ void System::set_domain(const Domain& domain) {
   touch();
 }
 
+void System::resize_box(const Vec3& min, const Vec3& max) {
+  Domain d = domain_;
+  for (int k = 0; k < 3; ++k) {
+    if (!d.periodic[k]) continue;
+    d.min[k] = min[k];
+    d.max[k] = max[k];
+  }
+  set_domain(d);
+}
+
 void System::set_radii(std::vector<double> radius) {
   if (!radius.empty() && static_cast<Index>(radius.size()) != size()) {
     throw Error(fmt::format("System::set_radii: {} radii for {} particles", radius.size(), size()));

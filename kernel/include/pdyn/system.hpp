@@ -125,6 +125,13 @@ class PDYN_API System {
   /// constraint impulse moves. Kept in step with masses() and fixed().
   const Eigen::VectorXd& inverse_masses() const noexcept { return inv_mass_; }
   const Domain& domain() const noexcept { return domain_; }
+  /// Since 0.10.0, for a solver that controls the pressure (a barostat):
+  /// moves the bounds of the periodic axes to `min` and `max` (m), keeping
+  /// which axes are periodic and the open axes' bounds. The solver moves the
+  /// positions itself, scaled with the box as its method says. Increases
+  /// state_version(); pair forces' neighbor lists rebuild for the new box.
+  /// Throws Error unless min < max, both finite, along every periodic axis.
+  void resize_box(const Vec3& min, const Vec3& max);
   const std::vector<double>& radii() const noexcept { return radius_; }
   const std::vector<std::int32_t>& types() const noexcept { return type_; }
   /// Per particle, how many box lengths it has been wrapped by along each

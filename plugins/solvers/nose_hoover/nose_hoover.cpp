@@ -72,8 +72,11 @@
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 #include <pdyn/thermo.hpp>
+#include <optional>
 #include <span>
 #include <vector>
+
+#include "barostat.hpp"
 
 namespace {
 
@@ -107,10 +110,19 @@ class NoseHoover final : public pdyn::Solver,
                          public pdyn::EnergyReservoir,
                          public pdyn::ForceReuseHolder {
  public:
-  NoseHoover(double kT, double tdamp, int chain, double extra_dof)
-      : kT_(kT), tau2_(tdamp * tdamp), m_(chain), extra_dof_(extra_dof) {}
+  NoseHoover(double kT, double tdamp, int chain, double extra_dof,
+             std::optional<nose_hoover::Barostat> barostat)
+      : kT_(kT),
+        tau2_(tdamp * tdamp),
+        m_(chain),
+        extra_dof_(extra_dof),
+        barostat_(std::move(barostat)) {}
 
   void step(pdyn::System& sys, double h) override {
+    if (barostat_) {
+      step_npt(sys, h);
+      return;
+    }
     const pdyn::ForceReuse::Needs needs = pdyn::ForceReuse::needs(sys);
     const pdyn::Matrix3X* kept = reuse_.kept(sys, needs);  // before this step's writable views
     const double t0 = sys.time();
@@ -160,6 +172,96 @@ class NoseHoover final : public pdyn::Solver,
     reuse_.keep(sys, a1, needs);  // after the step's last write
   }
 
+  // LAMMPS's fix npt iso, FixNH::initial_integrate and final_integrate in
+  // their order (barostat.hpp): the barostat's chain, the particles' chain,
+  // the barostat's kick from the pressure, v scaled by the box's rate,
+  // v += h/2 a0, dilate, x += h v, dilate; evaluate a1; v += h/2 a1, v
+  // scaled, the pressure at the new state, the kick, the particles' chain,
+  // the barostat's chain.
+  void step_npt(pdyn::System& sys, double h) {
+    const pdyn::ForceReuse::Needs needs = pdyn::ForceReuse::needs(sys);
+    const pdyn::Matrix3X* kept = reuse_.kept(sys, needs);  // before this step's writable views
+    if (needs.velocity) {
+      throw pdyn::Error(
+          "nose_hoover: the barostat (pressure) needs forces of the positions only (expected no "
+          "collider and no velocity-dependent force)");
+    }
+    nose_hoover::Barostat b = *barostat_;
+    if (!b.started()) b.start(sys);
+    const double t0 = sys.time();
+    const Index n = sys.size();
+    const double dof = degrees_of_freedom(sys);
+    Chain next = chain_;
+    const double virial0 = virial_kept_ && kept != nullptr ? virial_ : virial_of(sys);
+    b.chain_half_step(h);
+    double twice_k = update_then_twice_k(sys, [](Index, Index) {});
+    const double s0 = dof > 0 ? half_step(next, dof, twice_k, 0.5 * h) : 1.0;
+    twice_k *= s0 * s0;  // LAMMPS's tracked t_current
+    b.kick(pressure(sys, twice_k, virial0), volume(sys), twice_k, h);
+    const double f = b.velocity_factor(h);
+    const pdyn::Matrix3X& a0 = kept != nullptr ? *kept : sys.compute_accelerations();
+    auto v = sys.velocities();
+    pdyn::parallel_chunks(n, kChunk, [&](Index bb, Index e) {
+      auto vc = v.middleCols(bb, e - bb);
+      vc *= s0;
+      vc *= f;
+      vc *= f;
+      vc += (0.5 * h) * a0.middleCols(bb, e - bb);
+    });
+    b.dilate(sys, h);
+    auto x = sys.positions();
+    pdyn::parallel_chunks(n, kChunk, [&](Index bb, Index e) {
+      x.middleCols(bb, e - bb) += h * v.middleCols(bb, e - bb);
+    });
+    b.dilate(sys, h);
+    sys.set_time(t0 + h);
+
+    const pdyn::Matrix3X& a1 = sys.compute_accelerations();
+    twice_k = update_then_twice_k(sys, [&](Index bb, Index e) {
+      auto vc = v.middleCols(bb, e - bb);
+      vc += (0.5 * h) * a1.middleCols(bb, e - bb);
+      vc *= f;
+      vc *= f;
+    });
+    const double virial1 = virial_of(sys);
+    b.kick(pressure(sys, twice_k, virial1), volume(sys), twice_k, h);
+    if (dof > 0) {
+      const double s1 = half_step(next, dof, twice_k, 0.5 * h);
+      pdyn::parallel_chunks(n, kChunk, [&](Index bb, Index e) { v.middleCols(bb, e - bb) *= s1; });
+    }
+    b.chain_half_step(h);
+    if (finite(next) && b.finite()) {
+      chain_ = next;
+      dof_ = dof;
+      *barostat_ = b;
+      volume_ = volume(sys);
+    }
+    reuse_.keep(sys, a1, needs);  // after the step's last write
+    virial_ = virial1;            // the virial at the state a1 was evaluated at
+    virial_kept_ = true;
+  }
+
+  static double volume(const pdyn::System& sys) {
+    const pdyn::Domain& d = sys.domain();
+    return (d.max[0] - d.min[0]) * (d.max[1] - d.min[1]) * (d.max[2] - d.min[2]);
+  }
+
+  // LAMMPS's compute pressure: (2K + W) / 3 / V, with 2K = N_f k_B T.
+  static double pressure(const pdyn::System& sys, double twice_k, double virial) {
+    return (twice_k + virial) / 3.0 * (1.0 / volume(sys));
+  }
+
+  static double virial_of(const pdyn::System& sys) {
+    const pdyn::VirialSum w = pdyn::total_virial(sys);
+    if (std::isnan(w.value)) {
+      throw pdyn::Error(fmt::format(
+          "nose_hoover: the barostat (pressure) needs every force's virial, and {} reports none "
+          "(expected forces built with pdyn 0.8 or later, pdyn/thermo.hpp)",
+          w.missing));
+    }
+    return w.value;
+  }
+
   // A checkpoint carries the kept a1 (pdyn/force_reuse.hpp).
   const pdyn::Matrix3X* kept_accelerations(const pdyn::System& sys) const override {
     return reuse_.current(sys);
@@ -170,7 +272,7 @@ class NoseHoover final : public pdyn::Solver,
 
   double reservoir_energy() const override {
     const std::array<double, kMaxChain> q = thermostat_masses(dof_);
-    double e = 0.0;
+    double e = barostat_ ? barostat_->reservoir_energy(volume_) : 0.0;
     for (int j = 0; j < m_; ++j) e += 0.5 * q[j] * chain_.xi[j] * chain_.xi[j];
     e += dof_ * kT_ * chain_.eta[0];
     for (int j = 1; j < m_; ++j) e += kT_ * chain_.eta[j];
@@ -192,6 +294,14 @@ class NoseHoover final : public pdyn::Solver,
     put(&dof_, 8);
     put(chain_.eta.data(), 8 * static_cast<std::size_t>(m_));
     put(chain_.xi.data(), 8 * static_cast<std::size_t>(m_));
+    if (barostat_) {  // version 2: the barostat and the volume follow
+      const std::uint32_t v2 = 2;
+      std::memcpy(bytes.data() + 4, &v2, 4);
+      const std::vector<std::uint8_t> b = barostat_->save();
+      const auto* vol = reinterpret_cast<const std::uint8_t*>(&volume_);
+      bytes.insert(bytes.end(), vol, vol + 8);
+      bytes.insert(bytes.end(), b.begin(), b.end());
+    }
     return bytes;
   }
 
@@ -203,9 +313,15 @@ class NoseHoover final : public pdyn::Solver,
     }
     Chain c;
     double dof = 0.0;
-    const bool framed = bytes.size() == state_bytes(m_) &&
-                        std::memcmp(bytes.data(), kMagic, 4) == 0 && version == kStateVersion &&
-                        m == static_cast<std::uint32_t>(m_);
+    const std::size_t base = state_bytes(m_);
+    // Version 1: the chain; version 2 (a barostat): the volume and the barostat after it.
+    bool framed = bytes.size() >= base && std::memcmp(bytes.data(), kMagic, 4) == 0 &&
+                  version == (barostat_ ? 2u : kStateVersion) &&
+                  m == static_cast<std::uint32_t>(m_) && (barostat_ || bytes.size() == base);
+    if (framed && barostat_) {
+      framed = bytes.size() > base + 8 && barostat_->restore(bytes.subspan(base + 8));
+      if (framed) std::memcpy(&volume_, bytes.data() + base, 8);
+    }
     if (framed) {
       const std::uint8_t* p = bytes.data() + 12;
       std::memcpy(&dof, p, 8);
@@ -298,6 +414,10 @@ class NoseHoover final : public pdyn::Solver,
   int m_;
   double extra_dof_;
   Chain chain_;
+  std::optional<nose_hoover::Barostat> barostat_;  // `pressure:` given
+  double volume_ = 0.0;          // the box's volume after the last step (barostat)
+  double virial_ = 0.0;          // W at the last step's end, with the kept a1
+  bool virial_kept_ = false;
   double dof_ = 0.0;             // N_f of the last step, for reservoir_energy()
   std::vector<double> partial_;  // 2K per fixed chunk
   pdyn::Matrix3X half_;          // v_half for velocity-dependent forces, sized on first use
@@ -329,10 +449,31 @@ pdyn::PluginDescriptor describe() {
               "degrees of freedom removed from 3 N_free for N_f (3: the total momentum, "
               "as the energy writer)")
               .at_least(0),
+          pdyn::param::optional("pressure", pdyn::ParamType::Real, "Pa",
+                                "the target pressure P0: an isotropic MTK barostat (LAMMPS's fix "
+                                "npt iso); without it, constant volume"),
+          pdyn::param::optional("pdamp", pdyn::ParamType::Real, "s",
+                                "the barostat's damping time; LAMMPS suggests about 1000 time "
+                                "steps (needed with pressure)")
+              .greater_than(0),
+          pdyn::param::integer("pchain", 3, "thermostats in the barostat's chain")
+              .at_least(1)
+              .at_most(nose_hoover::Barostat::kMaxChain),
       });
   d.create_solver = [](const pdyn::Params& p, const pdyn::SceneContext&) {
-    return std::make_unique<NoseHoover>(pdyn::temperature_kT(p), p.real("tdamp"),
-                                        static_cast<int>(p.integer("chain")), p.real("extra_dof"));
+    const double kT = pdyn::temperature_kT(p);
+    std::optional<nose_hoover::Barostat> barostat;
+    if (p.has("pressure") != p.has("pdamp")) {
+      throw pdyn::ParamError(p.has("pressure") ? "pdamp" : "pressure",
+                             "the barostat needs both pressure and pdamp (expected both or "
+                             "neither)");
+    }
+    if (p.has("pressure")) {
+      barostat.emplace(p.real("pressure"), p.real("pdamp"), static_cast<int>(p.integer("pchain")),
+                       kT);
+    }
+    return std::make_unique<NoseHoover>(kT, p.real("tdamp"), static_cast<int>(p.integer("chain")),
+                                        p.real("extra_dof"), std::move(barostat));
   };
   return d;
 }
