@@ -12,7 +12,8 @@
 #   bash bench/convert_vs_lammps.sh [--build DIR] [--write-reference] [CASE ...]
 #
 #   cases: melt (in.melt of LAMMPS's melt example: fcc lattice, velocity create
-#   loop geom, lj/cut, neigh_modify every 20 check no, 250 steps); default all
+#   loop geom, lj/cut, neigh_modify every 20 check no, 250 steps), npt (the
+#   same melt under fix npt iso, in.npt); default all
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=build
@@ -26,7 +27,7 @@ while (($#)); do
   esac
   shift
 done
-((${#cases[@]})) || cases=(melt)
+((${#cases[@]})) || cases=(melt npt)
 pdyn="$PWD/$build/bin/pdyn"
 [[ -x "$pdyn" ]] || { echo "convert_vs_lammps: no $pdyn (build pdyn first)" >&2; exit 2; }
 have_lmp=0
@@ -38,7 +39,8 @@ for c in "${cases[@]}"; do
   # folder, input script, LAMMPS's thermo
   case "$c" in
     melt) set -- melt in.melt melt.thermo ;;
-    *) echo "convert_vs_lammps: unknown case '$c' (expected melt)" >&2; exit 2 ;;
+    npt) set -- melt in.npt npt.thermo ;;
+    *) echo "convert_vs_lammps: unknown case '$c' (expected melt or npt)" >&2; exit 2 ;;
   esac
   scene=tests/scenes/$1
   out=out/convert-vs-lammps/$c

@@ -30,7 +30,8 @@ constexpr const char* kCommands =
     "velocity, special_bonds, read_data, pair_style, pair_coeff, "
     "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
     "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, comm_modify, "
-    "timestep, fix nve, fix nvt, fix langevin, fix rattle, fix shake, thermo, thermo_style, "
+    "timestep, fix nve, fix nvt, fix npt, fix langevin, fix rattle, fix shake, thermo, "
+    "thermo_style, "
     "thermo_modify, run";
 
 // LAMMPS's bonded styles and the plugins that run them: each coefficient of
@@ -466,44 +467,82 @@ void Converter::fix(const Command& c) {
   const std::string& style = c.words[3].text;
   if (style == "nve" && c.words.size() == 4) {
     nve_ = true;
-  } else if (style == "nvt") {
+  } else if (style == "nvt" || style == "npt") {
     nvt(c);
   } else if (style == "langevin") {
     langevin(c);
   } else if (style == "rattle" || style == "shake") {
     rattle(c);
   } else {
-    fail(c, 3,
-         fmt::format("fix {}: not converted yet (supported: nve, nvt, langevin, rattle, shake)",
-                     style));
+    fail(
+        c, 3,
+        fmt::format("fix {}: not converted yet (supported: nve, nvt, npt, langevin, rattle, shake)",
+                    style));
   }
 }
 
 // fix ID all nvt temp TSTART TSTOP TDAMP [tchain N]: nose_hoover, which
 // follows LAMMPS's fix nvt step for step (its chain and dof defaults).
+// fix nvt temp TSTART TSTOP TDAMP [tchain N], and fix npt with iso PSTART
+// PSTOP PDAMP [pchain N] as well: nose_hoover, which follows LAMMPS's fix nvt
+// and fix npt iso step for step.
 void Converter::nvt(const Command& c) {
+  const std::string& style = c.words[3].text;
+  const bool npt = style == "npt";
+  const char* form = npt ? "temp TSTART TSTOP TDAMP iso PSTART PSTOP PDAMP [tchain N] [pchain N]"
+                         : "temp TSTART TSTOP TDAMP [tchain N]";
   if (c.words.size() < 8 || c.words[4].text != "temp") {
     fail(c, std::min<std::size_t>(4, c.words.size() - 1),
-         "fix nvt: expected temp TSTART TSTOP TDAMP [tchain N]");
+         fmt::format("fix {}: expected {}", style, form));
     return;
   }
   const auto start = number(c, 5, "TSTART"), stop = number(c, 6, "TSTOP"),
              damp = number(c, 7, "TDAMP");
   if (!start || !stop || !damp) return;
   if (*start != *stop) {
-    fail(c, 6, "fix nvt: a ramped temperature is not converted yet (expected TSTOP = TSTART)");
+    fail(c, 6,
+         fmt::format("fix {}: a ramped temperature is not converted yet (expected TSTOP = "
+                     "TSTART)",
+                     style));
     return;
   }
-  Nvt t{*start, *damp, 3};
+  Nvt t{*start, *damp, 3, std::nullopt, std::nullopt, 3};
   for (std::size_t k = 8; k < c.words.size(); k += 2) {
-    const auto v =
-        c.words[k].text == "tchain" ? number(c, k + 1, "the chain length") : std::nullopt;
-    if (!v) {
+    const std::string& key = c.words[k].text;
+    if (npt && (key == "aniso" || key == "tri" || key == "x" || key == "y" || key == "z")) {
       fail(c, k,
-           fmt::format("fix nvt: '{}' is not converted (supported: tchain N)", c.words[k].text));
+           fmt::format("fix npt: '{}' is not converted yet (supported: iso; pdyn's barostat is "
+                       "isotropic)",
+                       key));
       return;
     }
-    t.chain = static_cast<long>(*v);
+    if (npt && key == "iso" && k + 3 < c.words.size()) {
+      const auto p0 = number(c, k + 1, "PSTART"), p1 = number(c, k + 2, "PSTOP"),
+                 pd = number(c, k + 3, "PDAMP");
+      if (!p0 || !p1 || !pd) return;
+      if (*p0 != *p1) {
+        fail(c, k + 2, "fix npt: a ramped pressure is not converted yet (expected PSTOP = PSTART)");
+        return;
+      }
+      t.pressure = *p0;
+      t.pdamp = *pd;
+      k += 2;  // and the loop's 2
+      continue;
+    }
+    const bool chain = key == "tchain" || (npt && key == "pchain");
+    const auto v =
+        chain && k + 1 < c.words.size() ? number(c, k + 1, "the chain length") : std::nullopt;
+    if (!v) {
+      fail(c, k,
+           fmt::format("fix {}: '{}' is not converted (supported: {})", style, key,
+                       npt ? "iso, tchain N, pchain N" : "tchain N"));
+      return;
+    }
+    (key == "tchain" ? t.chain : t.pchain) = static_cast<long>(*v);
+  }
+  if (npt && !t.pressure) {
+    fail(c, 3, fmt::format("fix npt: no iso PSTART PSTOP PDAMP (expected {})", form));
+    return;
   }
   nvt_ = t;
 }
@@ -618,9 +657,9 @@ ConvertedScene Converter::convert(const std::string& text, const std::string& st
   if (!steps_) lacks("no run command (expected run N)");
   if (!dt_) dt_ = 0.005;  // LAMMPS's default in lj units
   if (nve_ == nvt_.has_value()) {
-    lacks("no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all nvt)");
+    lacks("no fix nve, nvt or npt, or more than one (expected one of fix ID all nve, nvt, npt)");
   }
-  if (nvt_ && rigid_) lacks("fix nvt with fix rattle is not converted yet (expected nve)");
+  if (nvt_ && rigid_) lacks("fix nvt or npt with fix rattle is not converted yet (expected nve)");
   check_coefficients();
   ConvertedScene out;
   for (long t = 1; x_.cols() > 0 && t <= types_; ++t) {
@@ -683,9 +722,13 @@ std::string Converter::yaml() const {
                      rebuild_.every, rebuild_.delay, rebuild_.check ? "true" : "false",
                      rebuild_ == RebuildSchedule{1, 10, true} ? " (LAMMPS's default)" : "");
   if (nvt_) {
+    const std::string barostat = nvt_->pressure
+                                     ? fmt::format(", pressure: {}, pdamp: {}, pchain: {}",
+                                                   *nvt_->pressure, *nvt_->pdamp, nvt_->pchain)
+                                     : "";
     out +=
-        fmt::format("  solver: {{ type: nose_hoover, kT: {}, tdamp: {}, chain: {} }}  # fix nvt\n",
-                    nvt_->kT, nvt_->tdamp, nvt_->chain);
+        fmt::format("  solver: {{ type: nose_hoover, kT: {}, tdamp: {}, chain: {}{} }}  # fix {}\n",
+                    nvt_->kT, nvt_->tdamp, nvt_->chain, barostat, nvt_->pressure ? "npt" : "nvt");
   } else {
     out += fmt::format("  solver: {{ type: verlet{} }}  # fix nve{}\n",
                        rigid_ ? fmt::format(", rattle_tolerance: {}", rigid_->tolerance) : "",

@@ -28,9 +28,13 @@ struct Command {
 };
 
 // `fix nvt temp T T DAMP [tchain N]`.
+// `fix nvt temp T T DAMP [tchain N]`, and `fix npt` with `iso P P PDAMP
+// [pchain N]`: nose_hoover with its barostat.
 struct Nvt {
   double kT = 1.0, tdamp = 0.1;
   long chain = 3;
+  std::optional<double> pressure, pdamp;
+  long pchain = 3;
 };
 
 // `fix rattle`'s rods: bond and angle types.

@@ -58,41 +58,63 @@ void ExpectConvertedRunFollowsLammps(const std::string& folder, const std::strin
 // same ones), and the default thermo: Step Temp E_pair E_mol TotEng Press
 // per atom. Every column at every thermo step, by LAMMPS's names
 // (melt.thermo: `bash bench/convert_vs_lammps.sh`, LAMMPS printing 17 digits).
-TEST(Convert, ShippedMeltFollowsLammps) {
-  const fs::path dir = test::temp_dir("convert-melt");
-  fs::copy_file(test::source_path("tests/scenes/melt/in.melt"), dir / "in.melt");
-  const auto converted = test::pdyn_in(dir, {"convert", "in.melt", "-o", "melt.yaml"});
-  ASSERT_EQ(converted.status, 0) << converted.err;
-  const auto run = test::pdyn_in(dir, {"run", "melt.yaml", "-q"});
-  ASSERT_EQ(run.status, 0) << run.err;
-  EXPECT_NE(run.err.find("simulation.neighbor.check: false rebuilds the neighbor lists only every "
-                         "20 steps"),
-            std::string::npos)
-      << run.err;
-  const std::string ours = test::read_bytes(dir / "in.melt-thermo.csv");
-  EXPECT_EQ(ours.substr(0, ours.find('\n')), "Step,Temp,E_pair,E_mol,TotEng,Press");
-  auto mine = test::csv_columns(dir / "in.melt-thermo.csv");
-  auto lammps = test::csv_columns(test::source_path("tests/scenes/melt/melt.thermo"));
-  ASSERT_EQ(mine["Step"], lammps["Step"]);
-  ASSERT_EQ(mine["Step"].size(), 6u);
-  for (const char* name : {"Temp", "E_pair", "E_mol", "TotEng", "Press"}) {
+// Converts tests/scenes/melt/INPUT alone (it makes its own atoms), runs
+// it, and compares every column of its thermo, by LAMMPS's names, with
+// REFERENCE (LAMMPS's log at 17 digits: `bash bench/convert_vs_lammps.sh`).
+// Returns the folder it ran in.
+fs::path ExpectScriptFollowsLammps(const std::string& input, const std::string& reference,
+                                   const std::string& header) {
+  const fs::path dir = test::temp_dir("convert-" + input);
+  fs::copy_file(test::source_path("tests/scenes/melt/" + input), dir / input);
+  const auto converted = test::pdyn_in(dir, {"convert", input, "-o", "scene.yaml"});
+  EXPECT_EQ(converted.status, 0) << converted.err;
+  const auto run = test::pdyn_in(dir, {"run", "scene.yaml", "-q"});
+  EXPECT_EQ(run.status, 0) << run.err;
+  const std::string ours = test::read_bytes(dir / (input + "-thermo.csv"));
+  EXPECT_EQ(ours.substr(0, ours.find('\n')), header);
+  auto mine = test::csv_columns(dir / (input + "-thermo.csv"));
+  auto lammps = test::csv_columns(test::source_path("tests/scenes/melt/" + reference));
+  EXPECT_EQ(mine["Step"], lammps["Step"]);
+  if (mine["Step"] != lammps["Step"]) return dir;
+  for (const auto& [name, values] : lammps) {
+    if (name == "Step") continue;
     double worst = 0.0;
-    for (std::size_t s = 0; s < lammps["Step"].size(); ++s) {
-      const double a = mine[name].at(s), b = lammps[name].at(s);
+    for (std::size_t s = 0; s < values.size(); ++s) {
+      const double a = mine[name].at(s), b = values[s];
       EXPECT_LE(std::abs(a - b), 1e-10 * std::abs(b)) << name << " at step " << lammps["Step"][s];
       if (b != 0.0) worst = std::max(worst, std::abs(a - b) / std::abs(b));
     }
-    std::cout << "melt: " << name << " vs LAMMPS: worst relative difference " << worst << "\n";
+    std::cout << input << ": " << name << " vs LAMMPS: worst relative difference " << worst
+              << " over " << values.size() << " thermo steps\n";
   }
+  return dir;
+}
+
+TEST(Convert, ShippedMeltFollowsLammps) {
+  const fs::path dir =
+      ExpectScriptFollowsLammps("in.melt", "melt.thermo", "Step,Temp,E_pair,E_mol,TotEng,Press");
   // With LAMMPS's default schedule (check yes) the run is another run:
   // the test can fail.
-  std::string scene = test::read_bytes(dir / "melt.yaml");
+  std::string scene = test::read_bytes(dir / "scene.yaml");
   scene.replace(scene.find("every: 20, delay: 0, check: false"), 33,
                 "every: 1, delay: 0, check: true");
-  test::write_file(dir / "melt.yaml", scene);
-  ASSERT_EQ(test::pdyn_in(dir, {"run", "melt.yaml", "-q"}).status, 0);
+  test::write_file(dir / "scene.yaml", scene);
+  ASSERT_EQ(test::pdyn_in(dir, {"run", "scene.yaml", "-q"}).status, 0);
   const double checked = test::csv_columns(dir / "in.melt-thermo.csv")["Temp"].at(1);
-  EXPECT_GT(std::abs(checked - lammps["Temp"].at(1)), 1e-6);
+  const auto lammps = test::csv_columns(test::source_path("tests/scenes/melt/melt.thermo"));
+  EXPECT_GT(std::abs(checked - lammps.at("Temp").at(1)), 1e-6);
+}
+
+// The melt under fix npt iso (LAMMPS's defaults): nose_hoover's barostat,
+// step for step, the volume included.
+TEST(Convert, MeltUnderNptFollowsLammps) {
+  const fs::path dir = ExpectScriptFollowsLammps("in.npt", "npt.thermo",
+                                                 "Step,Temp,Press,PotEng,KinEng,TotEng,Volume");
+  EXPECT_NE(test::read_bytes(dir / "scene.yaml")
+                .find("  solver: { type: nose_hoover, kT: 1.5, tdamp: 0.5, chain: 3, pressure: 1, "
+                      "pdamp: 5, pchain: 3 }  # fix npt\n"),
+            std::string::npos)
+      << test::read_bytes(dir / "scene.yaml");
 }
 
 // The atoms of lattice, region, create_box, create_atoms and mass, and the
@@ -240,9 +262,15 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
   EXPECT_EQ(
       ConvertProblems("pair_style lj/cut/coul/long 10.0\n" + tail),
       "in.test:1:12: pair_style lj/cut/coul/long: not converted yet (supported: lj/cut, zero)");
-  EXPECT_EQ(
-      ConvertProblems("fix 2 all npt temp 1 1 0.1 iso 1 1 1\n" + tail),
-      "in.test:1:11: fix npt: not converted yet (supported: nve, nvt, langevin, rattle, shake)");
+  EXPECT_EQ(ConvertProblems("fix 2 all nph iso 1 1 1\n" + tail),
+            "in.test:1:11: fix nph: not converted yet (supported: nve, nvt, npt, langevin, rattle, "
+            "shake)");
+  EXPECT_EQ(ConvertProblems("fix 2 all npt temp 1 1 0.1 aniso 1 1 1\n" + tail),
+            "in.test:1:28: fix npt: 'aniso' is not converted yet (supported: iso; pdyn's "
+            "barostat is isotropic)");
+  EXPECT_EQ(ConvertProblems("fix 2 all npt temp 1 1 0.1 iso 1 2 1\n" + tail),
+            "in.test:1:34: fix npt: a ramped pressure is not converted yet (expected PSTOP = "
+            "PSTART)");
   EXPECT_EQ(ConvertProblems("run ${n}\n" + tail),
             "in.test:1:5: variable 'n' is not defined (expected a `variable n "
             "index|equal|string VALUE` before it)\n"
@@ -253,16 +281,16 @@ TEST(Convert, WhatItDoesNotKnowIsRefusedAtTheWord) {
             "velocity, special_bonds, read_data, pair_style, pair_coeff, "
             "pair_modify, bond_style, bond_coeff, angle_style, angle_coeff, dihedral_style, "
             "dihedral_coeff, improper_style, improper_coeff, neighbor, neigh_modify, "
-            "comm_modify, timestep, fix nve, fix nvt, fix langevin, fix rattle, fix shake, "
-            "thermo, thermo_style, thermo_modify, run)");
+            "comm_modify, timestep, fix nve, fix nvt, fix npt, fix langevin, fix rattle, fix "
+            "shake, thermo, thermo_style, thermo_modify, run)");
   EXPECT_EQ(ConvertProblems("atom_style full\n"),
             "in.test:1:12: atom_style full: not converted (supported: atomic, bond, angle, "
             "molecular; pdyn has no charges)\n"
             "in.test: no read_data or create_atoms (expected the particles from a data file or a "
             "lattice)\n"
             "in.test: no run command (expected run N)\n"
-            "in.test: no fix nve or nvt, or both (expected one of fix ID all nve, fix ID all "
-            "nvt)");
+            "in.test: no fix nve, nvt or npt, or more than one (expected one of fix ID all nve, "
+            "nvt, npt)");
 }
 
 // A bonded style without its coefficients would drop its terms from the

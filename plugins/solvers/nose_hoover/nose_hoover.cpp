@@ -66,13 +66,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <pdyn/error.hpp>
 #include <pdyn/force_reuse.hpp>
 #include <pdyn/parallel.hpp>
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 #include <pdyn/thermo.hpp>
-#include <optional>
 #include <span>
 #include <vector>
 
@@ -415,8 +415,8 @@ class NoseHoover final : public pdyn::Solver,
   double extra_dof_;
   Chain chain_;
   std::optional<nose_hoover::Barostat> barostat_;  // `pressure:` given
-  double volume_ = 0.0;          // the box's volume after the last step (barostat)
-  double virial_ = 0.0;          // W at the last step's end, with the kept a1
+  double volume_ = 0.0;  // the box's volume after the last step (barostat)
+  double virial_ = 0.0;  // W at the last step's end, with the kept a1
   bool virial_kept_ = false;
   double dof_ = 0.0;             // N_f of the last step, for reservoir_energy()
   std::vector<double> partial_;  // 2K per fixed chunk
