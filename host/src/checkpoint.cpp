@@ -1,4 +1,4 @@
-// The checkpoint file format, version 6 (native byte order, x86-64):
+// The checkpoint file format, version 7 (native byte order, x86-64):
 //
 //   "PDYNCKPT"                8 bytes magic
 //   u32 format version        Checkpoint::kFormatVersion
@@ -14,6 +14,9 @@
 // reused accelerations if has_reused. A string or byte block is a u64
 // length and its bytes.
 //
+// Version 7 appends u8 has_box, then f64[3] min, f64[3] max and u8[3]
+// periodic of the box if has_box: a barostat changes the box during a run.
+// Version 6 is version 7 without the box (the scene's box is kept).
 // Version 5 is version 6 without the reused accelerations (a resumed run
 // then evaluates the forces afresh at its first step).
 // Version 4 is version 5 without the pending frames (read as none).
@@ -166,6 +169,14 @@ void write_checkpoint(const fs::path& path, const Checkpoint& c) {
   if (reused) {
     payload.append(reinterpret_cast<const char*>(c.reused.data()), 3 * n * sizeof(double));
   }
+  ByteWriter box;
+  box.pod<std::uint8_t>(c.box ? 1 : 0);
+  if (c.box) {
+    for (int k = 0; k < 3; ++k) box.pod(c.box->min[k]);
+    for (int k = 0; k < 3; ++k) box.pod(c.box->max[k]);
+    for (int k = 0; k < 3; ++k) box.pod<std::uint8_t>(c.box->periodic[k] ? 1 : 0);
+  }
+  payload += box.data();
 
   ByteWriter file;
   std::string out(kMagic, sizeof(kMagic));
@@ -370,6 +381,13 @@ Checkpoint read_checkpoint(const fs::path& path) {
   if (version >= 6 && r.pod<std::uint8_t>() != 0) {
     c.reused.resize(3, static_cast<Index>(n));
     for (Index k = 0; k < c.reused.size(); ++k) c.reused.data()[k] = r.pod<double>();
+  }
+  if (version >= 7 && r.pod<std::uint8_t>() != 0) {
+    Domain d;
+    for (int k = 0; k < 3; ++k) d.min[k] = r.pod<double>();
+    for (int k = 0; k < 3; ++k) d.max[k] = r.pod<double>();
+    for (int k = 0; k < 3; ++k) d.periodic[k] = r.pod<std::uint8_t>() != 0;
+    c.box = d;
   }
   if (!r.done()) r.fail("unexpected bytes after the last field");
   return c;

@@ -2,6 +2,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+
 #include "pdyn/force_reuse.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/crash_report.hpp"
@@ -88,6 +90,23 @@ void check_counts(const Scene& scene, const Checkpoint& c) {
         "particles)",
         count_of(static_cast<long long>(c.images.size()), "particle"), sys.size()));
   }
+  if (c.box) {  // a barostat's box: the scene's periodic axes, open axes unchanged
+    const Domain& d = sys.domain();
+    for (int k = 0; k < 3; ++k) {
+      const bool same_kind = c.box->periodic[k] == d.periodic[k];
+      const bool sound = d.periodic[k]
+                             ? std::isfinite(c.box->min[k]) && std::isfinite(c.box->max[k]) &&
+                                   c.box->min[k] < c.box->max[k]
+                             : c.box->min[k] == d.min[k] && c.box->max[k] == d.max[k];
+      if (!same_kind || !sound) {
+        throw CheckpointError(fmt::format(
+            "the checkpoint's box runs from {} to {} m along {} ({}), which the scene's box "
+            "cannot become (expected the same periodic axes, min < max along them, the open "
+            "axes' bounds unchanged)",
+            c.box->min[k], c.box->max[k], "xyz"[k], c.box->periodic[k] ? "periodic" : "open"));
+      }
+    }
+  }
   const std::size_t expected = 1 + sys.force_objects().size() + sys.collider_objects().size();
   if (c.plugin_states.size() != expected) {
     throw CheckpointError(
@@ -131,7 +150,8 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
   Matrix3X x = Eigen::Map<const Matrix3X>(c.state.data(), 3, sys.size());
   Matrix3X v = Eigen::Map<const Matrix3X>(c.state.data() + 3 * sys.size(), 3, sys.size());
   // Radii and types are the scene's (which the checkpoint matches);
-  // set_particles clears them. The box is kept; the images are the run's.
+  // set_particles clears them. The box and the images are the run's (a
+  // barostat changes the box; an older checkpoint keeps the scene's).
   std::vector<double> radius = sys.radii();
   std::vector<std::int32_t> type = sys.types();
   const SystemAssembly assembly(sys);
@@ -143,6 +163,7 @@ void restore_checkpoint(Scene& scene, const Checkpoint& c, bool force,
   } else {
     assembly.set_images(c.images);
   }
+  if (c.box) assembly.set_domain(*c.box);
   sys.set_time(c.time);
   // Last, after every write above: the end-of-step accelerations the solver
   // kept when the checkpoint was taken stand in for its next a0 again
@@ -164,6 +185,7 @@ Checkpoint capture_checkpoint(const Scene& scene, std::int64_t step) {
   c.mass = sys.masses();
   c.fixed = sys.fixed();
   c.images = sys.images();
+  c.box = sys.domain();
   if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene.solver.get())) {
     if (const Matrix3X* a1 = holder->kept_accelerations(sys)) c.reused = *a1;
   }

@@ -211,20 +211,24 @@ std::string with_v3_marks(const std::string& payload, const Checkpoint& now) {
   return old;
 }
 
-// Version 5 had no reused forces (this scene's drag reads velocities, so
-// version 6 holds none either: one flag byte); version 4 had no pending
+// Version 6 had no box (the scene's is kept); version 5 had no reused
+// forces (this scene's drag reads velocities, so version 6 holds none
+// either: one flag byte); version 4 had no pending
 // frames; version 3 held the marks of the frames and energy CSV files,
 // which are today's csv and energy writers; version 2, written before the
 // simulation box, is version 3 without the image counts. All are still
 // read (version 2 as images 0) and resume the run to the same end, byte
-// for byte, as the version 6 checkpoint of the same state.
-TEST_F(CheckpointCorruption, Versions5To2AreRead) {
-  ASSERT_EQ(Checkpoint::kFormatVersion, 6u);
+// for byte, as the version 7 checkpoint of the same state.
+TEST_F(CheckpointCorruption, Versions6To2AreRead) {
+  ASSERT_EQ(Checkpoint::kFormatVersion, 7u);
   const Checkpoint now = read_checkpoint(dir_ / "out/run.ckpt");
   ASSERT_EQ(now.outputs.size(), 2u);  // frames.csv, energy.csv
   ASSERT_EQ(now.reused.size(), 0);
   const std::size_t n = static_cast<std::size_t>(now.mass.size());
-  const std::string v6_payload = good_.substr(kHeader, good_.size() - kHeader - 4);
+  const std::string v7_payload = good_.substr(kHeader, good_.size() - kHeader - 4);
+  constexpr std::size_t kBox = 1 + 6 * 8 + 3;  // has_box, min, max, periodic
+  ASSERT_EQ(v7_payload[v7_payload.size() - kBox], '\1');
+  const std::string v6_payload = v7_payload.substr(0, v7_payload.size() - kBox);
   ASSERT_EQ(v6_payload.back(), '\0');  // no reused forces
   const std::string payload = v6_payload.substr(0, v6_payload.size() - 1);
   const std::string v3_payload = with_v3_marks(payload, now);
@@ -234,15 +238,17 @@ TEST_F(CheckpointCorruption, Versions5To2AreRead) {
       8 + now.scene_file.size() + 8 + now.scene_text.size() + 8 + 8 + 8 + 1 + 8 + 7 * n * 8 + n;
   std::string v2_payload = v3_payload;
   v2_payload.erase(images, 3 * n * sizeof(std::int32_t));
+  const std::string v6 = patch(reseal(good_, v6_payload), 8, std::uint32_t{6});
   const std::string v5 = patch(reseal(good_, payload), 8, std::uint32_t{5});
   const std::string v4 = patch(reseal(good_, with_v4_marks(payload, now)), 8, std::uint32_t{4});
   const std::string v3 = patch(reseal(good_, v3_payload), 8, std::uint32_t{3});
   const std::string v2 = patch(reseal(good_, v2_payload), 8, std::uint32_t{2});
+  write_bytes(dir_ / "v6.ckpt", v6);
   write_bytes(dir_ / "v5.ckpt", v5);
   write_bytes(dir_ / "v4.ckpt", v4);
   write_bytes(dir_ / "v3.ckpt", v3);
   write_bytes(dir_ / "v2.ckpt", v2);
-  for (const char* name : {"v5.ckpt", "v4.ckpt", "v3.ckpt", "v2.ckpt"}) {
+  for (const char* name : {"v6.ckpt", "v5.ckpt", "v4.ckpt", "v3.ckpt", "v2.ckpt"}) {
     SCOPED_TRACE(name);
     const Checkpoint c = read_checkpoint(dir_ / name);
     EXPECT_TRUE(same_bits(c.state, now.state));
@@ -259,7 +265,7 @@ TEST_F(CheckpointCorruption, Versions5To2AreRead) {
             (std::vector<std::array<std::int32_t, 3>>(n, {0, 0, 0})));
 
   std::map<std::string, std::pair<std::string, std::string>> ends;  // frames, energy
-  for (const char* name : {"v2.ckpt", "v3.ckpt", "v4.ckpt", "v5.ckpt", "out/run.ckpt"}) {
+  for (const char* name : {"v2.ckpt", "v3.ckpt", "v4.ckpt", "v5.ckpt", "v6.ckpt", "out/run.ckpt"}) {
     const fs::path copy = temp_dir(std::string("corruption-resume-") + name[1]);
     fs::copy(dir_, copy, fs::copy_options::recursive);
     auto a = pdyn_in(copy, {"run", "scene.yaml", "--steps", "200", "-q", "--resume", name});
@@ -270,6 +276,9 @@ TEST_F(CheckpointCorruption, Versions5To2AreRead) {
   EXPECT_EQ(ends["v3.ckpt"], ends["out/run.ckpt"]);
   EXPECT_EQ(ends["v4.ckpt"], ends["out/run.ckpt"]);
   EXPECT_EQ(ends["v5.ckpt"], ends["out/run.ckpt"]);
+  EXPECT_EQ(ends["v6.ckpt"], ends["out/run.ckpt"]);
+  EXPECT_FALSE(read_checkpoint(dir_ / "v6.ckpt").box.has_value());
+  EXPECT_TRUE(now.box.has_value());
 }
 
 TEST_F(CheckpointCorruption, TrailingGarbage) {

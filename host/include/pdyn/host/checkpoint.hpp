@@ -4,9 +4,11 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "pdyn/domain.hpp"
 #include "pdyn/error.hpp"
 #include "pdyn/host/export.hpp"
 #include "pdyn/types.hpp"
@@ -42,7 +44,8 @@ struct PDYN_HOST_API Checkpoint {
   /// per writer (output list); versions 3 (image
   /// counts, frames and energy marks) and 2 (no image counts: read as 0)
   /// are still read, their two marks as the csv and energy writers' marks.
-  static constexpr std::uint32_t kFormatVersion = 6;
+  /// Version 7 adds the box, which a barostat changes.
+  static constexpr std::uint32_t kFormatVersion = 7;
   static constexpr std::uint32_t kOldestReadableVersion = 2;
 
   std::string scene_file;           ///< where the scene came from (for messages)
@@ -65,6 +68,9 @@ struct PDYN_HOST_API Checkpoint {
   /// Version 6: the end-of-step accelerations (m/s^2, 3 x N) the solver
   /// would reuse as its next step's a0 (ForceReuseHolder), or empty.
   Matrix3X reused;
+  /// Version 7: the box at the checkpoint (System::domain()); earlier
+  /// versions: none, and the scene's box is kept.
+  std::optional<Domain> box;
 
   /// The mark of the writer whose path is `path`, or nullptr.
   const WriterMark* output(const std::string& path) const;
