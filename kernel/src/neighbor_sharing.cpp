@@ -46,6 +46,10 @@ struct SharedNeighborList::Entry {
   // counted, and the steps counted since its last build.
   double step_time = std::numeric_limits<double>::quiet_NaN();
   std::int64_t ago = 0;
+  // A barostat's box: the domain of the list's last build and the largest
+  // move of its faces since (NeighborList::UpdateRule::box_moved).
+  Domain built_in;
+  double box_moved = 0.0;
 
   Entry(const double* x_, Index n_, const Domain& d, NeighborList::Kind k,
         const std::vector<std::uint8_t>* members, double c, double s)
@@ -60,7 +64,7 @@ struct SharedNeighborList::Entry {
 
   bool matches(const double* x_, Index n_, const Domain& d, NeighborList::Kind k,
                const std::vector<std::uint8_t>* members) const {
-    if (x != x_ || n != n_ || kind != k || !(domain == d)) return false;
+    if (x != x_ || n != n_ || kind != k || !NeighborList::resizes(domain, d)) return false;
     return members ? mask == *members : mask.empty();
   }
 };
@@ -178,10 +182,21 @@ const NeighborList& SharedNeighborList::update(const Eigen::Ref<const Matrix3X>&
     e.reach = std::max(e.reach, cutoff_ + skin_);
     e.list.set_range(e.cutoff, e.reach - e.cutoff);
   }
-  if (const auto clock = clock_of(key)) {
-    if (e.list.update(x, domain, members, decide(e, *clock))) e.ago = 0;
+  NeighborList::UpdateRule rule;
+  if (const auto clock = clock_of(key)) rule.when = decide(e, *clock);
+  // A list built before stays while only the periodic faces moved: the
+  // faces' largest move since the build shrinks what particles may move.
+  const double moved =
+      e.list.size() == n && NeighborList::resizes(e.built_in, domain)
+          ? (domain.min - e.built_in.min).norm() + (domain.max - e.built_in.max).norm()
+          : 0.0;
+  rule.box_moved = std::max(e.box_moved, moved);
+  if (e.list.update(x, domain, members, rule)) {
+    e.ago = 0;
+    e.built_in = domain;
+    e.box_moved = 0.0;
   } else {
-    e.list.update(x, domain, members);
+    e.box_moved = rule.box_moved;
   }
   return e.list;
 }

@@ -143,10 +143,14 @@ bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& dom
 }
 
 bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
-                          const std::vector<std::uint8_t>* members, Rebuild when) {
-  if (when == Rebuild::IfMoved) return update(x, domain, members);
+                          const std::vector<std::uint8_t>* members, const UpdateRule& rule) {
   check(x, domain, members);
-  if (when == Rebuild::IfForced && !must_rebuild(x, domain, members)) return false;
+  const bool resized = rule.box_moved >= 0.0;
+  const bool rebuild =
+      rule.when == Rebuild::Always ||
+      (rule.when == Rebuild::IfForced ? must_rebuild(x, domain, members, resized)
+                                      : stale(x, domain, members, resized ? rule.box_moved : -1.0));
+  if (!rebuild) return false;
   build(x, domain, members);
   return true;
 }
@@ -178,22 +182,41 @@ void NeighborList::check(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
   }
 }
 
-// A list for other particles, another box or another selection.
+bool NeighborList::resizes(const Domain& from, const Domain& to) {
+  for (int k = 0; k < 3; ++k) {
+    if (from.periodic[k] != to.periodic[k]) return false;
+    if (!to.periodic[k] && (from.min[k] != to.min[k] || from.max[k] != to.max[k])) return false;
+  }
+  return true;
+}
+
+// A list for other particles, another box (or another kind of box, when a
+// resized one may be kept) or another selection.
 bool NeighborList::must_rebuild(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
-                                const std::vector<std::uint8_t>* members) const {
-  if (!built_ || x.cols() != size() || !(domain == domain_)) return true;
+                                const std::vector<std::uint8_t>* members, bool resized) const {
+  if (!built_ || x.cols() != size()) return true;
+  if (resized ? !resizes(domain_, domain) : !(domain == domain_)) return true;
   return members ? !std::equal(members->begin(), members->end(), mask_.begin(), mask_.end())
                  : !mask_.empty();
 }
 
 bool NeighborList::stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
                          const std::vector<std::uint8_t>* members) const {
+  return stale(x, domain, members, -1.0);
+}
+
+// box_moved < 0: the domain must be the build's; otherwise see UpdateRule.
+bool NeighborList::stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+                         const std::vector<std::uint8_t>* members, double box_moved) const {
   const Index n = x.cols();
-  if (must_rebuild(x, domain, members)) return true;
-  // Verlet's criterion: no listed particle has moved more than skin / 2.
-  // Particles that were not finite and still are not have no pairs to lose;
-  // one that changed between finite and not must be (un)listed.
-  const double limit2 = 0.25 * skin_ * skin_;
+  if (must_rebuild(x, domain, members, box_moved >= 0.0)) return true;
+  // Verlet's criterion: no listed particle has moved more than skin / 2
+  // (less the allowance of a resized box, UpdateRule). Particles that were
+  // not finite and still are not have no pairs to lose; one that changed
+  // between finite and not must be (un)listed.
+  const double limit = 0.5 * skin_ - (box_moved > 0.0 ? 2.5 * box_moved : 0.0);
+  if (!(limit > 0.0) && skin_ > 0.0) return true;
+  const double limit2 = limit * limit;
   std::atomic<bool> moved{false};
   parallel_ranges(n, [&](Index begin, Index end) {
     for (Index i = begin; i < end && !moved.load(std::memory_order_relaxed); ++i) {

@@ -39,13 +39,13 @@ TEST(NeighborListRebuild, ModesDecideWhatDisplacementDoesNot) {
   Matrix3X x = Scattered(100, 6.0, 3);
   NeighborList list(1.0, 0.4);
   using R = NeighborList::Rebuild;
-  EXPECT_TRUE(list.update(x, d, nullptr, R::IfForced));  // never built: must
-  x(0, 1) += 1.0;                                        // far beyond skin / 2
-  EXPECT_FALSE(list.update(x, d, nullptr, R::IfForced));
-  EXPECT_TRUE(list.update(x, d, nullptr, R::IfMoved));
-  EXPECT_FALSE(list.update(x, d, nullptr, R::IfMoved));
-  EXPECT_TRUE(list.update(x, d, nullptr, R::Always));                 // nothing moved
-  EXPECT_TRUE(list.update(x.leftCols(50), d, nullptr, R::IfForced));  // N changed: must
+  EXPECT_TRUE(list.update(x, d, nullptr, {R::IfForced}));  // never built: must
+  x(0, 1) += 1.0;                                          // far beyond skin / 2
+  EXPECT_FALSE(list.update(x, d, nullptr, {R::IfForced}));
+  EXPECT_TRUE(list.update(x, d, nullptr, {R::IfMoved}));
+  EXPECT_FALSE(list.update(x, d, nullptr, {R::IfMoved}));
+  EXPECT_TRUE(list.update(x, d, nullptr, {R::Always}));                 // nothing moved
+  EXPECT_TRUE(list.update(x.leftCols(50), d, nullptr, {R::IfForced}));  // N changed: must
   EXPECT_EQ(list.builds(), 4);
 }
 

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <pdyn/host/threads.hpp>
 #include <pdyn/neighbors.hpp>
@@ -311,6 +312,75 @@ TEST(NeighborList, UpdatesKeepEveryPairWithinCutoff) {
     SCOPED_TRACE("open, full");
     ExpectUpdatesHold(Domain{}, {0, 0, 0}, {8, 8, 8}, Kind::Full, nullptr);
   }
+}
+
+// A barostat's box: every step the particles move a little and the box
+// and positions dilate about the centre, by a factor that swings either way
+// (so that a particle is wrapped in one box and measured in another). The
+// list must hold every pair within the cutoff of the current box at every
+// step, without rebuilding at every step.
+TEST(NeighborList, AResizedBoxKeepsEveryPairWithinCutoff) {
+  const double cutoff = 1.0, skin = 0.3;
+  Domain d = Box({0, 0, 0}, {8, 8, 8}, {true, true, true});
+  Matrix3X x = Uniform(500, {0, 0, 0}, {8, 8, 8}, 81);
+  // The shared list is the one pair forces use; it keeps a resized box's
+  // list (a plain NeighborList rebuilds for any other domain).
+  SharedNeighborList shared(cutoff, skin);
+  shared.update(x, d);
+  const NeighborList& list = *shared.list();
+  std::mt19937_64 rng(82);
+  std::uniform_real_distribution<double> step(-0.01, 0.01);
+  const int steps = 200;
+  for (int s = 0; s < steps; ++s) {
+    const double f = 1.0 + 0.003 * std::sin(0.2 * s);
+    const Vec3 centre = 0.5 * (d.min + d.max);
+    Domain next = d;
+    next.min = (d.min - centre) * f + centre;
+    next.max = (d.max - centre) * f + centre;
+    for (Index i = 0; i < x.cols(); ++i) {
+      const Vec3 moved = (x.col(i) - centre) * f + centre + Vec3(step(rng), step(rng), step(rng));
+      x.col(i) = next.wrap(moved);
+    }
+    d = next;
+    shared.update(x, d);
+    for (Index i = 0; i < x.cols(); ++i) {
+      for (Index j = i + 1; j < x.cols(); ++j) {
+        if (d.minimum_image(x.col(j) - x.col(i)).norm() < cutoff) {
+          ASSERT_TRUE(Has(list, i, j)) << "step " << s << ": pair " << i << ", " << j;
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(NeighborList::resizes(Box({0, 0, 0}, {8, 8, 8}, {true, true, true}), d));
+  EXPECT_FALSE(NeighborList::resizes(d, Box({0, 0, 0}, {8, 8, 8}, {true, true, false})));
+  std::cout << "resized box: " << list.builds() << " builds in " << steps << " steps\n";
+  EXPECT_GT(list.builds(), 2);
+  EXPECT_LT(list.builds(), steps / 2);
+
+  // One face moving in while no particle moves: only the images come
+  // closer, which Verlet's displacement rule alone would never see.
+  Domain shrinking = Box({0, 0, 0}, {8, 8, 8}, {true, true, true});
+  Matrix3X still = Uniform(500, {0, 0, 0}, {7.5, 8, 8}, 83);
+  SharedNeighborList shared_faces(cutoff, skin);
+  shared_faces.update(still, shrinking);
+  const NeighborList& faces = *shared_faces.list();
+  for (int s = 0; s < 50; ++s) {
+    shrinking.max[0] -= 0.01;
+    shared_faces.update(still, shrinking);
+    for (Index i = 0; i < still.cols(); ++i) {
+      for (Index j = i + 1; j < still.cols(); ++j) {
+        if (shrinking.minimum_image(still.col(j) - still.col(i)).norm() < cutoff) {
+          ASSERT_TRUE(Has(faces, i, j)) << "face step " << s << ": pair " << i << ", " << j;
+        }
+      }
+    }
+  }
+  EXPECT_GT(faces.builds(), 1);
+  // A plain list rebuilds in any other box.
+  NeighborList plain(cutoff, skin);
+  ASSERT_TRUE(plain.update(still, shrinking));
+  shrinking.max[0] -= 0.001;
+  EXPECT_TRUE(plain.update(still, shrinking));
 }
 
 TEST(NeighborList, RebuildsWhenAndOnlyWhenNeeded) {

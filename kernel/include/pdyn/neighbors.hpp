@@ -113,10 +113,23 @@ class PDYN_API NeighborList {
     Always,    ///< rebuild whatever the particles did
     IfForced,  ///< only when the list must be rebuilt
   };
-  /// As update(), with the displacement rule replaced by `when` (since pdyn
-  /// 0.10.0; a host's rebuild schedule, pdyn/kernel/neighbor_schedule.hpp).
+  /// How a caller changes update()'s rule (since pdyn 0.10.0: a host's
+  /// rebuild schedule, pdyn/kernel/neighbor_schedule.hpp, and a barostat's
+  /// box, both through SharedNeighborList).
+  struct UpdateRule {
+    Rebuild when = Rebuild::IfMoved;
+    /// < 0: the domain must be the build's, or the list is rebuilt. >= 0: a
+    /// box resized since the build (resizes()) is kept, this (m) being the
+    /// largest |d min| + |d max| of its faces at any update since the
+    /// build: the displacement allowed shrinks to skin / 2 - 2.5 box_moved,
+    /// LAMMPS's allowance for the images' moves, and pdyn's wrap at every
+    /// step (a displacement measured across a wrap is off by the box's
+    /// change since the wrap).
+    double box_moved = -1.0;
+  };
+  /// As update(), under `rule`.
   bool update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
-              const std::vector<std::uint8_t>* members, Rebuild when);
+              const std::vector<std::uint8_t>* members, const UpdateRule& rule);
 
   /// Rebuilds unconditionally (same arguments and errors as update()). O(N):
   /// bins the particles into cells of side >= reach() / 2 (a counting sort),
@@ -147,6 +160,11 @@ class PDYN_API NeighborList {
   double skin() const noexcept { return skin_; }             ///< listed margin beyond rc, m
   double reach() const noexcept { return cutoff_ + skin_; }  ///< listing distance, m
   Kind kind() const noexcept { return kind_; }
+
+  /// Since 0.10.0: true when `to` is `from` with only the periodic axes'
+  /// bounds moved (a barostat's box): a list built in `from` can then be
+  /// kept in `to` (UpdateRule::box_moved).
+  static bool resizes(const Domain& from, const Domain& to);
 
   /// Number of builds so far (update()'s rebuilds and build()'s).
   std::int64_t builds() const noexcept { return builds_; }
@@ -215,7 +233,9 @@ class PDYN_API NeighborList {
   bool stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
              const std::vector<std::uint8_t>* members) const;
   bool must_rebuild(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
-                    const std::vector<std::uint8_t>* members) const;
+                    const std::vector<std::uint8_t>* members, bool resized) const;
+  bool stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
+             const std::vector<std::uint8_t>* members, double box_moved) const;
   void make_grid(const Domain& domain, const std::array<double, 3>& lo,
                  const std::array<double, 3>& hi, Index listed);
   void make_stencil();

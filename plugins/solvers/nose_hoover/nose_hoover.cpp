@@ -428,7 +428,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Solver;
   d.name = "nose_hoover";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.description =
       "velocity Verlet in a Nose-Hoover chain thermostat at temperature T (MTK 1996, as LAMMPS's "
       "fix nvt); order 2, conserves K + U + reservoir";
