@@ -73,6 +73,48 @@ std::optional<double> Anchor::potential_energy(const ParticleView& p) const {
   return 0.5 * p.x.squaredNorm();
 }
 
+namespace {
+
+// Calls pair(i, j, d, r) for every pair closer than the spheres' diameter,
+// d = x_i - x_j at the nearest image, r = |d|.
+template <class Pair>
+void soft_pairs(const ParticleView& p, Pair&& pair) {
+  constexpr double kDiameter = 1.2;
+  for (Index i = 0; i < p.size(); ++i) {
+    for (Index j = i + 1; j < p.size(); ++j) {
+      const Vec3 d = p.domain.minimum_image(p.x.col(i) - p.x.col(j));
+      const double r = d.norm();
+      if (r < kDiameter && r > 0.0) pair(i, j, d, r, 1.0 - r / kDiameter, kDiameter);
+    }
+  }
+}
+
+}  // namespace
+
+void SoftSpheres::add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) {
+  soft_pairs(p, [&](Index i, Index j, const Vec3& d, double r, double overlap, double diameter) {
+    const Vec3 fij = (2.0 * overlap / (diameter * r)) * d;  // -dU/dr along d
+    f.col(i) += fij;
+    f.col(j) -= fij;
+  });
+}
+
+std::optional<double> SoftSpheres::potential_energy(const ParticleView& p) const {
+  double u = 0.0;
+  soft_pairs(p, [&](Index, Index, const Vec3&, double, double overlap, double) {
+    u += overlap * overlap;
+  });
+  return u;
+}
+
+double SoftSpheres::virial(const ParticleView& p) const {
+  double w = 0.0;
+  soft_pairs(p, [&](Index, Index, const Vec3&, double r, double overlap, double diameter) {
+    w += 2.0 * overlap * r / diameter;  // d . f_ij
+  });
+  return w;
+}
+
 void Constant::add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) {
   f.noalias() += g_ * p.mass.transpose();
 }

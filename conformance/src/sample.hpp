@@ -12,7 +12,9 @@
 #include <vector>
 
 #include "pdyn/force.hpp"
+#include "pdyn/periodic_invariant.hpp"
 #include "pdyn/plugin.hpp"
+#include "pdyn/thermo.hpp"
 
 namespace pdyn::conformance::detail {
 
@@ -88,6 +90,18 @@ class Constant final : public Force {
 
  private:
   Vec3 g_;
+};
+
+/// Soft spheres: U = (1 - r / 1.2 m)^2 J per pair closer than 1.2 m,
+/// every pair at its nearest periodic image, with its virial: the kit's
+/// periodic liquid, on which solver.extended_energy runs a thermostat or a
+/// barostat (a solver that reads the pressure needs pdyn::VirialSource).
+class SoftSpheres final : public Force, public VirialSource, public PeriodicInvariant {
+ public:
+  void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X> f) override;
+  std::optional<double> potential_energy(const ParticleView& p) const override;
+  double virial(const ParticleView& p) const override;
+  StateDependence dependence() const override { return {false, false}; }  // positions only
 };
 
 /// The force `force` adds to zero accumulators in state `s`, N.

@@ -6,6 +6,7 @@
 // Solver::step's contract, so they call it directly, not through a Stepper.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -14,6 +15,7 @@
 #include "checks.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/system.hpp"
+#include "pdyn/thermo.hpp"
 #include "sample.hpp"
 
 namespace pdyn::conformance::detail {
@@ -165,6 +167,101 @@ void contract_checks(const PluginDescriptor& d, const Params& params, std::mt199
   });
 }
 
+// The kit's periodic liquid: 27 soft spheres on a jittered 3 x 3 x 3 grid
+// of 1 m in a periodic 3 m box, 1 kg each, velocities drawn from `seed`.
+std::unique_ptr<System> soft_liquid(std::uint64_t seed) {
+  std::mt19937_64 r(seed);
+  std::uniform_real_distribution<double> jitter(-0.15, 0.15), speed(-1.0, 1.0);
+  Matrix3X x(3, 27), v(3, 27);
+  Index k = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      for (int c = 0; c < 3; ++c, ++k) {
+        x.col(k) = Vec3(a + 0.5 + jitter(r), b + 0.5 + jitter(r), c + 0.5 + jitter(r));
+        v.col(k) = Vec3(speed(r), speed(r), speed(r));
+      }
+    }
+  }
+  auto sys = std::make_unique<System>();
+  const SystemAssembly assembly(*sys);
+  assembly.set_particles(x, v, Eigen::VectorXd::Ones(27), std::vector<std::uint8_t>(27, 0));
+  Domain box;
+  box.min = Vec3::Zero();
+  box.max = Vec3::Constant(3.0);
+  box.periodic = {true, true, true};
+  assembly.set_domain(box);
+  assembly.add_force(std::make_shared<SoftSpheres>(), "conformance soft spheres");
+  return sys;
+}
+
+// The largest |K + U + reservoir - its start| over 1 s of steps of h on the
+// soft liquid (the kernel's wrap after each step, as a host's).
+double extended_energy_error(const PluginDescriptor& d, const Params& params, std::uint64_t seed,
+                             double h) {
+  auto sys = soft_liquid(seed);
+  auto solver = d.create_solver(params, SceneContext{sys->view(), nullptr});
+  const auto energy = [&] {
+    return sys->kinetic_energy() + sys->potential_energy() +
+           total_reservoir_energy(*sys, solver.get());
+  };
+  const double h0 = energy();
+  double worst = 0.0;
+  for (int s = 0; s < static_cast<int>(std::lround(1.0 / h)); ++s) {
+    solver->step(*sys, h);
+    SystemAssembly(*sys).wrap_positions();
+    worst = std::max(worst, std::abs(energy() - h0));
+  }
+  return worst;
+}
+
+// A solver that is an EnergyReservoir (a thermostat, a barostat) conserves
+// K + U + reservoir to its declared order: the largest error over 1 s on
+// the kit's periodic liquid, at h = 0.01 s and 0.0025 s. A solver with an
+// optional `pressure` (Pa) is a barostat by pdyn's convention
+// (nose_hoover's): the check runs again with pressure 1 Pa (and pdamp 0.5 s
+// if it takes one), its conserved quantity then holding P V and the
+// barostat's energies.
+void extended_energy_checks(const PluginDescriptor& d, const Params& params, std::uint64_t seed,
+                            std::vector<CheckResult>& out) {
+  const auto spec = [&](const char* name) {
+    return std::find_if(d.params.begin(), d.params.end(),
+                        [&](const ParamSpec& p) { return p.name == name; });
+  };
+  const auto pressure = spec("pressure");
+  const bool barostat = pressure != d.params.end() && !pressure->required &&
+                        pressure->type == ParamType::Real && !params.has("pressure");
+  for (const bool npt : {false, true}) {
+    const char* name = npt ? "solver.extended_energy_npt" : "solver.extended_energy";
+    if (npt && !barostat) {
+      out.push_back(skip(name, "no optional `pressure` parameter: not a barostat"));
+      continue;
+    }
+    guarded(out, name, [&] {
+      Params p = params;
+      if (npt) {
+        p.set("pressure", 1.0);
+        if (spec("pdamp") != d.params.end() && !p.has("pdamp")) p.set("pdamp", 0.5);
+      }
+      {
+        auto probe = soft_liquid(seed);
+        auto solver = d.create_solver(p, SceneContext{probe->view(), nullptr});
+        if (dynamic_cast<const EnergyReservoir*>(solver.get()) == nullptr) {
+          return skip(name, "not an EnergyReservoir (pdyn/thermo.hpp): K + U is its energy");
+        }
+      }
+      const double coarse = extended_energy_error(d, p, seed, 0.01);
+      const double fine = extended_energy_error(d, p, seed, 0.0025);
+      const double order = std::log2(coarse / fine) / 2.0;
+      const int declared = d.solver_traits.order;
+      return result(name, std::abs(order - declared) <= 0.4, order, 0.4,
+                    fmt::format("K + U + reservoir over 1 s on 27 soft spheres in a periodic box"
+                                "{}: largest error {:.3g} J at h = 0.01 s, {:.3g} J at 0.0025 s, "
+                                "order {:.2f} (declared {})",
+                                npt ? " at pressure 1 Pa" : "", coarse, fine, order, declared));
+    });
+  }
+}
+
 }  // namespace
 
 void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<CheckResult>& out) {
@@ -182,6 +279,7 @@ void solver_checks(const PluginDescriptor& d, const Options& o, std::vector<Chec
   basic_solver_checks(d, params, rng, out);
   accuracy_checks(d, params, out);
   contract_checks(d, params, rng, out);
+  extended_energy_checks(d, params, rng(), out);
 }
 
 }  // namespace pdyn::conformance::detail
