@@ -111,12 +111,8 @@ class NoseHoover final : public pdyn::Solver,
                          public pdyn::ForceReuseHolder {
  public:
   NoseHoover(double kT, double tdamp, int chain, double extra_dof,
-             std::optional<nose_hoover::Barostat> barostat)
-      : kT_(kT),
-        tau2_(tdamp * tdamp),
-        m_(chain),
-        extra_dof_(extra_dof),
-        barostat_(std::move(barostat)) {}
+             const std::optional<nose_hoover::Barostat>& barostat)
+      : kT_(kT), tau2_(tdamp * tdamp), m_(chain), extra_dof_(extra_dof), barostat_(barostat) {}
 
   void step(pdyn::System& sys, double h) override {
     if (barostat_) {
@@ -473,7 +469,7 @@ pdyn::PluginDescriptor describe() {
                        kT);
     }
     return std::make_unique<NoseHoover>(kT, p.real("tdamp"), static_cast<int>(p.integer("chain")),
-                                        p.real("extra_dof"), std::move(barostat));
+                                        p.real("extra_dof"), barostat);
   };
   return d;
 }
