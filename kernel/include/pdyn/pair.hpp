@@ -90,6 +90,7 @@
 // it declares nothing, and the kit skips that check.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <concepts>
@@ -229,11 +230,15 @@ class PairForce : public Force,
   /// Sum over the pairs closer than the cutoff of (x_i - x_j) . f_ij, the
   /// separation to the nearest image (pdyn/thermo.hpp), J.
   double virial(const ParticleView& p) const override {
-    double w = 0.0;
-    for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2, double wt) {
-      w += d.dot(wt * evaluate(p, i, j, d, r2).force);
-    });
-    return w;
+    if constexpr (kSelect) {
+      return selected_virial(p);
+    } else {
+      double w = 0.0;
+      for_each_pair(p, [&](Index i, Index j, const Vec3& d, double r2, double wt) {
+        w += d.dot(wt * evaluate(p, i, j, d, r2).force);
+      });
+      return w;
+    }
   }
 
   const Law& law() const noexcept { return law_; }
@@ -545,6 +550,56 @@ class PairForce : public Force,
       }
       Eigen::Map<Vec3>(fd + fs * i) = fi;
     }
+  }
+
+  // The virial of a law the force loop selects on (kSelect): per pair
+  // r^2 g(r^2) (w) for r < cutoff, g = -U'/r, in blocks whose law runs in
+  // vector registers as range_forces_selected's. A barostat asks for it at
+  // every step, so it is summed over fixed chunks of rows on the host's
+  // threads, each chunk in row order and the chunks' sums in chunk order:
+  // the same bits for any thread count.
+  double selected_virial(const ParticleView& p) const {
+    update(p);
+    const Rows r = rows();
+    const Images im(p.domain);
+    const Index n = p.size();
+    constexpr Index kRows = 512;
+    std::vector<double> sums(static_cast<std::size_t>((n + kRows - 1) / kRows), 0.0);
+    parallel_ranges(n, [&](Index begin, Index end) {
+      constexpr Index kBlock = 64;
+      alignas(64) double r2s[kBlock], g[kBlock];
+      alignas(64) std::int32_t tj[kBlock];
+      const double* x = p.x.data();
+      for (Index c = (begin + kRows - 1) / kRows; c * kRows < end; ++c) {
+        double w = 0.0;
+        for (Index i = c * kRows; i < std::min(n, (c + 1) * kRows); ++i) {
+          const std::int32_t ti = type_of(p, i);
+          for (Index k0 = r.offsets[i]; k0 < r.offsets[i + 1]; k0 += kBlock) {
+            const Index m = std::min(kBlock, r.offsets[i + 1] - k0);
+            const Index* row = r.indices + k0;
+            for (Index k = 0; k < m; ++k) {
+              r2s[k] = separation(x + 3 * i, x + 3 * row[k], im).squaredNorm();
+              tj[k] = type_of(p, row[k]);
+            }
+#ifdef _OPENMP
+#pragma omp simd
+#endif
+            for (Index k = 0; k < m; ++k) {
+              const double v = law_(r2s[k], ti, tj[k]).force_over_r;
+              g[k] = r2s[k] < cutoff2_ ? v * r2s[k] : 0.0;
+            }
+            if (r.which) {
+              for (Index k = 0; k < m; ++k) g[k] *= r.scale[r.which[k0 + k]];
+            }
+            for (Index k = 0; k < m; ++k) w += g[k];
+          }
+        }
+        sums[static_cast<std::size_t>(c)] = w;
+      }
+    });
+    double w = 0.0;
+    for (const double s : sums) w += s;
+    return w;
   }
 
 #ifdef _OPENMP

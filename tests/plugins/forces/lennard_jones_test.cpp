@@ -232,6 +232,33 @@ TEST(LennardJones, TheSelectingPairLoopGivesTheBranchingLoopsBits) {
   set_threads(available_threads());
 }
 
+// The virial a barostat reads at every step (PairForce::virial): for a law
+// the loop selects on, summed in blocks over fixed chunks of rows on the
+// threads. The same bits for 1 to 4 threads (21,952 particles: beyond the
+// one-thread threshold), and the branching law's sum of (x_i - x_j) . f_ij
+// to rounding.
+TEST(LennardJones, TheVirialIsTheSameBitsForOneToFourThreadsAndTheBranchingSum) {
+  System sys;
+  set(sys, lattice(28, 1.1, 3));
+  Domain d;
+  d.max = Vec3::Constant(28 * 1.1);
+  d.periodic = {true, true, true};
+  SystemAssembly(sys).set_domain(d);
+  std::vector<double> selected;
+  for (const int threads : {1, 2, 3, 4}) {
+    set_threads(threads);
+    PairForce<TestLaw<true, false>> force(TestLaw<true, false>{}, 2.5, 0.3);
+    selected.push_back(force.virial(sys.view()));
+  }
+  set_threads(1);
+  PairForce<TestLaw<false, false>> branching(TestLaw<false, false>{}, 2.5, 0.3);
+  const double reference = branching.virial(sys.view());
+  set_threads(available_threads());
+  for (const double w : selected) EXPECT_EQ(w, selected.front());
+  EXPECT_NE(reference, 0.0);
+  EXPECT_NEAR(selected.front(), reference, 1e-12 * std::abs(reference));
+}
+
 // 256 atoms of an fcc Lennard-Jones liquid (reduced density 0.8442, the
 // LAMMPS melt benchmark's), periodic, shifted cutoff 2.5 sigma, velocity
 // Verlet over 5 time units. The total energy is bounded (no drift) and its
