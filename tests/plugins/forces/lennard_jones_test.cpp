@@ -212,13 +212,19 @@ Matrix3X pair_forces(const System& sys) {
   return f;
 }
 
-TEST(LennardJones, TheSelectingPairLoopGivesTheBranchingLoopsBits) {
-  System sys;
+// 21,952 particles on a jittered simple cubic lattice of 1.1 in its
+// periodic box.
+void jittered_periodic_lattice(System& sys) {
   set(sys, lattice(28, 1.1, 3));
   Domain d;
   d.max = Vec3::Constant(28 * 1.1);
   d.periodic = {true, true, true};
   SystemAssembly(sys).set_domain(d);
+}
+
+TEST(LennardJones, TheSelectingPairLoopGivesTheBranchingLoopsBits) {
+  System sys;
+  jittered_periodic_lattice(sys);
   for (const int threads : {1, 2}) {
     set_threads(threads);
     const Matrix3X branching = pair_forces<TestLaw<false, false>>(sys);
@@ -239,11 +245,7 @@ TEST(LennardJones, TheSelectingPairLoopGivesTheBranchingLoopsBits) {
 // to rounding.
 TEST(LennardJones, TheVirialIsTheSameBitsForOneToFourThreadsAndTheBranchingSum) {
   System sys;
-  set(sys, lattice(28, 1.1, 3));
-  Domain d;
-  d.max = Vec3::Constant(28 * 1.1);
-  d.periodic = {true, true, true};
-  SystemAssembly(sys).set_domain(d);
+  jittered_periodic_lattice(sys);
   std::vector<double> selected;
   for (const int threads : {1, 2, 3, 4}) {
     set_threads(threads);
