@@ -411,7 +411,7 @@ void Converter::bonded_coeff(const Command& c) {
     if (!v) return;
     values.push_back(*v);
   }
-  if (type && (*type < 1 || *type != std::floor(*type))) {
+  if (type && !whole_in(*type, 1, std::numeric_limits<double>::infinity())) {
     fail(c, 1, fmt::format("{}: type {} (expected a whole type number from 1)", c.name(), *type));
     return;
   }
@@ -436,7 +436,7 @@ void Converter::neigh_modify(const Command& c) {
     }
     if (key == "every" || key == "delay") {
       const auto v = number(c, k + 1, key == "every" ? "a step count >= 1" : "a step count >= 0");
-      if (v && (*v != std::floor(*v) || *v < (key == "every" ? 1 : 0))) {
+      if (v && !whole_in(*v, key == "every" ? 1 : 0, std::numeric_limits<double>::infinity())) {
         fail(c, k + 1,
              fmt::format("neigh_modify {}: {} (expected a whole number of steps, >= {})", key,
                          c.words[k + 1].text, key == "every" ? 1 : 0));

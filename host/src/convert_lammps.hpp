@@ -6,6 +6,8 @@
 #pragma once
 
 #include <array>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -16,6 +18,11 @@
 #include "pdyn/host/scene.hpp"
 
 namespace pdyn::lammps {
+
+/// A whole number from lo to hi: what a type, a count or a seed must be.
+inline bool whole_in(double v, double lo, double hi) {
+  return v >= lo && v <= hi && v == std::floor(v);
+}
 
 struct Word {
   std::string text;

@@ -89,7 +89,7 @@ void Converter::create_box(const Command& c) {
   if (!arity(c, 2, 2, "create_box N REGION, with no keywords")) return;
   const auto n = number(c, 1, "the number of atom types");
   if (!n) return;
-  if (*n < 1 || *n != std::floor(*n)) {
+  if (!whole_in(*n, 1, std::numeric_limits<double>::infinity())) {
     fail(c, 1, fmt::format("create_box: {} atom types (expected a whole number >= 1)", *n));
     return;
   }
@@ -111,7 +111,7 @@ void Converter::create_atoms(const Command& c) {
   }
   const auto t = number(c, 1, "an atom type");
   if (!t) return;
-  if (*t < 1 || *t > static_cast<double>(types_) || *t != std::floor(*t)) {
+  if (!whole_in(*t, 1, static_cast<double>(types_))) {
     fail(c, 1, fmt::format("create_atoms: type {} (expected 1..{})", c.words[1].text, types_));
     return;
   }
@@ -150,7 +150,7 @@ void Converter::mass(const Command& c) {
     return;
   }
   const auto t = number(c, 1, "an atom type or *");
-  if (t && (*t < 1 || *t > static_cast<double>(types_) || *t != std::floor(*t))) {
+  if (t && !whole_in(*t, 1, static_cast<double>(types_))) {
     fail(c, 1,
          fmt::format("mass: type {} (expected 1..{} after create_box, or *)", c.words[1].text,
                      types_));
@@ -180,7 +180,7 @@ void Converter::velocity(const Command& c) {
   const auto t = number(c, 3, "a temperature");
   const auto seed = number(c, 4, "a seed");
   if (!t || !seed) return;
-  if (*seed < 1 || *seed > 2147483647.0 || *seed != std::floor(*seed)) {
+  if (!whole_in(*seed, 1, 2147483647.0)) {
     fail(c, 4,
          fmt::format("velocity create: seed {} (expected a whole number from 1 to 2^31 - 1)",
                      c.words[4].text));

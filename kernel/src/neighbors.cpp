@@ -136,10 +136,7 @@ void NeighborList::set_range(double cutoff, double skin) {
 
 bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
                           const std::vector<std::uint8_t>* members) {
-  check(x, domain, members);
-  if (!stale(x, domain, members)) return false;
-  build(x, domain, members);
-  return true;
+  return update(x, domain, members, UpdateRule{});
 }
 
 bool NeighborList::update(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
@@ -200,6 +197,8 @@ bool NeighborList::must_rebuild(const Eigen::Ref<const Matrix3X>& x, const Domai
                  : !mask_.empty();
 }
 
+// Unused since update() took an UpdateRule; kept because 0.9.0's kernel
+// exported it (tests/kernel/kernel_exports.txt): dropping a symbol is an ABI bump.
 bool NeighborList::stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
                          const std::vector<std::uint8_t>* members) const {
   return stale(x, domain, members, -1.0);

@@ -207,6 +207,31 @@ inline bool same_bits(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
          std::memcmp(a.data(), b.data(), static_cast<std::size_t>(a.size()) * sizeof(double)) == 0;
 }
 
+/// Runs the scene file `scene` in `dir` whole, then again stopped after
+/// `stop` steps and resumed from its checkpoint: its outputs out/frames.csv
+/// (not empty) and out/energy.csv, and the final checkpoint out/run.ckpt's
+/// state and plugin states, must be the same bytes. The two final
+/// checkpoints (the whole run's, the resumed run's) go to `whole` and
+/// `resumed` for the caller's own checks.
+inline void expect_resumed_run_is_whole_run(const fs::path& dir, const std::string& scene, int stop,
+                                            Checkpoint& whole, Checkpoint& resumed) {
+  auto all = pdyn_in(dir, {"run", scene, "-q"});
+  ASSERT_EQ(all.status, 0) << all.err;
+  const std::string frames = read_bytes(dir / "out/frames.csv");
+  const std::string energy = read_bytes(dir / "out/energy.csv");
+  ASSERT_FALSE(frames.empty());
+  whole = read_checkpoint(dir / "out/run.ckpt");
+  auto half = pdyn_in(dir, {"run", scene, "--steps", std::to_string(stop), "-q"});
+  ASSERT_EQ(half.status, 0) << half.err;
+  auto rest = pdyn_in(dir, {"run", scene, "--resume", "out/run.ckpt", "-q"});
+  ASSERT_EQ(rest.status, 0) << rest.err;
+  EXPECT_EQ(read_bytes(dir / "out/frames.csv"), frames);
+  EXPECT_EQ(read_bytes(dir / "out/energy.csv"), energy);
+  resumed = read_checkpoint(dir / "out/run.ckpt");
+  EXPECT_TRUE(same_bits(whole.state, resumed.state));
+  EXPECT_EQ(whole.plugin_states, resumed.plugin_states);
+}
+
 /// A child `pdyn` process (the real binary), with stderr captured to a file.
 class Child {
  public:

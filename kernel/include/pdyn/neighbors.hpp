@@ -231,7 +231,7 @@ class PDYN_API NeighborList {
   void check(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
              const std::vector<std::uint8_t>* members) const;
   bool stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
-             const std::vector<std::uint8_t>* members) const;
+             const std::vector<std::uint8_t>* members) const;  // 0.9.0's; unused
   bool must_rebuild(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,
                     const std::vector<std::uint8_t>* members, bool resized) const;
   bool stale(const Eigen::Ref<const Matrix3X>& x, const Domain& domain,

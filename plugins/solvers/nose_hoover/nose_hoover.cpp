@@ -314,9 +314,12 @@ class NoseHoover final : public pdyn::Solver,
     bool framed = bytes.size() >= base && std::memcmp(bytes.data(), kMagic, 4) == 0 &&
                   version == (barostat_ ? 2u : kStateVersion) &&
                   m == static_cast<std::uint32_t>(m_) && (barostat_ || bytes.size() == base);
-    if (framed && barostat_) {
-      framed = bytes.size() > base + 8 && barostat_->restore(bytes.subspan(base + 8));
-      if (framed) std::memcpy(&volume_, bytes.data() + base, 8);
+    // Read into copies: a refused state leaves the solver as it was.
+    std::optional<nose_hoover::Barostat> barostat = barostat_;
+    double volume = volume_;
+    if (framed && barostat) {
+      framed = bytes.size() > base + 8 && barostat->restore(bytes.subspan(base + 8));
+      if (framed) std::memcpy(&volume, bytes.data() + base, 8);
     }
     if (framed) {
       const std::uint8_t* p = bytes.data() + 12;
@@ -329,11 +332,14 @@ class NoseHoover final : public pdyn::Solver,
       throw pdyn::Error(fmt::format(
           "nose_hoover: the checkpoint's solver state is not one this nose_hoover (chain: {}) "
           "wrote ({} bytes; expected {} bytes starting with 'nhch' version {}, chain length {}, "
-          "then finite numbers)",
-          m_, bytes.size(), state_bytes(m_), kStateVersion, m_));
+          "then finite numbers{})",
+          m_, bytes.size(), state_bytes(m_), barostat_ ? 2u : kStateVersion, m_,
+          barostat_ ? ", the volume and the barostat's state" : ""));
     }
     chain_ = c;
     dof_ = dof;
+    barostat_ = barostat;
+    volume_ = volume;
   }
 
  private:

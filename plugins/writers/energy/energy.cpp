@@ -74,13 +74,8 @@ constexpr std::array<ColumnInfo, 15> kColumns = {{
      "E_mol", true},
 }};
 
-const ColumnInfo& info(Column c) {
-  return *std::find_if(kColumns.begin(), kColumns.end(),
-                       [&](const ColumnInfo& i) { return i.column == c; });
-}
-
-std::vector<Column> read_columns(const pdyn::Params& p, const pdyn::Domain& domain) {
-  std::vector<Column> out;
+std::vector<const ColumnInfo*> read_columns(const pdyn::Params& p, const pdyn::Domain& domain) {
+  std::vector<const ColumnInfo*> out;
   const auto& names = p.strings("columns");
   if (names.empty()) throw pdyn::ParamError("columns", "no column (expected at least one)");
   for (std::size_t k = 0; k < names.size(); ++k) {
@@ -101,7 +96,7 @@ std::vector<Column> read_columns(const pdyn::Params& p, const pdyn::Domain& doma
                              fmt::format("'{}' needs a box (expected simulation.box)", names[k]),
                              static_cast<long>(k));
     }
-    out.push_back(it->column);
+    out.push_back(&*it);
   }
   return out;
 }
@@ -127,7 +122,7 @@ class Energy final : public pdyn::Writer {
     if (ctx.resuming) return;
     if (lammps_header_) {
       std::vector<std::string> names;
-      for (const Column c : columns_) names.emplace_back(info(c).lammps);
+      for (const ColumnInfo* c : columns_) names.emplace_back(c->lammps);
       file_.write(fmt::format("{}\n", fmt::join(names, ",")));
     } else {
       file_.write(fmt::format("{}\n", fmt::join(p.strings("columns"), ",")));
@@ -146,7 +141,7 @@ class Energy final : public pdyn::Writer {
     std::string row;
     for (std::size_t c = 0; c < columns_.size(); ++c) {
       if (c > 0) row += ',';
-      switch (columns_[c]) {
+      switch (columns_[c]->column) {
         case Column::Step:
           row += fmt::format("{}", frame.step);
           continue;
@@ -177,9 +172,9 @@ class Energy final : public pdyn::Writer {
         default:
           break;
       }
-      double x = value(columns_[c], frame, k, u, state);
+      double x = value(columns_[c]->column, frame, k, u, state);
       // LAMMPS's thermo_modify norm yes: extensive values per particle.
-      if (per_particle_ && info(columns_[c]).extensive && frame.particles.x.cols() > 0) {
+      if (per_particle_ && columns_[c]->extensive && frame.particles.x.cols() > 0) {
         x /= static_cast<double>(frame.particles.x.cols());
       }
       row += fmt::format("{:.17g}", x);
@@ -231,7 +226,7 @@ class Energy final : public pdyn::Writer {
     return 0.0;
   }
 
-  std::vector<Column> columns_;
+  std::vector<const ColumnInfo*> columns_;  // entries of kColumns
   double extra_dof_;
   bool per_particle_;
   bool lammps_header_;  // checked before the file is opened

@@ -150,21 +150,8 @@ TEST(NoseHoover, AResumedRunIsTheSameBits) {
                 ", " + std::to_string(1.12 * c + 0.05 * a) + "], mass: 1 }\n";
   text += "forces:\n  - { type: lennard_jones }\n";
   test::write_file(dir / "cluster.yaml", text);
-  auto whole = test::pdyn_in(dir, {"run", "cluster.yaml", "-q"});
-  ASSERT_EQ(whole.status, 0) << whole.err;
-  const std::string frames = test::read_bytes(dir / "out/frames.csv");
-  const std::string energy = test::read_bytes(dir / "out/energy.csv");
-  ASSERT_FALSE(frames.empty());
-  const Checkpoint end = read_checkpoint(dir / "out/run.ckpt");
-  auto half = test::pdyn_in(dir, {"run", "cluster.yaml", "--steps", "173", "-q"});
-  ASSERT_EQ(half.status, 0) << half.err;
-  auto rest = test::pdyn_in(dir, {"run", "cluster.yaml", "--resume", "out/run.ckpt", "-q"});
-  ASSERT_EQ(rest.status, 0) << rest.err;
-  EXPECT_EQ(test::read_bytes(dir / "out/frames.csv"), frames);
-  EXPECT_EQ(test::read_bytes(dir / "out/energy.csv"), energy);
-  const Checkpoint resumed = read_checkpoint(dir / "out/run.ckpt");
-  EXPECT_TRUE(test::same_bits(end.state, resumed.state));
-  EXPECT_EQ(end.plugin_states, resumed.plugin_states);
+  Checkpoint end, resumed;
+  test::expect_resumed_run_is_whole_run(dir, "cluster.yaml", 173, end, resumed);
 }
 
 // The checkpoint bytes: what save_state() wrote restores bit for bit; bytes
