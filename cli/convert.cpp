@@ -9,7 +9,10 @@
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "commands.hpp"
 #include "sdk_commands.hpp"
@@ -22,6 +25,7 @@ namespace fs = std::filesystem;
 
 struct ConvertArgs {
   std::string input, output;
+  std::vector<std::pair<std::string, std::string>> variables;  // --var NAME VALUE
 };
 
 int cmd_convert(const ConvertArgs& a, std::ostream& out, std::ostream& err) {
@@ -35,8 +39,10 @@ int cmd_convert(const ConvertArgs& a, std::ostream& out, std::ostream& err) {
   // The files the scene reads are written before it, beside it: a scene
   // that exists finds them.
   const fs::path scene(a.output);
+  std::map<std::string, std::string> variables;
+  for (const auto& [name, value] : a.variables) variables[name] = value;
   const ConvertedScene converted = convert_lammps_script(
-      text.str(), a.input, a.output.empty() ? std::string() : scene.stem().string());
+      text.str(), a.input, a.output.empty() ? std::string() : scene.stem().string(), variables);
   if (!converted.files.empty() && a.output.empty()) {
     err << fmt::format(
         "pdyn: {} makes its own atoms, which go to a data file beside the scene (expected pdyn "
@@ -60,6 +66,11 @@ SdkCommand add_convert_command(CLI::App& app) {
   sub->add_option("input", a->input, "the LAMMPS input script (in.*)")->required();
   sub->add_option("--output,-o", a->output,
                   "write the scene to this file instead of standard output");
+  sub->add_option("--var", a->variables,
+                  "NAME VALUE: define the script's variable NAME, as lmp -var NAME VALUE "
+                  "(repeatable)")
+      ->type_size(2)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   return {sub, [a](std::ostream& out, std::ostream& err) { return cmd_convert(*a, out, err); }};
 }
 

@@ -19,6 +19,7 @@
 #include <sstream>
 #include <vector>
 
+#include "import_files.hpp"
 #include "pdyn/host/convert.hpp"
 #include "text_file.hpp"
 
@@ -131,8 +132,9 @@ std::string Converter::substitute(const std::string& line, int number) {
     if (it == variables_.end()) {
       diags_.push_back({fmt::format("{}:{}:{}", file_, number, k + 1),
                         fmt::format("variable '{}' is not defined (expected a `variable {} "
-                                    "index|equal|string VALUE` before it)",
-                                    name, name)});
+                                    "index|equal|string VALUE` before it, or pdyn convert --var "
+                                    "{} VALUE as lmp -var)",
+                                    name, name, name)});
     } else {
       out += it->second;
     }
@@ -180,7 +182,11 @@ void Converter::define_variable(const Command& c) {
          "VALUE, one value)");
     return;
   }
-  variables_[c.words[1].text] = c.words[3].text;
+  // LAMMPS's rule: an index variable given on the command line (-var, here
+  // --var) is not redefined by the script's; equal and string ones are.
+  const std::string& name = c.words[1].text;
+  if (c.words[2].text == "index" && command_line_.count(name) != 0) return;
+  variables_[name] = c.words[3].text;
 }
 
 // ---------------------------------------------------------------------------
@@ -271,12 +277,15 @@ void Converter::units(const Command& c) {
 
 void Converter::atom_style(const Command& c) {
   static const std::set<std::string> kStyles = {"atomic", "bond", "angle", "molecular"};
-  if (arity(c, 1, 1, "atom_style STYLE") && kStyles.count(c.words[1].text) == 0) {
+  if (!arity(c, 1, 1, "atom_style STYLE")) return;
+  if (kStyles.count(c.words[1].text) == 0) {
     fail(c, 1,
          fmt::format("atom_style {}: not converted (supported: atomic, bond, angle, molecular; "
                      "pdyn has no charges)",
                      c.words[1].text));
+    return;
   }
+  atom_style_ = c.words[1].text;
 }
 
 void Converter::boundary(const Command& c) {
@@ -329,6 +338,9 @@ void Converter::pair_style(const Command& c) {
   if (!arity(c, 1, 2, "pair_style lj/cut CUTOFF, or zero [CUTOFF]")) return;
   if (c.words[1].text == "zero") {  // no pair force
     zero_pair_ = true;
+    if (c.words.size() == 3) {
+      if (const auto rc = number(c, 2, "the cutoff")) pair_cutoff_max_ = *rc;
+    }
     return;
   }
   if (c.words.size() != 3 || c.words[1].text != "lj/cut") {
@@ -350,6 +362,7 @@ void Converter::pair_coeff(const Command& c) {
   if (c.words[1].text == "*" && c.words[2].text == "*") {
     pair_all_ = std::array<double, 2>{*eps, *sigma};
     if (rc) cutoff_ = rc;
+    if (cutoff_) pair_cutoff_max_ = std::max(pair_cutoff_max_, *cutoff_);
     return;
   }
   for (std::size_t k = 1; k <= 2; ++k) {
@@ -360,6 +373,8 @@ void Converter::pair_coeff(const Command& c) {
   }
   pair_rows_.push_back(fmt::format("{} {} {} {}{}", c.words[1].text, c.words[2].text, *eps, *sigma,
                                    rc ? fmt::format(" {}", *rc) : std::string()));
+  // LAMMPS's pair without a cutoff takes the global one as it is now.
+  if (rc || cutoff_) pair_cutoff_max_ = std::max(pair_cutoff_max_, rc ? *rc : *cutoff_);
 }
 
 void Converter::pair_modify(const Command& c) {
@@ -548,9 +563,10 @@ void Converter::nvt(const Command& c) {
 }
 
 // fix ID all langevin TSTART TSTOP DAMP SEED: the langevin force, LAMMPS's
-// drag m v / DAMP and random force of the same variance; its random
-// numbers are pdyn's (counter-based), not LAMMPS's, so a run agrees with
-// LAMMPS's in distribution, not step for step.
+// drag m v / DAMP and random force of the same variance, with LAMMPS's
+// generator (seed + rank 0) in the order of LAMMPS's atom sort, and verlet
+// feeding the forces v_half as fix nve does: the run follows LAMMPS's
+// (langevin's generator: lammps, verlet's velocity_forces: half_step).
 void Converter::langevin(const Command& c) {
   if (c.words.size() != 8) {
     fail(c, std::min<std::size_t>(8, c.words.size() - 1),
@@ -564,10 +580,14 @@ void Converter::langevin(const Command& c) {
     fail(c, 5, "fix langevin: a ramped temperature is not converted yet (expected TSTOP = TSTART)");
     return;
   }
-  langevin_ = fmt::format(
-      "  # fix langevin: the same drag and noise variance, pdyn's random numbers (not LAMMPS's)\n"
-      "  - {{ type: langevin, kT: {}, damp: {}, seed: {} }}\n",
-      *start, *damp, static_cast<long>(*seed));
+  if (*seed != std::floor(*seed) || *seed < 1 || *seed > 900000000) {
+    fail(c, 7,
+         fmt::format("fix langevin: seed {} is not one LAMMPS takes (expected a whole number, 1 "
+                     "to 900000000)",
+                     c.words[7].text));
+    return;
+  }
+  langevin_ = Langevin{*start, *damp, static_cast<long>(*seed)};
 }
 
 // fix ID all rattle TOL ITER N b T... a T...
@@ -730,11 +750,23 @@ std::string Converter::yaml() const {
         fmt::format("  solver: {{ type: nose_hoover, kT: {}, tdamp: {}, chain: {}{} }}  # fix {}\n",
                     nvt_->kT, nvt_->tdamp, nvt_->chain, barostat, nvt_->pressure ? "npt" : "nvt");
   } else {
-    out += fmt::format("  solver: {{ type: verlet{} }}  # fix nve{}\n",
+    out += fmt::format("  solver: {{ type: verlet{}{} }}  # fix nve{}\n",
+                       langevin_ ? ", velocity_forces: half_step" : "",
                        rigid_ ? fmt::format(", rattle_tolerance: {}", rigid_->tolerance) : "",
                        rigid_ ? ", fix rattle" : "");
   }
-  out += fmt::format("  box: {{ file: {} }}\nparticles:\n  - file: {}\n", data_, data_);
+  // A data file is read in the script's atom_style, as read_data reads it
+  // (the file need not say its style); by its format when its name does
+  // not say it (LAMMPS's data.NAME).
+  std::string keys;
+  if (x_.cols() == 0) {
+    if (import_files::format_of_extension(data_) != import_files::Format::LammpsData) {
+      keys += ", format: lammps_data";
+    }
+    if (!atom_style_.empty()) keys += ", atom_style: " + atom_style_;
+  }
+  out += fmt::format("  box: {{ file: {}{} }}\nparticles:\n  - {{ file: {}{} }}\n", data_, keys,
+                     data_, keys);
   if (!style_.empty()) {
     out += fmt::format("special_bonds: {{ lj: [{}] }}  # LAMMPS's special_bonds (default 0 0 0)\n",
                        fmt::join(special_, ", "));
@@ -753,7 +785,19 @@ std::string Converter::yaml() const {
     out += " }\n";
   }
   out += bonded_entries();
-  out += langevin_;
+  if (langevin_) {
+    // LAMMPS sorts its atoms in bins of half the neighbor cutoff (Atom::sort).
+    out += fmt::format(
+        "  # fix langevin: LAMMPS's numbers, drawn in the order of its atom sort\n"
+        "  - {{ type: langevin, kT: {}, damp: {}, seed: {}, generator: lammps, "
+        "lammps_sort_bin: {} }}\n",
+        langevin_->kT, langevin_->damp, langevin_->seed, 0.5 * (pair_cutoff_max_ + skin_));
+    if (*steps_ > 1000) {
+      out +=
+          "  # LAMMPS sorts its atoms again every 1000 steps (atom_modify sort), and from then on\n"
+          "  # gives its numbers to other atoms: the runs agree in distribution after that.\n";
+    }
+  }
   out += rigid_entries();
   out += output_entry();
   return out;
@@ -858,7 +902,13 @@ namespace pdyn {
 
 ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
                                      const std::string& stem) {
-  return lammps::Converter(file).convert(text, stem);
+  return convert_lammps_script(text, file, stem, {});
+}
+
+ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
+                                     const std::string& stem,
+                                     const std::map<std::string, std::string>& variables) {
+  return lammps::Converter(file, variables).convert(text, stem);
 }
 
 std::string convert_lammps_input(const std::string& text, const std::string& file) {

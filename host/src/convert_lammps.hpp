@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -53,7 +54,11 @@ struct Rigid {
 
 class Converter {
  public:
-  explicit Converter(std::string file) : file_(std::move(file)) {}
+  /// `variables`: those given on the command line (lmp -var NAME VALUE).
+  Converter(std::string file, const std::map<std::string, std::string>& variables)
+      : file_(std::move(file)), variables_(variables) {
+    for (const auto& [name, value] : variables) command_line_.insert(name);
+  }
   /// The scene, and the data file it reads when the script made its own
   /// atoms (`STEM.data`, beside the scene).
   ConvertedScene convert(const std::string& text, const std::string& stem);
@@ -109,8 +114,10 @@ class Converter {
   std::string file_;
   std::vector<Diagnostic> diags_;
   std::map<std::string, std::string> variables_;
+  std::set<std::string> command_line_;  // the variables given on the command line
   // What the script set.
   std::string data_;                               // read_data's file
+  std::string atom_style_;                         // atom_style, or empty
   std::optional<double> dt_;                       // timestep
   std::optional<long> steps_;                      // run
   bool nve_ = false;                               // fix nve
@@ -140,7 +147,12 @@ class Converter {
   std::map<std::string, std::map<long, std::vector<double>>> coeffs_;
   std::optional<Rigid> rigid_;
   std::optional<Nvt> nvt_;
-  std::string langevin_;  // the langevin force's entry, or empty
+  struct Langevin {
+    double kT, damp;
+    long seed;
+  };
+  std::optional<Langevin> langevin_;  // fix langevin
+  double pair_cutoff_max_ = 0.0;      // the largest pair cutoff, for the atom sort's bins
   long thermo_every_ = 0;
   // LAMMPS's thermo_style one: Step Temp E_pair E_mol TotEng Press.
   std::vector<std::string> columns_{"step", "kT", "pair", "bonded", "total", "pressure"};

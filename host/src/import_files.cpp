@@ -61,7 +61,8 @@ std::optional<Format> format_of_extension(const std::filesystem::path& file) {
 bool has_frames(Format format) { return format == Format::LammpsDump || format == Format::ExtXyz; }
 
 ReadResult read(const std::filesystem::path& file, Format format, long long frame,
-                const std::string& shown, std::vector<Diagnostic>& out) {
+                std::string_view atom_style, const std::string& shown,
+                std::vector<Diagnostic>& out) {
   if (format == Format::Csv) {
     auto rows = side_files::read_particles(file, shown, out);
     ReadResult r;
@@ -81,7 +82,7 @@ ReadResult read(const std::filesystem::path& file, Format format, long long fram
   ReadResult r;
   switch (format) {
     case Format::LammpsData:
-      r = detail::read_lammps_data(*text, problems);
+      r = detail::read_lammps_data(*text, atom_style, problems);
       break;
     case Format::LammpsDump:
       r = detail::read_lammps_dump(*text, frame, problems);

@@ -39,6 +39,11 @@ std::optional<Format> parse_format(std::string_view name);
 std::optional<Format> format_of_extension(const std::filesystem::path& file);
 /// Whether the format's files hold several frames (dumps, XYZ): `frame:`.
 bool has_frames(Format format);
+/// The LAMMPS atom styles a data file's Atoms section may have, for
+/// messages: "atomic, charge, sphere, bond, angle, molecular, full".
+std::string atom_style_names();
+/// Whether `name` is one of atom_style_names().
+bool is_atom_style(std::string_view name);
 
 /// What a file gives, particles in id order: LAMMPS ids sorted (a dump
 /// lists atoms in any order), extended XYZ in file order or by its `id`
@@ -93,9 +98,13 @@ struct ReadResult {
 };
 
 /// Reads `file` as `format`: frame `frame` of a dump or XYZ file (0 the
-/// first, -1 the last). Appends to `out` located problems (`shown:LINE:COLUMN: ...`,
-/// at most side_files::kMaxProblemsPerFile) if anything is wrong.
+/// first, -1 the last). A data file's Atoms are read in `atom_style` (one
+/// of atom_style_names(), as LAMMPS's input script names it) when it is
+/// given, else in the style the section's title comment names. Appends to
+/// `out` located problems (`shown:LINE:COLUMN: ...`, at most
+/// side_files::kMaxProblemsPerFile) if anything is wrong.
 ReadResult read(const std::filesystem::path& file, Format format, long long frame,
-                const std::string& shown, std::vector<Diagnostic>& out);
+                std::string_view atom_style, const std::string& shown,
+                std::vector<Diagnostic>& out);
 
 }  // namespace pdyn::import_files

@@ -298,24 +298,49 @@ void read_atom_row(const Line& r, DataFile& d, Problems& problems) {
   d.atoms.add(a, r.number);
 }
 
-// The style is the first word after the title's '#' (write_data writes
-// it); a title without one is read as atomic, read_data's default.
-void read_atoms(const Line& title, const std::vector<const Line*>& rows, DataFile& d,
-                Problems& problems) {
+const AtomStyle* find_style(std::string_view name) {
+  for (const auto& s : kStyles) {
+    if (name == s.name) return &s;
+  }
+  return nullptr;
+}
+
+// The style is the input script's atom_style when the scene gives it (as
+// LAMMPS's read_data takes it), else the first word after the title's '#'
+// (write_data writes it); a title without either is read as atomic,
+// read_data's default. A title naming a style whose columns differ from
+// the given one is refused: one of the two is wrong, and reading the rows
+// either way could give wrong positions.
+void read_atoms(const Line& title, const std::vector<const Line*>& rows, std::string_view given,
+                DataFile& d, Problems& problems) {
   d.have_atoms = true;
   std::string_view name = "atomic";
   std::size_t column = 1;
+  bool commented = false;
   if (const auto hash = title.raw.find('#'); hash != std::string_view::npos) {
     const std::string_view comment = text_file::trim(title.raw.substr(hash + 1));
     name = comment.substr(0, comment.find_first_of(" \t"));
     column = static_cast<std::size_t>(comment.data() - title.raw.data()) + 1;
+    commented = true;
   }
-  for (const auto& s : kStyles) {
-    if (name == s.name) d.style = &s;
+  if (!given.empty()) {
+    d.style = find_style(given);
+    const AtomStyle* said = commented ? find_style(name) : nullptr;
+    if (said != nullptr && (said->width != d.style->width || said->type != d.style->type ||
+                            said->x != d.style->x || said->diameter != d.style->diameter)) {
+      problems.add(title.number, column,
+                   fmt::format("the title says atom style {} but the scene's atom_style is {}, "
+                               "whose columns differ (expected the style the file was written in)",
+                               name, given));
+      return;
+    }
+  } else {
+    d.style = find_style(name);
   }
   if (!d.style) {
     problems.add(title.number, column,
-                 fmt::format("atom style {} is not one pdyn reads (expected one of {})",
+                 fmt::format("atom style {} is not one pdyn reads (expected one of {}, or the "
+                             "scene's atom_style: beside file)",
                              quoted(name), kStyleNames));
     return;
   }
@@ -481,7 +506,8 @@ void complete(DataFile& d, Imported& out, Problems& problems) {
 
 }  // namespace
 
-ReadResult read_lammps_data(const std::string& text, Problems& problems) {
+ReadResult read_lammps_data(const std::string& text, std::string_view atom_style,
+                            Problems& problems) {
   const auto lines = text_file::split_lines(text, true);
   DataFile d;
   std::size_t k = read_header(lines, d, problems);
@@ -502,7 +528,7 @@ ReadResult read_lammps_data(const std::string& text, Problems& problems) {
         std::find(std::begin(kUnread), std::end(kUnread), name) != std::end(kUnread)) {
       d.unread.push_back({name, static_cast<long long>(rows.size()), title.number});
     }
-    if (name == "Atoms") read_atoms(title, rows, d, problems);
+    if (name == "Atoms") read_atoms(title, rows, atom_style, d, problems);
     if (name == "Masses") read_masses(rows, d, problems);
     if (name == "Velocities") read_velocities(rows, d, problems);
     for (const auto& sec : kTopology) {
@@ -530,3 +556,11 @@ ReadResult read_lammps_data(const std::string& text, Problems& problems) {
 }
 
 }  // namespace pdyn::import_files::detail
+
+namespace pdyn::import_files {
+
+std::string atom_style_names() { return detail::kStyleNames; }
+
+bool is_atom_style(std::string_view name) { return detail::find_style(name) != nullptr; }
+
+}  // namespace pdyn::import_files

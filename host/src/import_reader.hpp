@@ -87,7 +87,9 @@ std::optional<double> parse_mass(const Field& f, std::size_t line, Problems& pro
 std::optional<double> parse_size(const Field& f, std::size_t line, std::string_view name,
                                  Problems& problems);
 
-ReadResult read_lammps_data(const std::string& text, Problems& problems);
+/// `atom_style` as import_files::read() takes it (empty: the title's comment).
+ReadResult read_lammps_data(const std::string& text, std::string_view atom_style,
+                            Problems& problems);
 ReadResult read_lammps_dump(const std::string& text, long long frame, Problems& problems);
 ReadResult read_extxyz(const std::string& text, long long frame, Problems& problems);
 

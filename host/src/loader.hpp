@@ -210,6 +210,7 @@ class Loader final : public BuilderHost {
   std::optional<import_files::Imported> import_file(const YAML::Node& map, const std::string& path,
                                                     bool for_box);
   std::optional<import_files::Format> file_format(const YAML::Node& map, const std::string& path);
+  std::optional<std::string> read_atom_style(const YAML::Node& n, const std::string& path);
   std::optional<long long> read_frame(const YAML::Node& n, const std::string& path);
   bool apply_masses(const YAML::Node& item, const std::string& path, import_files::Imported& in);
   bool masses_by_kind(const YAML::Node& per, const std::string& at, import_files::Imported& in);

@@ -1,8 +1,8 @@
 // The loader's particles and boxes from files: pdyn's CSV side files
 // (side_files.hpp) and other programs' files (import_files.hpp), as
 // `- file:` particle entries and `simulation: { box: { file: } }`, with the
-// keys that say how to read them: format, frame, mass, masses, types,
-// periodic (docs/scenes.md, "Particles from LAMMPS and extended XYZ
+// keys that say how to read them: format, frame, atom_style, mass, masses,
+// types, periodic (docs/scenes.md, "Particles from LAMMPS and extended XYZ
 // files"). Members of Loader (loader.hpp), apart from scene_loader.cpp for
 // size.
 #include <fmt/format.h>
@@ -27,6 +27,7 @@ using import_files::Format;
 std::vector<std::string> file_keys(std::optional<Format> f, bool for_box) {
   std::vector<std::string> keys{"file", "format"};
   if (!f || import_files::has_frames(*f)) keys.push_back("frame");
+  if (!f || *f == Format::LammpsData) keys.push_back("atom_style");
   if (for_box) {
     keys.push_back("periodic");
     return keys;
@@ -104,6 +105,20 @@ std::optional<Format> Loader::file_format(const YAML::Node& map, const std::stri
   return format;
 }
 
+// `atom_style`: the LAMMPS atom style a data file's Atoms are in, as the
+// input script's atom_style names it (a data file need not say it); empty
+// when not given, nothing when it is not a style.
+std::optional<std::string> Loader::read_atom_style(const YAML::Node& n, const std::string& path) {
+  if (!n.IsDefined()) return std::string();
+  if (!n.IsScalar() || !import_files::is_atom_style(n.Scalar())) {
+    error(n, path,
+          fmt::format("{}: '{}' is not an atom style pdyn reads (expected one of {})", path,
+                      shown(n), import_files::atom_style_names()));
+    return std::nullopt;
+  }
+  return n.Scalar();
+}
+
 // `frame`: 0 the first, 1 the second, ..., -1 (the default) the last.
 std::optional<long long> Loader::read_frame(const YAML::Node& n, const std::string& path) {
   if (!n.IsDefined() || n.IsNull()) return -1;
@@ -126,17 +141,18 @@ std::optional<import_files::Imported> Loader::import_file(const YAML::Node& map,
                               "or dump file or an extended XYZ file",
                               file_keys(format, for_box));
   const auto frame = read_frame(map["frame"], path + ".frame");
-  if (!file || !format || !frame) return std::nullopt;
+  const auto style = read_atom_style(map["atom_style"], path + ".atom_style");
+  if (!file || !format || !frame || !style) return std::nullopt;
   // A file that gives the box and the particles is read once: its problems
   // are reported once.
-  const std::string key =
-      fmt::format("{}|{}|{}", file->lexically_normal().string(), static_cast<int>(*format), *frame);
+  const std::string key = fmt::format("{}|{}|{}|{}", file->lexically_normal().string(),
+                                      static_cast<int>(*format), *frame, *style);
   import_files::ReadResult r;
   if (const auto it = box_files_.find(key); it != box_files_.end() && !for_box) {
     r = std::move(it->second);
     box_files_.erase(it);
   } else {
-    r = import_files::read(*file, *format, *frame, file->string(), diags_);
+    r = import_files::read(*file, *format, *frame, *style, file->string(), diags_);
   }
   if (r.no_such_frame) {
     const auto n = static_cast<long long>(r.frames);

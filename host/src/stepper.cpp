@@ -283,12 +283,13 @@ std::optional<double> Stepper::guarded(const Take& take) {
     return fail();
   }
   if (one_pass) previous_.swap(next_);  // the next step's last good state
-  // Only after a good step: a failed one leaves the images alone. A wrap
-  // that moved a particle leaves previous_ behind the state (and its image
-  // counts) even when it did not change state_version() (every force
-  // periodic-invariant): the next step copies the state again.
-  const bool moved = SystemAssembly(sys_).wrap_positions();
-  version_ = moved ? ~std::uint64_t{0} : sys_.state_version();
+  // Only after a good step: a failed one leaves the images alone. previous_
+  // equals the state here, and the wrap moves its positions with the
+  // state's (the image counts are the System's): the next step need not
+  // copy the state again, though some particle crosses a face in most steps
+  // of a periodic liquid (a 32,000-bead melt: 1.5 MB a step saved).
+  SystemAssembly(sys_).wrap_positions(previous_.data());
+  version_ = sys_.state_version();
   return h;
 }
 

@@ -298,11 +298,16 @@ std::optional<std::vector<std::array<Index, K>>> Loader::read_tuples(const YAML:
                          : K == 3 ? "a list of particle index triples [[i, j, k], ...]"
                                   : "a list of particle index quadruples [[i, j, k, l], ...]";
   if (n.IsMap()) {  // { file: pairs.csv }, a CSV side file, or a data file's section
+    // Without format:, a data file is one its extension names, or the file of
+    // a `particles: - file:` entry read as a data file (LAMMPS's data.NAME).
     const YAML::Node format = n["format"], name = n["file"];
-    const bool data = format.IsDefined() ? format.IsScalar() && format.Scalar() == "lammps_data"
-                                         : name.IsDefined() && name.IsScalar() &&
-                                               import_files::format_of_extension(name.Scalar()) ==
-                                                   import_files::Format::LammpsData;
+    const bool named = name.IsDefined() && name.IsScalar() && !name.Scalar().empty();
+    const bool data =
+        format.IsDefined()
+            ? format.IsScalar() && format.Scalar() == "lammps_data"
+            : named && (import_files::format_of_extension(name.Scalar()) ==
+                            import_files::Format::LammpsData ||
+                        topology_.count(scene_relative(name.Scalar()).lexically_normal().string()));
     if (data) return read_data_terms<K>(n, path);
     const auto file = side_file(n, path,
                                 K == 2   ? "{ file: pairs.csv } with header i,j"

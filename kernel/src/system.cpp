@@ -129,7 +129,9 @@ void System::set_images(std::vector<std::array<std::int32_t, 3>> images) {
 
 // Wrapping moves x by whole box lengths only, so forces that measure
 // separations by the minimum image see the same system before and after.
-bool System::wrap_positions() {
+bool System::wrap_positions() { return wrap_positions(nullptr); }
+
+bool System::wrap_positions(double* mirror) {
   if (!domain_.any_periodic()) return false;
   // Not positions(): only a wrap that moves a particle changes the version.
   // Forces evaluated before it stay valid otherwise, bit for bit.
@@ -147,6 +149,7 @@ bool System::wrap_positions() {
       }
     }
     x.col(i) = after;
+    if (mirror != nullptr) Eigen::Map<Vec3>(mirror + 3 * i) = after;
     moved = true;
   }
   // A wrap is a change of the state for a force that measures separations

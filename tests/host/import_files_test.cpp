@@ -52,15 +52,16 @@ TEST(ImportFiles, AFormatIsNamedOrElseTakenFromAKnownExtension) {
                               "one of csv, lammps_data, lammps_dump, extxyz)");
 }
 
-// Each format takes its own keys: a data file has one frame and no species.
+// Each format takes its own keys: a data file has one frame and no species
+// (and an atom style, which other formats do not).
 TEST(ImportFiles, KeysAnotherFormatTakesAreRefusedWithTheFormatsOwn) {
   const auto p = entry_problems(import_sample("melt.data"), ", frame: 0, types: { Ar: 1 }");
   EXPECT_EQ(p.problems, p.at("frame") +
                             ": unknown key 'frame' in particles[0] (expected one of: file, "
-                            "format, mass, masses)\n" +
+                            "format, atom_style, mass, masses)\n" +
                             p.at("types") +
                             ": unknown key 'types' in particles[0] (expected one of: file, "
-                            "format, mass, masses)");
+                            "format, atom_style, mass, masses)");
 }
 
 TEST(ImportFiles, AFrameMustBeOneOfTheFile) {

@@ -132,6 +132,33 @@ TEST(ImportLammps, SphereStyleGivesRadiiAndMassesAsLammpsComputesThem) {
   EXPECT_NEAR(s.masses()[0], 1.5 * std::numbers::pi / 6.0 * 0.8 * 0.8 * 0.8, 1e-15);
 }
 
+// A data file need not say its atom style (LAMMPS's read_data takes the
+// input script's): `atom_style:` gives it, as pdyn convert writes it for a
+// script's atom_style, and the topology of a file without a .data name is
+// read from the particles' entry. A style the title contradicts, or one
+// pdyn does not read, is refused.
+TEST(ImportLammps, AtomStyleReadsAFileWhoseTitleDoesNotSayIt) {
+  const auto dir = test::temp_dir("import-atom-style");
+  test::write_file(dir / "data.pair",
+                   "LAMMPS data file\n\n2 atoms\n1 bonds\n1 atom types\n1 bond types\n"
+                   "0 4 xlo xhi\n0 4 ylo yhi\n0 4 zlo zhi\n\nMasses\n\n1 2\n\n"
+                   "Atoms\n\n1 7 1 0.5 1 1 0 0 0\n2 7 1 1.5 1 1 0 0 0\n\nBonds\n\n1 1 1 2\n");
+  const std::string entry = "{ file: " + (dir / "data.pair").string() + ", format: lammps_data";
+  const std::string scene = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n  - " + entry +
+                            ", atom_style: bond }\nforces:\n  - { type: spring, pairs: { file: " +
+                            (dir / "data.pair").string() + " }, ks: 1, rest: 1 }\n";
+  const Scene loaded = test::load_text(scene);
+  ASSERT_EQ(loaded.system->size(), 2);
+  EXPECT_EQ(loaded.system->positions().col(1), Vec3(1.5, 1, 1));
+  EXPECT_EQ(loaded.system->masses()[0], 2.0);
+  const std::string bad = "simulation: { dt: 0.01, steps: 1 }\nparticles:\n  - " + entry +
+                          ", atom_style: ellipsoid }\n";
+  EXPECT_EQ(test::load_problems(bad),
+            test::scene_at(bad, "ellipsoid") +
+                ": particles[0].atom_style: 'ellipsoid' is not an atom style pdyn reads (expected "
+                "one of atomic, charge, sphere, bond, angle, molecular, full)");
+}
+
 // Sections pdyn does not need are skipped by their counts: a molecular
 // file (style full) with bonds, angles and coefficients loads its atoms,
 // and topology that no force of the scene takes is named in one warning at
@@ -261,10 +288,16 @@ INSTANTIATE_TEST_SUITE_P(
                   "",
                   "FILE:8:9: the box is triclinic (xy xz yz tilt factors) (expected an orthogonal "
                   "box: pdyn's simulation box has no tilt)"},
-        BadLammps{"style.data", HEADER MASSES "Atoms # ellipsoid\n\n1 1 1 1 0 0 0\n2 1 1 1 0 0 0\n",
-                  "",
-                  "FILE:13:9: atom style 'ellipsoid' is not one pdyn reads (expected one of "
-                  "atomic, charge, sphere, bond, angle, molecular, full)"},
+        BadLammps{
+            "style.data", HEADER MASSES "Atoms # ellipsoid\n\n1 1 1 1 0 0 0\n2 1 1 1 0 0 0\n", "",
+            "FILE:13:9: atom style 'ellipsoid' is not one pdyn reads (expected one of "
+            "atomic, charge, sphere, bond, angle, molecular, full, or the scene's atom_style: "
+            "beside file)"},
+        BadLammps{"mismatch.data",
+                  HEADER MASSES "Atoms # full\n\n1 1 1 0 0 0 0\n2 1 1 0 .5 .5 .5\n",
+                  ", atom_style: bond",
+                  "FILE:13:9: the title says atom style full but the scene's atom_style is bond, "
+                  "whose columns differ (expected the style the file was written in)"},
         BadLammps{"count.data", HEADER MASSES "Atoms # atomic\n\n1 1 0 0 0\n", "",
                   "FILE:13:1: the Atoms section has 1 row but the header says 2 atoms (expected "
                   "a row per atom)"},

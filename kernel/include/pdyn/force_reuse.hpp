@@ -107,8 +107,13 @@ class ForceReuse {
   /// writes or evaluates first. A host's set-up may give the accelerations
   /// it evaluated at the current state too. Ignored when some force or
   /// collider reads velocities.
-  void restore(const System& sys, const Matrix3X& a1) {
-    if (needs(sys).velocity) {  // a1 was evaluated at other velocities
+  void restore(const System& sys, const Matrix3X& a1) { restore(sys, a1, needs(sys)); }
+
+  /// As restore(sys, a1), with `needs` as the solver takes them for kept()
+  /// and keep() (verlet's velocity_forces: half_step reuses a1 whatever the
+  /// forces read, and says so with needs.velocity false).
+  void restore(const System& sys, const Matrix3X& a1, const Needs& needs) {
+    if (needs.velocity) {  // a1 was evaluated at other velocities
       a1_ = nullptr;
       return;
     }

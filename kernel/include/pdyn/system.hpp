@@ -231,6 +231,11 @@ class PDYN_API System {
   /// periodic-invariant (pdyn/periodic_invariant.hpp): forces evaluated
   /// before the wrap then stay valid, to rounding.
   bool wrap_positions();
+  /// As wrap_positions(), and each moved particle's position is written to
+  /// `mirror` as well, a state vector (dimension()) that equals state()
+  /// before the call: the Stepper's last good state follows the wrap
+  /// without a copy of the whole state (since 0.10).
+  bool wrap_positions(double* mirror);
   /// Runs every collider's collision response; the host's Stepper calls it
   /// (through pdyn::SystemAssembly) after each accepted step of length `h`.
   void respond_to_collisions(double h);

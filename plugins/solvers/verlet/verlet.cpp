@@ -16,6 +16,12 @@
 //   velocity-independent forces a1 does not depend on it and the scheme is
 //   exactly velocity Verlet.
 //
+// * `velocity_forces: half_step` evaluates a1 at v_half instead, and reuses
+//   it as the next a0 whatever the forces read: the scheme of LAMMPS's
+//   fix nve and of most MD codes (Allen & Tildesley, 2nd ed., sec. 3.2.1),
+//   first order for damped systems, for scenes converted from LAMMPS that
+//   must follow its runs step for step (a langevin bath, issue 44).
+//
 // * The end-of-step forces a1 are reused as the next step's a0 (one force
 //   evaluation per step, as LAMMPS's velocity Verlet does) only when that
 //   gives the same bits as evaluating a0 afresh: every force declares that
@@ -69,8 +75,9 @@ class Verlet final : public pdyn::Solver,
                      public pdyn::ConstraintSolver,
                      public pdyn::ConstraintVirialSource {
  public:
-  Verlet(bool promise, bool rattle, double tolerance, Index max_iterations)
+  Verlet(bool promise, bool half_step, bool rattle, double tolerance, Index max_iterations)
       : promise_(promise),
+        half_step_(half_step),
         rattle_on_(rattle),
         tolerance_(tolerance),
         rattle_(tolerance, max_iterations) {}
@@ -91,7 +98,7 @@ class Verlet final : public pdyn::Solver,
     if (promise_) {
       promised_.remember(sys, a1);
     } else {
-      reuse_.restore(sys, a1);
+      reuse_.restore(sys, a1, needs_of(sys));
     }
   }
 
@@ -159,10 +166,13 @@ class Verlet final : public pdyn::Solver,
   using Needs = pdyn::ForceReuse::Needs;
 
   // The promise stands for the forces' declarations: only a collider makes
-  // the step read velocities.
+  // the step read velocities. With half_step the forces read v_half in
+  // place, and a1 stands for the next a0 whatever they read.
   Needs needs_of(const pdyn::System& sys) const {
     if (promise_) return Needs{!sys.collider_objects().empty(), false};
-    return pdyn::ForceReuse::needs(sys);
+    Needs n = pdyn::ForceReuse::needs(sys);
+    if (half_step_) n.velocity = false;
+    return n;
   }
 
   // reuse_forces: true keeps the rule it had before forces declared their
@@ -209,6 +219,7 @@ class Verlet final : public pdyn::Solver,
   };
 
   bool promise_;
+  bool half_step_;  // velocity_forces: half_step
   bool rattle_on_;
   double tolerance_;  // rattle_tolerance
   pdyn_verlet::Rattle rattle_;
@@ -221,7 +232,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Solver;
   d.name = "verlet";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.description =
       "velocity Verlet: v' = v0 + h/2 a0, x1 = x0 + h v', v1 = v' + h/2 a1; order 2, symplectic";
   d.solver_traits.order = 2;
@@ -231,6 +242,10 @@ pdyn::PluginDescriptor describe() {
           "reuse_forces", false,
           "promise that the forces depend on positions and time only, for forces that do not say "
           "(Force::dependence): reuse the last step's a1 as a0 even then"),
+      pdyn::param::string("velocity_forces", "predictor",
+                          "the velocities forces at the step's end see: predictor (v0 + h a0; "
+                          "order 2 with drag) or half_step (v0 + h/2 a0, LAMMPS's fix nve; a1 "
+                          "reused as the next a0)"),
       pdyn::param::string("constraints", "rattle",
                           "how constraints are kept: rattle (positions and velocities projected "
                           "each step) or force (Witkin's constraint force, as other solvers)"),
@@ -249,8 +264,19 @@ pdyn::PluginDescriptor describe() {
                                          "or force)",
                                          how));
     }
-    return std::make_unique<Verlet>(p.boolean("reuse_forces"), how == "rattle",
-                                    p.real("rattle_tolerance"), p.integer("rattle_max_iterations"));
+    const std::string& velocities = p.string("velocity_forces");
+    if (velocities != "predictor" && velocities != "half_step") {
+      throw pdyn::ParamError(
+          "velocity_forces",
+          fmt::format("'{}' is not a choice (expected predictor or half_step)", velocities));
+    }
+    if (velocities == "half_step" && p.boolean("reuse_forces")) {
+      throw pdyn::ParamError("velocity_forces",
+                             "half_step reuses the forces already (expected reuse_forces: false)");
+    }
+    return std::make_unique<Verlet>(p.boolean("reuse_forces"), velocities == "half_step",
+                                    how == "rattle", p.real("rattle_tolerance"),
+                                    p.integer("rattle_max_iterations"));
   };
   return d;
 }

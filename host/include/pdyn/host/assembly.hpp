@@ -59,6 +59,7 @@ class SystemAssembly {
     sys_.set_images(std::move(images));
   }
   bool wrap_positions() const { return sys_.wrap_positions(); }
+  bool wrap_positions(double* mirror) const { return sys_.wrap_positions(mirror); }
   void respond_to_collisions(double h) const { sys_.respond_to_collisions(h); }
   void set_finite_checks(bool on) const noexcept { sys_.set_finite_checks(on); }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -35,5 +36,12 @@ struct PDYN_HOST_API ConvertedScene {
 /// `stem` (the scene's file name without its extension).
 PDYN_HOST_API ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
                                                    const std::string& stem);
+
+/// As above, with variables given as lmp's command line gives them
+/// (`-var NAME VALUE`): `${NAME}` in the script is VALUE, and an index
+/// variable of the same name in the script does not redefine it.
+PDYN_HOST_API ConvertedScene
+convert_lammps_script(const std::string& text, const std::string& file, const std::string& stem,
+                      const std::map<std::string, std::string>& variables);
 
 }  // namespace pdyn

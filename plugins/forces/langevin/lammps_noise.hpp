@@ -1,0 +1,84 @@
+// langevin's `generator: lammps`: the random numbers of LAMMPS's
+// `fix langevin` on one process, so that a converted input follows LAMMPS's
+// run step for step (issue 44; docs/lammps.md).
+//
+// LAMMPS's fix draws, at every force evaluation of velocity Verlet (the
+// set-up's and each step's end), three uniform numbers per atom of its group
+// in the order its atoms are stored, from one Marsaglia generator seeded
+// with the fix's seed (RanMars, seed + rank). It stores its atoms in the
+// order of its spatial sort (Atom::sort) at the set-up: the atoms binned
+// by position into cubes of `bin` (half the neighbor cutoff by default),
+// bin after bin, and in the order read within a bin.
+//
+// Here the numbers of the evaluation at t = k h (k = 0 the set-up) are the
+// k-th block of 3 x (particles in the bath) draws: the same numbers however
+// often the host evaluates at that time, and a run resumed from a
+// checkpoint continues the stream (save() / restore()).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <pdyn/domain.hpp>
+#include <pdyn/types.hpp>
+#include <span>
+#include <vector>
+
+namespace pdyn_langevin {
+
+// RANMAR, the universal generator of Marsaglia, Zaman & Tsang, "Toward a
+// universal random number generator", Statistics & Probability Letters 9
+// (1990) 35-39: a lagged Fibonacci generator (lags 97, 33) on 24-bit
+// fractions combined with an arithmetic sequence, period 2^144. Seeded
+// from one number as LAMMPS's RanMars seeds it (1 <= seed <= 900000000,
+// split into the paper's two seeds ij, kl), which also draws one number
+// before its first use.
+class Ranmar {
+ public:
+  explicit Ranmar(std::int64_t seed);
+  double uniform();  // in [0, 1)
+
+  static constexpr std::size_t kStateBytes = 97 * 8 + 8 + 2 * 4;
+  void save(std::uint8_t* out) const;
+  void load(const std::uint8_t* in);
+
+ private:
+  std::array<double, 97> u_{};
+  double c_ = 0.0;
+  int i_ = 96, j_ = 32;  // the paper's 97 and 33, 0-based
+};
+
+class LammpsNoise {
+ public:
+  // `bin`: the sort's bin edge (m); 0 keeps the particles' order.
+  LammpsNoise(std::int64_t seed, double bin) : seed_(seed), bin_(bin), gen_(seed), before_(seed) {}
+
+  // The numbers of the evaluation at step boundary `k` (>= 0), u - 1/2 per
+  // component of each particle (3 x N; 0 outside the bath). At the first
+  // call `in_bath` (1 for a particle in the bath, N), `x` (m, 3 x N) and
+  // `domain` set the draw order; later calls must give the same N.
+  const pdyn::Matrix3X& block(long long k, const std::vector<std::uint8_t>& in_bath,
+                              const Eigen::Ref<const pdyn::Matrix3X>& x,
+                              const pdyn::Domain& domain);
+
+  // The draw order, the bath and the generator before the current block: a
+  // checkpoint's state. restore() throws pdyn::Error for bytes save() did not
+  // write, and leaves the stream as it was.
+  std::vector<std::uint8_t> save() const;
+  void restore(std::span<const std::uint8_t> bytes);
+
+ private:
+  void set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdyn::Domain& domain);
+  void draw(pdyn::Matrix3X& into);
+
+  std::int64_t seed_;
+  double bin_;
+  std::vector<pdyn::Index> order_;  // the draw order, set at the first draw
+  std::vector<std::uint8_t> in_bath_;
+  Ranmar gen_;                       // after block_
+  Ranmar before_;                    // before block_
+  long long block_ = -1;             // the block noise_ holds, -1 none
+  pdyn::Matrix3X noise_, previous_;  // blocks block_ and block_ - 1
+  bool have_previous_ = false;
+};
+
+}  // namespace pdyn_langevin
