@@ -373,6 +373,9 @@ void Converter::pair_coeff(const Command& c) {
   }
   pair_rows_.push_back(fmt::format("{} {} {} {}{}", c.words[1].text, c.words[2].text, *eps, *sigma,
                                    rc ? fmt::format(" {}", *rc) : std::string()));
+  if (c.words[1].text == "1" && c.words[2].text == "1" && (rc || cutoff_)) {
+    type_one_ = std::array<double, 3>{*eps, *sigma, rc ? *rc : *cutoff_};
+  }
   // LAMMPS's pair without a cutoff takes the global one as it is now.
   if (rc || cutoff_) pair_cutoff_max_ = std::max(pair_cutoff_max_, rc ? *rc : *cutoff_);
 }
@@ -733,6 +736,23 @@ std::string Converter::bonded_entries() const {
   return out;
 }
 
+// fix langevin's force: LAMMPS sorts its atoms in bins of half the
+// neighbor cutoff (Atom::sort), and draws in that order.
+std::string Converter::langevin_entry() const {
+  if (!langevin_) return "";
+  std::string out = fmt::format(
+      "  # fix langevin: LAMMPS's numbers, drawn in the order of its atom sort\n"
+      "  - {{ type: langevin, kT: {}, damp: {}, seed: {}, generator: lammps, "
+      "lammps_sort_bin: {} }}\n",
+      langevin_->kT, langevin_->damp, langevin_->seed, 0.5 * (pair_cutoff_max_ + skin_));
+  if (*steps_ > 1000) {
+    out +=
+        "  # LAMMPS sorts its atoms again every 1000 steps (atom_modify sort), and from then on\n"
+        "  # gives its numbers to other atoms: the runs agree in distribution after that.\n";
+  }
+  return out;
+}
+
 std::string Converter::yaml() const {
   std::string out = fmt::format(
       "# Converted by `pdyn convert` from the LAMMPS input script {}.\n"
@@ -772,7 +792,19 @@ std::string Converter::yaml() const {
                        fmt::join(special_, ", "));
   }
   out += "forces:\n";
-  if (cutoff_) {
+  // One row, `pair_coeff 1 1`: LAMMPS runs it only with one atom type (it
+  // refuses pairs without coefficients), so the law needs no types: the
+  // same numbers, without the per-pair table lookup (about 10% of a pair
+  // loop).
+  const bool one_type = pair_rows_.size() == 1 && type_one_ && !pair_all_;
+  if (cutoff_ && one_type) {
+    out += fmt::format(
+        "  # pair_style lj/cut, pair_coeff 1 1 (one atom type), neighbor\n  - {{ type: "
+        "lennard_jones, cutoff: {}, skin: {}, shift: {}, epsilon: {}, sigma: {}",
+        (*type_one_)[2], skin_, shift_ ? "true" : "false", (*type_one_)[0], (*type_one_)[1]);
+    if (!mix_.empty()) out += ", mix: " + mix_;
+    out += " }\n";
+  } else if (cutoff_) {
     out += fmt::format(
         "  # pair_style lj/cut, pair_coeff, neighbor\n  - {{ type: lennard_jones, "
         "cutoff: {}, skin: {}, shift: {}",
@@ -785,19 +817,7 @@ std::string Converter::yaml() const {
     out += " }\n";
   }
   out += bonded_entries();
-  if (langevin_) {
-    // LAMMPS sorts its atoms in bins of half the neighbor cutoff (Atom::sort).
-    out += fmt::format(
-        "  # fix langevin: LAMMPS's numbers, drawn in the order of its atom sort\n"
-        "  - {{ type: langevin, kT: {}, damp: {}, seed: {}, generator: lammps, "
-        "lammps_sort_bin: {} }}\n",
-        langevin_->kT, langevin_->damp, langevin_->seed, 0.5 * (pair_cutoff_max_ + skin_));
-    if (*steps_ > 1000) {
-      out +=
-          "  # LAMMPS sorts its atoms again every 1000 steps (atom_modify sort), and from then on\n"
-          "  # gives its numbers to other atoms: the runs agree in distribution after that.\n";
-    }
-  }
+  out += langevin_entry();
   out += rigid_entries();
   out += output_entry();
   return out;

@@ -107,6 +107,7 @@ class Converter {
   std::string yaml() const;
   std::string bonded_entries() const;
   std::string rigid_entries() const;
+  std::string langevin_entry() const;
   std::string output_entry() const;
   const std::map<long, std::vector<double>>& coeffs_of(const std::string& kind) const;
   void check_coefficients();
@@ -125,6 +126,7 @@ class Converter {
   std::optional<double> cutoff_;                   // pair_style lj/cut
   std::vector<std::string> pair_rows_;             // pair_coeff I J eps sigma [rc]
   std::optional<std::array<double, 2>> pair_all_;  // pair_coeff * * eps sigma
+  std::optional<std::array<double, 3>> type_one_;  // pair_coeff 1 1: eps, sigma, its cutoff
   bool shift_ = false;
   bool zero_pair_ = false;  // pair_style zero
   std::string mix_;

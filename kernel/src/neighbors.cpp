@@ -92,6 +92,32 @@ void sort_row(Index* row, Index count) {
   }
 }
 
+// A half list's rows from pairs (lower index, higher index) gathered in
+// `pairs`: count_rows adds each pair's row to its size (offsets[row + 1]),
+// scatter_rows writes the higher index at its row's cursor (offsets[row],
+// the row's start before, its end after), through an atomic_ref when threads
+// share the rows.
+void count_rows(const std::vector<Index>& pairs, std::vector<Index>& offsets, bool atomic) {
+  for (std::size_t k = 0; k < pairs.size(); k += 2) {
+    Index& row = offsets[static_cast<std::size_t>(pairs[k]) + 1];
+    if (atomic) {
+      std::atomic_ref<Index>(row).fetch_add(1, std::memory_order_relaxed);
+    } else {
+      ++row;
+    }
+  }
+}
+
+void scatter_rows(const std::vector<Index>& pairs, std::vector<Index>& offsets,
+                  std::vector<Index>& indices, bool atomic) {
+  for (std::size_t k = 0; k < pairs.size(); k += 2) {
+    Index& at = offsets[static_cast<std::size_t>(pairs[k])];
+    const Index to =
+        atomic ? std::atomic_ref<Index>(at).fetch_add(1, std::memory_order_relaxed) : at++;
+    indices[static_cast<std::size_t>(to)] = pairs[k + 1];
+  }
+}
+
 // The squared distance from p to the nearest image of q (Grid::fold), with
 // the box's half and whole lengths per axis. Both positions are wrapped, so
 // |d| < L: one fold gives the nearest image (half = +inf on open axes: no
@@ -253,7 +279,11 @@ void NeighborList::build(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
 
   bin(x, domain);
   make_stencil();
-  fill_rows(n);
+  if (kind_ == Kind::Half && !grid_.fold) {
+    fill_half_rows(n);
+  } else {
+    fill_rows(n);
+  }
 
   built_ = true;
   ++builds_;
@@ -612,6 +642,153 @@ void NeighborList::fill_rows(Index n) {
                         offsets_[static_cast<std::size_t>(begin)]),
                 indices_.begin() + offsets_[static_cast<std::size_t>(begin)]);
     }
+  }
+#endif
+}
+
+// The pairs within reach of the particle in `slot`, each pair of the list
+// found from one of its two particles only: the later slots of its own cell
+// and the cells of the stencil's forward half, rows dz > 0 or dz = 0 and
+// dy > 0 whole and row (0, 0) from x offset 1 on (LAMMPS's half/bin/newton
+// stencil). Without a fold every cell within reach is one offset away, so
+// the other particle finds the pair in its backward half, which it does not
+// scan. Written to buf[used, ...) as (lower index, higher index); returns
+// the count of entries (twice the pairs). Half the distances of fill_row's
+// full stencil, whose rows keep j > i only.
+Index NeighborList::half_pairs(Index slot, std::vector<Index>& buf, Index used) const {
+  const Grid& g = grid_;
+  const auto us = static_cast<std::size_t>(slot);
+  const Index i = sorted_index_[us];
+  const Index cell = cell_of_[static_cast<std::size_t>(i)];
+  const Point p = sorted_pos_[us];
+  const Index cx = cell % g.n[0], cy = (cell / g.n[0]) % g.n[1], cz = cell / (g.n[0] * g.n[1]);
+  const Near* edge_y = edge_row(1, cy);
+  const Near* edge_z = edge_row(2, cz);
+  const double reach2 = reach() * reach();
+  const Index* index = sorted_index_.data();
+  const Point* pos = sorted_pos_.data();
+  Index count = 0;
+
+  // Slots [begin, end) shifted by (sx, sy, sz); the candidate is written
+  // before the test and kept by advancing: no branch on the outcome.
+  const auto scan = [&](Index begin, Index end, double sx, double sy, double sz) {
+    if (begin >= end) return;
+    if (static_cast<std::size_t>(used + count + 2 * (end - begin)) > buf.size()) {
+      const auto needed = static_cast<std::size_t>(used + count + 2 * (end - begin));
+      buf.resize(std::max(buf.size() + buf.size() / 2, needed + needed / 8));
+    }
+    Index* out = buf.data() + used;
+    Index kept = count;
+    for (Index s = begin; s < end; ++s) {
+      const Index j = index[s];
+      const Point& q = pos[s];
+      const double dx = q[0] + sx - p[0], dy = q[1] + sy - p[1], dz = q[2] + sz - p[2];
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      out[kept] = std::min(i, j);
+      out[kept + 1] = std::max(i, j);
+      kept += 2 * static_cast<Index>(r2 <= reach2);
+    }
+    count = kept;
+  };
+  const auto cells = [&](Index first, Index last, double sx, double sy, double sz) {
+    if (first > last) return;
+    scan(cell_start_[static_cast<std::size_t>(first)],
+         cell_start_[static_cast<std::size_t>(last) + 1], sx, sy, sz);
+  };
+
+  scan(slot + 1, cell_start_[static_cast<std::size_t>(cell) + 1], 0.0, 0.0, 0.0);
+  const Index nx = g.n[0];
+  for (int r = 0; r < stencil_rows_; ++r) {
+    const StencilRow& row = stencil_[static_cast<std::size_t>(r)];
+    if (row.dz < 0 || (row.dz == 0 && row.dy < 0)) continue;
+    const Index from = row.dz == 0 && row.dy == 0 ? 1 : -row.half_x;
+    if (from > row.half_x) continue;
+    const Near y = edge_y ? edge_y[row.dy] : Near{cy + row.dy, 0.0};
+    const Near z = edge_z ? edge_z[row.dz] : Near{cz + row.dz, 0.0};
+    if (y.cell < 0 || z.cell < 0) continue;
+    const Index base = nx * (y.cell + g.n[1] * z.cell);
+    const Index lo = cx + from, hi = cx + row.half_x;
+    if (!g.periodic[0]) {
+      cells(base + std::max<Index>(lo, 0), base + std::min(hi, nx - 1), 0.0, y.shift, z.shift);
+    } else if (lo < 0) {
+      cells(base + lo + nx, base + nx - 1, -g.length[0], y.shift, z.shift);
+      cells(base, base + hi, 0.0, y.shift, z.shift);
+    } else if (hi >= nx) {
+      cells(base + lo, base + nx - 1, 0.0, y.shift, z.shift);
+      cells(base, base + hi - nx, g.length[0], y.shift, z.shift);
+    } else {
+      cells(base + lo, base + hi, 0.0, y.shift, z.shift);
+    }
+  }
+  return count;
+}
+
+// Kind::Half without a fold: the pairs, each found once (half_pairs), over
+// slots in cell order (neighbors in memory) and split over the threads;
+// then counted per row of the lower index, scattered into the rows and each
+// row sorted, so that the list is what fill_row gives: the same rows,
+// ascending, whatever the thread count.
+void NeighborList::fill_half_rows(Index n) {
+  int threads = 1;
+#ifdef _OPENMP
+  if (n >= kParallelMinElements && !omp_in_parallel()) threads = max_threads();
+#endif
+  const auto un = static_cast<std::size_t>(n);
+  const auto slots = static_cast<Index>(sorted_index_.size());
+  if (chunks_.size() < static_cast<std::size_t>(threads)) chunks_.resize(threads);
+  offsets_.assign(un + 1, 0);
+
+  // Thread t's pairs, in its buffer sized to them (no allocation once warm).
+  const auto gather = [&](int t, int nt) {
+    std::vector<Index>& buf = chunks_[static_cast<std::size_t>(t)];
+    buf.resize(buf.capacity());
+    Index used = 0;
+    for (Index s = slots * t / nt, end = slots * (t + 1) / nt; s < end; ++s) {
+      used += half_pairs(s, buf, used);
+    }
+    buf.resize(static_cast<std::size_t>(used));
+  };
+  const auto starts = [&] {
+    for (std::size_t i = 0; i < un; ++i) offsets_[i + 1] += offsets_[i];
+    reserve_for(indices_, static_cast<std::size_t>(offsets_[un]));
+    indices_.resize(static_cast<std::size_t>(offsets_[un]));
+  };
+  // After the scatter offsets_[i] is row i's end: one place down, its start.
+  const auto restore_starts = [&] {
+    for (std::size_t i = un; i > 0; --i) offsets_[i] = offsets_[i - 1];
+    offsets_[0] = 0;
+  };
+  const auto sort_rows = [&](Index begin, Index end) {
+    for (Index i = begin; i < end; ++i) {
+      const Index first = offsets_[static_cast<std::size_t>(i)];
+      sort_row(indices_.data() + first, offsets_[static_cast<std::size_t>(i) + 1] - first);
+    }
+  };
+
+  if (threads == 1) {
+    gather(0, 1);
+    count_rows(chunks_[0], offsets_, false);
+    starts();
+    scatter_rows(chunks_[0], offsets_, indices_, false);
+    restore_starts();
+    sort_rows(0, n);
+    return;
+  }
+#ifdef _OPENMP
+#pragma omp parallel num_threads(threads)
+  {
+    const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+    gather(t, nt);
+#pragma omp barrier
+    count_rows(chunks_[static_cast<std::size_t>(t)], offsets_, true);
+#pragma omp barrier
+#pragma omp single
+    starts();
+    scatter_rows(chunks_[static_cast<std::size_t>(t)], offsets_, indices_, true);
+#pragma omp barrier
+#pragma omp single
+    restore_starts();
+    sort_rows(n * t / nt, n * (t + 1) / nt);
   }
 #endif
 }

@@ -266,7 +266,11 @@ TEST(Convert, FixNvtIsNoseHoover) {
       scene.find("  solver: { type: nose_hoover, kT: 1.5, tdamp: 0.5, chain: 5 }  # fix nvt\n"),
       std::string::npos)
       << scene;
-  EXPECT_NE(scene.find("pair_coeff: [\"1 1 1 1\"]"), std::string::npos) << scene;
+  // One atom type: its coefficients, without the per-type table.
+  EXPECT_NE(scene.find("{ type: lennard_jones, cutoff: 2.5, skin: 0.3, shift: false, epsilon: 1, "
+                       "sigma: 1 }"),
+            std::string::npos)
+      << scene;
 }
 
 // LAMMPS's own bead-spring benchmark script (in.chain in the bench folder
@@ -284,8 +288,7 @@ TEST(Convert, LammpsChainBenchmarkScriptConverts) {
       "in.chain");
   for (const char* entry :
        {"  dt: 0.012\n  steps: 100\n", "special_bonds: { lj: [0, 1, 1] }",
-        "{ type: lennard_jones, cutoff: 1.12, skin: 0.4, shift: true, pair_coeff: [\"1 1 1 1 "
-        "1.12\"] }",
+        "{ type: lennard_jones, cutoff: 1.12, skin: 0.4, shift: true, epsilon: 1, sigma: 1 }",
         "{ type: fene, pairs: { file: data.chain, types: [1] }, k: [30], r0: [1.5], epsilon: [1], "
         "sigma: [1] }",
         "{ type: langevin, kT: 1, damp: 10, seed: 904297, generator: lammps, lammps_sort_bin: "

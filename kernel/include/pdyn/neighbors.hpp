@@ -247,6 +247,9 @@ class PDYN_API NeighborList {
   template <bool Fold>
   Index fill_row(Index i, std::vector<Index>& buf, Index used) const;
   void fill_rows(Index n);
+  // Kind::Half on a grid without a fold: each pair found once (since 0.10).
+  Index half_pairs(Index slot, std::vector<Index>& buf, Index used) const;
+  void fill_half_rows(Index n);
 
   double cutoff_, skin_;
   Kind kind_;

@@ -42,23 +42,6 @@ Ranmar::Ranmar(std::int64_t seed) {
   uniform();  // as RanMars's constructor
 }
 
-// The paper's routine RANMAR: x_n = x_{n-97} - x_{n-33} mod 1, minus the
-// arithmetic sequence c_n = c_{n-1} - 7654321/2^24 mod 16777213/2^24.
-double Ranmar::uniform() {
-  constexpr double kCd = 7654321.0 / 16777216.0;
-  constexpr double kCm = 16777213.0 / 16777216.0;
-  double uni = u_[static_cast<std::size_t>(i_)] - u_[static_cast<std::size_t>(j_)];
-  if (uni < 0.0) uni += 1.0;
-  u_[static_cast<std::size_t>(i_)] = uni;
-  if (--i_ < 0) i_ = 96;
-  if (--j_ < 0) j_ = 96;
-  c_ -= kCd;
-  if (c_ < 0.0) c_ += kCm;
-  uni -= c_;
-  if (uni < 0.0) uni += 1.0;
-  return uni;
-}
-
 void Ranmar::save(std::uint8_t* out) const {
   std::memcpy(out, u_.data(), 97 * 8);
   std::memcpy(out + 97 * 8, &c_, 8);
@@ -118,10 +101,13 @@ void LammpsNoise::set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdy
 
 void LammpsNoise::draw(pdyn::Matrix3X& into) {
   into.setZero(3, static_cast<Index>(order_.size()));
+  Ranmar g = gen_;  // a local copy stays in registers: `into` cannot alias it
+  double* out = into.data();
   for (const Index i : order_) {
     if (in_bath_[static_cast<std::size_t>(i)] == 0) continue;
-    for (int d = 0; d < 3; ++d) into(d, i) = gen_.uniform() - 0.5;  // exact: 24-bit fractions
+    for (Index d = 0; d < 3; ++d) out[3 * i + d] = g.uniform() - 0.5;  // exact: 24-bit fractions
   }
+  gen_ = g;
 }
 
 const pdyn::Matrix3X& LammpsNoise::block(long long k, const std::vector<std::uint8_t>& in_bath,
