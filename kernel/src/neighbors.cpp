@@ -93,28 +93,25 @@ void sort_row(Index* row, Index count) {
 }
 
 // A half list's rows from pairs (lower index, higher index) gathered in
-// `pairs`: count_rows adds each pair's row to its size (offsets[row + 1]),
-// scatter_rows writes the higher index at its row's cursor (offsets[row],
-// the row's start before, its end after), through an atomic_ref when threads
-// share the rows.
-void count_rows(const std::vector<Index>& pairs, std::vector<Index>& offsets, bool atomic) {
+// `pairs`, for the rows [first, last) only: count_rows adds each pair's row
+// to its size (offsets[row + 1]), scatter_rows writes the higher index at
+// its row's cursor (offsets[row], the row's start before, its end after).
+// Threads take rows of their own, each reading every thread's pairs: no
+// atomics (a chain-numbered melt puts a pair's rows anywhere).
+void count_rows(const std::vector<Index>& pairs, Index first, Index last,
+                std::vector<Index>& offsets) {
   for (std::size_t k = 0; k < pairs.size(); k += 2) {
-    Index& row = offsets[static_cast<std::size_t>(pairs[k]) + 1];
-    if (atomic) {
-      std::atomic_ref<Index>(row).fetch_add(1, std::memory_order_relaxed);
-    } else {
-      ++row;
-    }
+    const Index row = pairs[k];
+    if (row >= first && row < last) ++offsets[static_cast<std::size_t>(row) + 1];
   }
 }
 
-void scatter_rows(const std::vector<Index>& pairs, std::vector<Index>& offsets,
-                  std::vector<Index>& indices, bool atomic) {
+void scatter_rows(const std::vector<Index>& pairs, Index first, Index last,
+                  std::vector<Index>& offsets, std::vector<Index>& indices) {
   for (std::size_t k = 0; k < pairs.size(); k += 2) {
-    Index& at = offsets[static_cast<std::size_t>(pairs[k])];
-    const Index to =
-        atomic ? std::atomic_ref<Index>(at).fetch_add(1, std::memory_order_relaxed) : at++;
-    indices[static_cast<std::size_t>(to)] = pairs[k + 1];
+    const Index row = pairs[k];
+    if (row < first || row >= last) continue;
+    indices[static_cast<std::size_t>(offsets[static_cast<std::size_t>(row)]++)] = pairs[k + 1];
   }
 }
 
@@ -767,9 +764,9 @@ void NeighborList::fill_half_rows(Index n) {
 
   if (threads == 1) {
     gather(0, 1);
-    count_rows(chunks_[0], offsets_, false);
+    count_rows(chunks_[0], 0, n, offsets_);
     starts();
-    scatter_rows(chunks_[0], offsets_, indices_, false);
+    scatter_rows(chunks_[0], 0, n, offsets_, indices_);
     restore_starts();
     sort_rows(0, n);
     return;
@@ -778,17 +775,21 @@ void NeighborList::fill_half_rows(Index n) {
 #pragma omp parallel num_threads(threads)
   {
     const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+    const Index first = n * t / nt, last = n * (t + 1) / nt;
     gather(t, nt);
 #pragma omp barrier
-    count_rows(chunks_[static_cast<std::size_t>(t)], offsets_, true);
+    for (int u = 0; u < nt; ++u)
+      count_rows(chunks_[static_cast<std::size_t>(u)], first, last, offsets_);
 #pragma omp barrier
 #pragma omp single
     starts();
-    scatter_rows(chunks_[static_cast<std::size_t>(t)], offsets_, indices_, true);
+    for (int u = 0; u < nt; ++u) {
+      scatter_rows(chunks_[static_cast<std::size_t>(u)], first, last, offsets_, indices_);
+    }
 #pragma omp barrier
 #pragma omp single
     restore_starts();
-    sort_rows(n * t / nt, n * (t + 1) / nt);
+    sort_rows(first, last);
   }
 #endif
 }

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -134,24 +135,30 @@ bool System::wrap_positions() { return wrap_positions(nullptr); }
 bool System::wrap_positions(double* mirror) {
   if (!domain_.any_periodic()) return false;
   // Not positions(): only a wrap that moves a particle changes the version.
-  // Forces evaluated before it stay valid otherwise, bit for bit.
+  // Forces evaluated before it stay valid otherwise, bit for bit. Columns
+  // are independent: over the host's threads.
   Eigen::Map<Matrix3X> x(state_.data(), 3, size());
   const Vec3 length = domain_.length();
-  bool moved = false;
-  for (Index i = 0; i < size(); ++i) {
-    const Vec3 before = x.col(i);
-    const Vec3 after = domain_.wrap(before);
-    if (after == before) continue;
-    for (int k = 0; k < 3; ++k) {
-      if (domain_.periodic[k] && std::isfinite(before[k])) {
-        images_[static_cast<std::size_t>(i)][k] +=
-            static_cast<std::int32_t>(std::lround((before[k] - after[k]) / length[k]));
+  std::atomic<bool> any{false};
+  parallel_ranges(size(), [&](Index begin, Index end) {
+    bool moved_here = false;
+    for (Index i = begin; i < end; ++i) {
+      const Vec3 before = x.col(i);
+      const Vec3 after = domain_.wrap(before);
+      if (after == before) continue;
+      for (int k = 0; k < 3; ++k) {
+        if (domain_.periodic[k] && std::isfinite(before[k])) {
+          images_[static_cast<std::size_t>(i)][k] +=
+              static_cast<std::int32_t>(std::lround((before[k] - after[k]) / length[k]));
+        }
       }
+      x.col(i) = after;
+      if (mirror != nullptr) Eigen::Map<Vec3>(mirror + 3 * i) = after;
+      moved_here = true;
     }
-    x.col(i) = after;
-    if (mirror != nullptr) Eigen::Map<Vec3>(mirror + 3 * i) = after;
-    moved = true;
-  }
+    if (moved_here) any.store(true, std::memory_order_relaxed);
+  });
+  const bool moved = any.load();
   // A wrap is a change of the state for a force that measures separations
   // as given (a spring across a face); not when every force is
   // periodic-invariant, so that a solver may keep the forces it evaluated
