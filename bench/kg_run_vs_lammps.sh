@@ -8,12 +8,22 @@
 # ROUNDS times (default 3), and prints each round's loop times and their
 # ratios: LAMMPS's "Loop time", pdyn's "the steps X s" (both after set-up).
 #
-#   bash bench/kg_run_vs_lammps.sh [BUILD_DIR]      (default: build)
+#   bash bench/kg_run_vs_lammps.sh [--shipped] [BUILD_DIR]   (default: build)
+#
+# --shipped times LAMMPS's own script instead: in.chain of its COUPLE/multiple
+# example as Debian ships it (tests/scenes/chain, lmp -var t 1.0: the same
+# model from its data.chain, fix langevin, neigh_modify every 1 delay 1,
+# 500 steps of 0.012), converted by `pdyn convert in.chain --var t 1.0`.
 #
 # Needs Debian's lammps (lmp) and, for 2 ranks, mpirun; never a build
 # dependency. Writes out/kg_run/. Run it on a quiet machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+shipped=0
+if [[ ${1:-} == --shipped ]]; then
+  shipped=1
+  shift
+fi
 build=${1:-build}
 rounds=${ROUNDS:-3}
 command -v lmp >/dev/null || { echo "kg_run_vs_lammps: needs lmp (apt-get install lammps)" >&2; exit 2; }
@@ -21,6 +31,12 @@ pdyn="$PWD/$build/bin/pdyn"
 [[ -x "$pdyn" ]] || { echo "kg_run_vs_lammps: no $pdyn (build pdyn first)" >&2; exit 2; }
 out=out/kg_run
 mkdir -p "$out"
+input=in.kg scene=kg.yaml steps=1000 vars=()
+if ((shipped)); then
+  input=in.chain scene=chain.yaml steps=500 vars=(-var t 1.0)
+  cp tests/scenes/chain/in.chain tests/scenes/chain/data.chain "$out/"
+  (cd "$out" && "$pdyn" convert in.chain --var t 1.0 -o chain.yaml)
+fi
 cp bench/lammps/in.kg_make bench/lammps/in.kg tests/scenes/special/chain.mol "$out/"
 [[ -f "$out/kg32k.data" ]] || (cd "$out" && lmp -in in.kg_make -log none -screen none)
 cat > "$out/kg.yaml" <<SCENE
@@ -39,17 +55,17 @@ forces:
 SCENE
 lammps_loop() {  # ranks -> the Loop time, s
   if [[ $1 == 1 ]]; then
-    (cd "$out" && lmp -in in.kg -log log.1 -screen none)
+    (cd "$out" && lmp "${vars[@]}" -in "$input" -log log.1 -screen none)
   else
     (cd "$out" && OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 \
-      mpirun --oversubscribe -np "$1" lmp -in in.kg -log "log.$1" -screen none)
+      mpirun --oversubscribe -np "$1" lmp "${vars[@]}" -in "$input" -log "log.$1" -screen none)
   fi
   awk '/^Loop time of/{print $4}' "$out/log.$1"
 }
 pdyn_loop() {  # threads -> the steps' time, s
   local text
-  text=$(cd "$out" && "$pdyn" run kg.yaml --threads "$1")
-  sed -n 's/^pdyn: 1000 steps of .* (the steps \([0-9.e+-]*\) s).*/\1/p' <<<"$text"
+  text=$(cd "$out" && "$pdyn" run "$scene" --threads "$1")
+  sed -n "s/^pdyn: $steps steps of .* (the steps \([0-9.e+-]*\) s).*/\1/p" <<<"$text"
 }
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
 printf '| round | LAMMPS 1 rank, s | pdyn 1 thread, s | ratio | LAMMPS 2 ranks, s | pdyn 2 threads, s | ratio |\n|---|---|---|---|---|---|---|\n'

@@ -25,6 +25,9 @@
 //      buffer, rows are sorted, and the buffers are joined in order: row i is
 //      computed by the same operations from the same data whatever the
 //      split, so the list is bit-identical for every thread count.
+//      A half list without a fold scans the stencil's forward half instead
+//      (half_pairs, fill_half_rows): each pair once, scattered into the row
+//      of its lower index, then the rows sorted: the same rows.
 //
 // Every buffer is a member that only grows: once warm (a build with the same
 // N has run, and the pair count stays within the 1/8 headroom that the
