@@ -95,6 +95,31 @@ void sort_row(Index* row, Index count) {
   }
 }
 
+// A row buffer grown to hold `needed` entries, by half its size at least
+// (and 1/8 headroom), so that runs of a build rarely reallocate.
+void make_room(std::vector<Index>& buf, std::size_t needed) {
+  if (needed > buf.size()) buf.resize(std::max(buf.size() + buf.size() / 2, needed + needed / 8));
+}
+
+// The cells [lo, hi] of the x row that starts at cell `base` (nx cells),
+// cut at the faces of an open axis or wrapped round a periodic one (of
+// `length`): visit(first, last, x shift) for each run of cells.
+template <class Visit>
+void x_runs(Index base, Index lo, Index hi, Index nx, bool periodic, double length,
+            const Visit& visit) {
+  if (!periodic) {
+    visit(base + std::max<Index>(lo, 0), base + std::min(hi, nx - 1), 0.0);
+  } else if (lo < 0) {
+    visit(base + lo + nx, base + nx - 1, -length);
+    visit(base, base + hi, 0.0);
+  } else if (hi >= nx) {
+    visit(base + lo, base + nx - 1, 0.0);
+    visit(base, base + hi - nx, length);
+  } else {
+    visit(base + lo, base + hi, 0.0);
+  }
+}
+
 // A half list's rows from pairs (lower index, higher index) gathered in
 // `pairs`, for the rows [first, last) only: count_rows adds each pair's row
 // to its size (offsets[row + 1]), scatter_rows writes the higher index at
@@ -515,10 +540,7 @@ Index NeighborList::fill_row(Index i, std::vector<Index>& buf, Index used) const
   const auto scan = [&](Index first, Index last, double sx, double sy, double sz) {
     const Index begin = cell_start_[static_cast<std::size_t>(first)];
     const Index end = cell_start_[static_cast<std::size_t>(last) + 1];
-    if (static_cast<std::size_t>(used + count + (end - begin)) > buf.size()) {
-      const auto needed = static_cast<std::size_t>(used + count + (end - begin));
-      buf.resize(std::max(buf.size() + buf.size() / 2, needed + needed / 8));
-    }
+    make_room(buf, static_cast<std::size_t>(used + count + (end - begin)));
     // A local count: `out` and `count` are both Index, so through the
     // reference every store to out would force a reload of count.
     Index* out = buf.data() + used;
@@ -547,18 +569,11 @@ Index NeighborList::fill_row(Index i, std::vector<Index>& buf, Index used) const
     if (y.cell < 0 || z.cell < 0) continue;
     const Index base = nx * (y.cell + g.n[1] * z.cell);
     const Index lo = cx - row.half_x, hi = cx + row.half_x;
-    if (!g.periodic[0]) {
-      scan(base + std::max<Index>(lo, 0), base + std::min(hi, nx - 1), 0.0, y.shift, z.shift);
-    } else if (nx < 2 * row.half_x + 1) {
+    if (g.periodic[0] && nx < 2 * row.half_x + 1) {
       scan(base, base + nx - 1, 0.0, y.shift, z.shift);  // the whole row, once (Fold)
-    } else if (lo < 0) {
-      scan(base + lo + nx, base + nx - 1, -g.length[0], y.shift, z.shift);
-      scan(base, base + hi, 0.0, y.shift, z.shift);
-    } else if (hi >= nx) {
-      scan(base + lo, base + nx - 1, 0.0, y.shift, z.shift);
-      scan(base, base + hi - nx, g.length[0], y.shift, z.shift);
     } else {
-      scan(base + lo, base + hi, 0.0, y.shift, z.shift);
+      x_runs(base, lo, hi, nx, g.periodic[0], g.length[0],
+             [&](Index first, Index last, double sx) { scan(first, last, sx, y.shift, z.shift); });
     }
   }
   // Ascending, so that a row depends only on the set of partners (not on
@@ -673,10 +688,7 @@ Index NeighborList::half_pairs(Index slot, std::vector<Index>& buf, Index used) 
   // before the test and kept by advancing: no branch on the outcome.
   const auto scan = [&](Index begin, Index end, double sx, double sy, double sz) {
     if (begin >= end) return;
-    if (static_cast<std::size_t>(used + count + 2 * (end - begin)) > buf.size()) {
-      const auto needed = static_cast<std::size_t>(used + count + 2 * (end - begin));
-      buf.resize(std::max(buf.size() + buf.size() / 2, needed + needed / 8));
-    }
+    make_room(buf, static_cast<std::size_t>(used + count + 2 * (end - begin)));
     Index* out = buf.data() + used;
     Index kept = count;
     for (Index s = begin; s < end; ++s) {
@@ -708,17 +720,8 @@ Index NeighborList::half_pairs(Index slot, std::vector<Index>& buf, Index used) 
     if (y.cell < 0 || z.cell < 0) continue;
     const Index base = nx * (y.cell + g.n[1] * z.cell);
     const Index lo = cx + from, hi = cx + row.half_x;
-    if (!g.periodic[0]) {
-      cells(base + std::max<Index>(lo, 0), base + std::min(hi, nx - 1), 0.0, y.shift, z.shift);
-    } else if (lo < 0) {
-      cells(base + lo + nx, base + nx - 1, -g.length[0], y.shift, z.shift);
-      cells(base, base + hi, 0.0, y.shift, z.shift);
-    } else if (hi >= nx) {
-      cells(base + lo, base + nx - 1, 0.0, y.shift, z.shift);
-      cells(base, base + hi - nx, g.length[0], y.shift, z.shift);
-    } else {
-      cells(base + lo, base + hi, 0.0, y.shift, z.shift);
-    }
+    x_runs(base, lo, hi, nx, g.periodic[0], g.length[0],
+           [&](Index first, Index last, double sx) { cells(first, last, sx, y.shift, z.shift); });
   }
   return count;
 }
