@@ -39,10 +39,17 @@ int cmd_convert(const ConvertArgs& a, std::ostream& out, std::ostream& err) {
   // The files the scene reads are written before it, beside it: a scene
   // that exists finds them.
   const fs::path scene(a.output);
-  std::map<std::string, std::string> variables;
-  for (const auto& [name, value] : a.variables) variables[name] = value;
+  ConvertOptions options;
+  for (const auto& [name, value] : a.variables) options.variables[name] = value;
+  // read_data's names are relative to this directory, as lmp's; the scene
+  // names them from its own folder.
+  if (!a.output.empty()) {
+    std::error_code ec;
+    const fs::path from = fs::relative(fs::current_path(), fs::absolute(scene).parent_path(), ec);
+    if (!ec && from != ".") options.data_folder = from.generic_string();
+  }
   const ConvertedScene converted = convert_lammps_script(
-      text.str(), a.input, a.output.empty() ? std::string() : scene.stem().string(), variables);
+      text.str(), a.input, a.output.empty() ? std::string() : scene.stem().string(), options);
   if (!converted.files.empty() && a.output.empty()) {
     err << fmt::format(
         "pdyn: {} makes its own atoms, which go to a data file beside the scene (expected pdyn "

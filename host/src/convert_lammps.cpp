@@ -13,6 +13,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <set>
@@ -331,7 +332,12 @@ void Converter::special_bonds(const Command& c) {
 }
 
 void Converter::read_data(const Command& c) {
-  if (arity(c, 1, 1, "read_data FILE, with no keywords")) data_ = c.words[1].text;
+  if (!arity(c, 1, 1, "read_data FILE, with no keywords")) return;
+  // Relative to lmp's working directory, seen from the scene's folder.
+  const std::filesystem::path file(c.words[1].text);
+  data_ = file.is_absolute() || data_folder_.empty()
+              ? file.generic_string()
+              : (std::filesystem::path(data_folder_) / file).lexically_normal().generic_string();
 }
 
 void Converter::pair_style(const Command& c) {
@@ -922,13 +928,12 @@ namespace pdyn {
 
 ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
                                      const std::string& stem) {
-  return convert_lammps_script(text, file, stem, {});
+  return convert_lammps_script(text, file, stem, ConvertOptions{});
 }
 
 ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
-                                     const std::string& stem,
-                                     const std::map<std::string, std::string>& variables) {
-  return lammps::Converter(file, variables).convert(text, stem);
+                                     const std::string& stem, const ConvertOptions& options) {
+  return lammps::Converter(file, options).convert(text, stem);
 }
 
 std::string convert_lammps_input(const std::string& text, const std::string& file) {

@@ -54,10 +54,11 @@ struct Rigid {
 
 class Converter {
  public:
-  /// `variables`: those given on the command line (lmp -var NAME VALUE).
-  Converter(std::string file, const std::map<std::string, std::string>& variables)
-      : file_(std::move(file)), variables_(variables) {
-    for (const auto& [name, value] : variables) command_line_.insert(name);
+  /// `options`: the command line's variables (lmp -var NAME VALUE) and
+  /// the folder read_data's names are relative to.
+  Converter(std::string file, const ConvertOptions& options)
+      : file_(std::move(file)), variables_(options.variables), data_folder_(options.data_folder) {
+    for (const auto& [name, value] : options.variables) command_line_.insert(name);
   }
   /// The scene, and the data file it reads when the script made its own
   /// atoms (`STEM.data`, beside the scene).
@@ -116,6 +117,7 @@ class Converter {
   std::vector<Diagnostic> diags_;
   std::map<std::string, std::string> variables_;
   std::set<std::string> command_line_;  // the variables given on the command line
+  std::string data_folder_;             // ConvertOptions::data_folder
   // What the script set.
   std::string data_;                               // read_data's file
   std::string atom_style_;                         // atom_style, or empty

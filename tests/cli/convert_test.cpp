@@ -301,6 +301,27 @@ TEST(Convert, LammpsChainBenchmarkScriptConverts) {
   }
 }
 
+// read_data names its file relative to lmp's working directory: a scene
+// written to another folder names it from there, and runs.
+TEST(Convert, ReadDataIsFoundFromASceneWrittenElsewhere) {
+  const fs::path dir = test::temp_dir("convert-elsewhere");
+  fs::copy_file(test::source_path("tests/scenes/thermo/thermo_start.data"), dir / "start.data");
+  test::write_file(dir / "in.x",
+                   "units lj\natom_style atomic\npair_style lj/cut 2.5\nread_data start.data\n"
+                   "pair_coeff 1 1 1.0 1.0\nfix 1 all nve\nrun 10\n");
+  fs::create_directories(dir / "scenes");
+  const auto converted = test::pdyn_in(dir, {"convert", "in.x", "-o", "scenes/x.yaml"});
+  ASSERT_EQ(converted.status, 0) << converted.err;
+  const std::string scene = test::read_bytes(dir / "scenes/x.yaml");
+  EXPECT_NE(
+      scene.find("  box: { file: ../start.data, atom_style: atomic }\nparticles:\n  - { file: "
+                 "../start.data, atom_style: atomic }\n"),
+      std::string::npos)
+      << scene;
+  const auto run = test::pdyn_in(dir, {"run", "scenes/x.yaml", "-q"});
+  EXPECT_EQ(run.status, 0) << run.err;
+}
+
 std::string ConvertProblems(const std::string& script) {
   try {
     convert_lammps_input(script, "in.test");

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <pdyn/error.hpp>
+#include <pdyn/parallel.hpp>
 
 namespace pdyn_langevin {
 
@@ -42,6 +43,49 @@ Ranmar::Ranmar(std::int64_t seed) {
   uniform();  // as RanMars's constructor
 }
 
+void Ranmar::fill(double* out, std::size_t count, std::vector<double>& history) {
+  constexpr double kCd = 7654321.0 / 16777216.0;
+  constexpr double kCm = 16777213.0 / 16777216.0;
+  // history[m] = x_{n-97+m}: the slot written 97 - m calls ago, i_ - m (mod
+  // 97), since uniform() writes the slots in decreasing order.
+  history.resize(97 + count);
+  double* h = history.data();
+  for (int m = 0; m < 97; ++m) h[m] = u_[static_cast<std::size_t>((i_ - m + 97) % 97)];
+  for (std::size_t k = 0; k < count; ++k) {
+    const double x = h[k] - h[k + 64];  // x_{n-97} - x_{n-33}
+    h[k + 97] = x + (x < 0.0 ? 1.0 : 0.0);
+  }
+  // c after k + 1 steps of -cd (mod cm), four chains of -4 cd (mod cm).
+  constexpr double kCd4 = (4.0 * 7654321.0 - 16777213.0) / 16777216.0;  // 4 cd mod cm
+  std::array<double, 4> c{};
+  double previous = c_;
+  for (double& lane : c) {
+    previous -= kCd;
+    previous += previous < 0.0 ? kCm : 0.0;
+    lane = previous;
+  }
+  for (std::size_t k = 0; k < count; k += 4) {
+    for (std::size_t l = 0; l < 4 && k + l < count; ++l) {
+      const double y = h[k + l + 97] - c[l];
+      out[k + l] = y + (y < 0.0 ? 1.0 : 0.0);
+      const double next = c[l] - kCd4;
+      c[l] = next + (next < 0.0 ? kCm : 0.0);
+    }
+  }
+  // The state after `count` calls: c stepped count times, the slots moved.
+  c_ = count == 0 ? c_ : c[(count - 1) % 4];
+  if (count > 0) {
+    // Lane (count - 1) % 4 holds c after count steps only before its last
+    // advance: step it back.
+    const double back = c_ + kCd4;
+    c_ = back >= kCm ? back - kCm : back;
+  }
+  const int moved = static_cast<int>(count % 97);
+  i_ = (i_ - moved + 97) % 97;
+  j_ = (j_ - moved + 97) % 97;
+  for (int m = 0; m < 97; ++m) u_[static_cast<std::size_t>((i_ - m + 97) % 97)] = h[count + m];
+}
+
 void Ranmar::save(std::uint8_t* out) const {
   std::memcpy(out, u_.data(), 97 * 8);
   std::memcpy(out + 97 * 8, &c_, 8);
@@ -67,6 +111,7 @@ void Ranmar::load(const std::uint8_t* in) {
 // read, the atoms' ids for a data file written in id order).
 void LammpsNoise::set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdyn::Domain& domain) {
   const Index n = x.cols();
+  first_.clear();
   order_.resize(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
   if (bin_ <= 0.0) return;
@@ -100,14 +145,30 @@ void LammpsNoise::set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdy
 }
 
 void LammpsNoise::draw(pdyn::Matrix3X& into) {
-  into.setZero(3, static_cast<Index>(order_.size()));
-  Ranmar g = gen_;  // a local copy stays in registers: `into` cannot alias it
-  double* out = into.data();
-  for (const Index i : order_) {
-    if (in_bath_[static_cast<std::size_t>(i)] == 0) continue;
-    for (Index d = 0; d < 3; ++d) out[3 * i + d] = g.uniform() - 0.5;  // exact: 24-bit fractions
+  if (first_.size() != order_.size()) {  // where each draw position's numbers start
+    first_.assign(order_.size(), -1);
+    Index next = 0;
+    for (std::size_t k = 0; k < order_.size(); ++k) {
+      if (in_bath_[static_cast<std::size_t>(order_[k])] == 0) continue;
+      first_[k] = next;
+      next += 3;
+    }
+    numbers_.resize(static_cast<std::size_t>(next));
   }
-  gen_ = g;
+  gen_.fill(numbers_.data(), numbers_.size(), history_);
+  into.resize(3, static_cast<Index>(order_.size()));
+  double* out = into.data();
+  pdyn::parallel_ranges(static_cast<Index>(order_.size()), [&](Index b, Index e) {
+    for (Index k = b; k < e; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
+      const Index i = order_[uk];
+      for (Index d = 0; d < 3; ++d) {
+        // Exact: 24-bit fractions.
+        out[3 * i + d] =
+            first_[uk] < 0 ? 0.0 : numbers_[static_cast<std::size_t>(first_[uk] + d)] - 0.5;
+      }
+    }
+  });
 }
 
 const pdyn::Matrix3X& LammpsNoise::block(long long k, const std::vector<std::uint8_t>& in_bath,
@@ -177,6 +238,7 @@ std::vector<std::uint8_t> LammpsNoise::save() const {
 void LammpsNoise::restore(std::span<const std::uint8_t> bytes) {
   if (bytes.empty()) {  // checkpointed before the first draw
     order_.clear();
+    first_.clear();
     block_ = -1;
     have_previous_ = false;
     gen_ = before_ = Ranmar(seed_);
@@ -211,6 +273,7 @@ void LammpsNoise::restore(std::span<const std::uint8_t> bytes) {
     i = static_cast<Index>(v);
   }
   order_ = std::move(order);
+  first_.clear();
   in_bath_.assign(p, p + n);
   before_ = gen_ = before;
   draw(noise_);

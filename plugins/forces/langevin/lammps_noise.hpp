@@ -56,6 +56,14 @@ class Ranmar {
     return uni + (uni < 0.0 ? 1.0 : 0.0);
   }
 
+  // The next `count` numbers, as `count` calls of uniform() give them, into
+  // out[0, count). The lagged values as one array, so that 33 consecutive
+  // ones never depend on each other (the loop runs in vector registers),
+  // and the arithmetic sequence in four interleaved chains: the numbers are
+  // multiples of 2^-24 below 1, so every step is exact and the order of the
+  // steps cannot change a bit. `history` is scratch, grown as needed.
+  void fill(double* out, std::size_t count, std::vector<double>& history);
+
   static constexpr std::size_t kStateBytes = 97 * 8 + 8 + 2 * 4;
   void save(std::uint8_t* out) const;
   void load(const std::uint8_t* in);
@@ -93,10 +101,12 @@ class LammpsNoise {
   double bin_;
   std::vector<pdyn::Index> order_;  // the draw order, set at the first draw
   std::vector<std::uint8_t> in_bath_;
-  Ranmar gen_;                       // after block_
-  Ranmar before_;                    // before block_
-  long long block_ = -1;             // the block noise_ holds, -1 none
-  pdyn::Matrix3X noise_, previous_;  // blocks block_ and block_ - 1
+  std::vector<pdyn::Index> first_;  // per draw position: its first number, -1 outside the bath
+  std::vector<double> numbers_, history_;  // a block's numbers in draw order; scratch
+  Ranmar gen_;                             // after block_
+  Ranmar before_;                          // before block_
+  long long block_ = -1;                   // the block noise_ holds, -1 none
+  pdyn::Matrix3X noise_, previous_;        // blocks block_ and block_ - 1
   bool have_previous_ = false;
 };
 

@@ -13,8 +13,9 @@
 namespace pdyn {
 
 /// The scene equivalent to the LAMMPS input script `text` (read from `file`,
-/// which names it in messages; the data files it reads are named relative
-/// to the script, as LAMMPS reads them), as commented YAML. Converts what
+/// which names it in messages; the data files it reads are named as the
+/// script names them, for a scene in lmp's working directory:
+/// ConvertOptions::data_folder says otherwise), as commented YAML. Converts what
 /// a simple input uses (docs/lammps.md lists the commands); anything else
 /// throws SceneError with one diagnostic per problem, located
 /// "FILE:LINE:COLUMN" at the word, "what (supported: ...)".
@@ -37,11 +38,21 @@ struct PDYN_HOST_API ConvertedScene {
 PDYN_HOST_API ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
                                                    const std::string& stem);
 
-/// As above, with variables given as lmp's command line gives them
-/// (`-var NAME VALUE`): `${NAME}` in the script is VALUE, and an index
-/// variable of the same name in the script does not redefine it.
-PDYN_HOST_API ConvertedScene
-convert_lammps_script(const std::string& text, const std::string& file, const std::string& stem,
-                      const std::map<std::string, std::string>& variables);
+/// What `pdyn convert`'s command line adds to a script.
+struct PDYN_HOST_API ConvertOptions {
+  /// Variables as lmp's command line gives them (`-var NAME VALUE`):
+  /// `${NAME}` in the script is VALUE, and an index variable of the same
+  /// name in the script does not redefine it.
+  std::map<std::string, std::string> variables;
+  /// The folder read_data's relative names are relative to (lmp's working
+  /// directory), as seen from the scene's folder: prefixed to them, so that
+  /// a scene written elsewhere finds its data file. Empty: the same folder.
+  std::string data_folder;
+};
+
+/// As above, with the command line's options.
+PDYN_HOST_API ConvertedScene convert_lammps_script(const std::string& text, const std::string& file,
+                                                   const std::string& stem,
+                                                   const ConvertOptions& options);
 
 }  // namespace pdyn
