@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstring>
 #include <pdyn/error.hpp>
-#include <pdyn/parallel.hpp>
 
 namespace pdyn_langevin {
 
@@ -51,6 +50,8 @@ void Ranmar::fill(double* out, std::size_t count, std::vector<double>& history) 
   history.resize(97 + count);
   double* h = history.data();
   for (int m = 0; m < 97; ++m) h[m] = u_[static_cast<std::size_t>((i_ - m + 97) % 97)];
+    // Iteration k reads what iteration k - 33 wrote: 32 at a time are free.
+#pragma omp simd safelen(32)
   for (std::size_t k = 0; k < count; ++k) {
     const double x = h[k] - h[k + 64];  // x_{n-97} - x_{n-33}
     h[k + 97] = x + (x < 0.0 ? 1.0 : 0.0);
@@ -64,14 +65,17 @@ void Ranmar::fill(double* out, std::size_t count, std::vector<double>& history) 
     previous += previous < 0.0 ? kCm : 0.0;
     lane = previous;
   }
-  for (std::size_t k = 0; k < count; k += 4) {
-    for (std::size_t l = 0; l < 4 && k + l < count; ++l) {
-      const double y = h[k + l + 97] - c[l];
-      out[k + l] = y + (y < 0.0 ? 1.0 : 0.0);
-      const double next = c[l] - kCd4;
-      c[l] = next + (next < 0.0 ? kCm : 0.0);
-    }
+  const auto step = [&](std::size_t k, std::size_t l) {
+    const double y = h[k + l + 97] - c[l];
+    out[k + l] = y + (y < 0.0 ? 1.0 : 0.0);
+    const double next = c[l] - kCd4;
+    c[l] = next + (next < 0.0 ? kCm : 0.0);
+  };
+  std::size_t k = 0;
+  for (; k + 4 <= count; k += 4) {
+    for (std::size_t l = 0; l < 4; ++l) step(k, l);
   }
+  for (std::size_t l = 0; k + l < count; ++l) step(k, l);
   // The state after `count` calls: c stepped count times, the slots moved.
   c_ = count == 0 ? c_ : c[(count - 1) % 4];
   if (count > 0) {
@@ -111,7 +115,7 @@ void Ranmar::load(const std::uint8_t* in) {
 // read, the atoms' ids for a data file written in id order).
 void LammpsNoise::set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdyn::Domain& domain) {
   const Index n = x.cols();
-  first_.clear();
+  first_of_.clear();
   order_.resize(static_cast<std::size_t>(n));
   for (Index i = 0; i < n; ++i) order_[static_cast<std::size_t>(i)] = i;
   if (bin_ <= 0.0) return;
@@ -144,36 +148,24 @@ void LammpsNoise::set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdy
   });
 }
 
-void LammpsNoise::draw(pdyn::Matrix3X& into) {
-  if (first_.size() != order_.size()) {  // where each draw position's numbers start
-    first_.assign(order_.size(), -1);
+void LammpsNoise::draw(std::vector<double>& into) {
+  if (first_of_.size() != order_.size()) {  // where each particle's numbers start
+    first_of_.assign(order_.size(), -1);
     Index next = 0;
-    for (std::size_t k = 0; k < order_.size(); ++k) {
-      if (in_bath_[static_cast<std::size_t>(order_[k])] == 0) continue;
-      first_[k] = next;
+    for (const Index i : order_) {
+      if (in_bath_[static_cast<std::size_t>(i)] == 0) continue;
+      first_of_[static_cast<std::size_t>(i)] = next;
       next += 3;
     }
-    numbers_.resize(static_cast<std::size_t>(next));
+    count_ = static_cast<std::size_t>(next);
   }
-  gen_.fill(numbers_.data(), numbers_.size(), history_);
-  into.resize(3, static_cast<Index>(order_.size()));
-  double* out = into.data();
-  pdyn::parallel_ranges(static_cast<Index>(order_.size()), [&](Index b, Index e) {
-    for (Index k = b; k < e; ++k) {
-      const auto uk = static_cast<std::size_t>(k);
-      const Index i = order_[uk];
-      for (Index d = 0; d < 3; ++d) {
-        // Exact: 24-bit fractions.
-        out[3 * i + d] =
-            first_[uk] < 0 ? 0.0 : numbers_[static_cast<std::size_t>(first_[uk] + d)] - 0.5;
-      }
-    }
-  });
+  into.resize(count_);
+  gen_.fill(into.data(), count_, history_);
 }
 
-const pdyn::Matrix3X& LammpsNoise::block(long long k, const std::vector<std::uint8_t>& in_bath,
-                                         const Eigen::Ref<const pdyn::Matrix3X>& x,
-                                         const pdyn::Domain& domain) {
+const std::vector<double>& LammpsNoise::block(long long k, const std::vector<std::uint8_t>& in_bath,
+                                              const Eigen::Ref<const pdyn::Matrix3X>& x,
+                                              const pdyn::Domain& domain) {
   if (order_.empty()) {
     in_bath_ = in_bath;
     set_order(x, domain);
@@ -238,7 +230,7 @@ std::vector<std::uint8_t> LammpsNoise::save() const {
 void LammpsNoise::restore(std::span<const std::uint8_t> bytes) {
   if (bytes.empty()) {  // checkpointed before the first draw
     order_.clear();
-    first_.clear();
+    first_of_.clear();
     block_ = -1;
     have_previous_ = false;
     gen_ = before_ = Ranmar(seed_);
@@ -273,7 +265,7 @@ void LammpsNoise::restore(std::span<const std::uint8_t> bytes) {
     i = static_cast<Index>(v);
   }
   order_ = std::move(order);
-  first_.clear();
+  first_of_.clear();
   in_bath_.assign(p, p + n);
   before_ = gen_ = before;
   draw(noise_);

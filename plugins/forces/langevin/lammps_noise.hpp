@@ -83,9 +83,12 @@ class LammpsNoise {
   // component of each particle (3 x N; 0 outside the bath). At the first
   // call `in_bath` (1 for a particle in the bath, N), `x` (m, 3 x N) and
   // `domain` set the draw order; later calls must give the same N.
-  const pdyn::Matrix3X& block(long long k, const std::vector<std::uint8_t>& in_bath,
-                              const Eigen::Ref<const pdyn::Matrix3X>& x,
-                              const pdyn::Domain& domain);
+  // Particle i's numbers are numbers[first_of()[i] + 0, 1, 2] (u in [0, 1)),
+  // first_of()[i] < 0 outside the bath: read, not scattered, by the force's
+  // threads.
+  const std::vector<double>& block(long long k, const std::vector<std::uint8_t>& in_bath,
+                                   const Eigen::Ref<const pdyn::Matrix3X>& x,
+                                   const pdyn::Domain& domain);
 
   // The draw order, the bath and the generator before the current block: a
   // checkpoint's state. restore() throws pdyn::Error for bytes save() did not
@@ -95,18 +98,23 @@ class LammpsNoise {
 
  private:
   void set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdyn::Domain& domain);
-  void draw(pdyn::Matrix3X& into);
+  void draw(std::vector<double>& into);
 
+ public:
+  const std::vector<pdyn::Index>& first_of() const noexcept { return first_of_; }
+
+ private:
   std::int64_t seed_;
   double bin_;
   std::vector<pdyn::Index> order_;  // the draw order, set at the first draw
   std::vector<std::uint8_t> in_bath_;
-  std::vector<pdyn::Index> first_;  // per draw position: its first number, -1 outside the bath
-  std::vector<double> numbers_, history_;  // a block's numbers in draw order; scratch
-  Ranmar gen_;                             // after block_
-  Ranmar before_;                          // before block_
-  long long block_ = -1;                   // the block noise_ holds, -1 none
-  pdyn::Matrix3X noise_, previous_;        // blocks block_ and block_ - 1
+  std::vector<pdyn::Index> first_of_;     // per particle: its first number, -1 outside the bath
+  std::vector<double> history_;           // scratch of Ranmar::fill
+  std::size_t count_ = 0;                 // numbers per block: 3 per particle in the bath
+  Ranmar gen_;                            // after block_
+  Ranmar before_;                         // before block_
+  long long block_ = -1;                  // the block noise_ holds, -1 none
+  std::vector<double> noise_, previous_;  // blocks block_ and block_ - 1, in draw order
   bool have_previous_ = false;
 };
 

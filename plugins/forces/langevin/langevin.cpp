@@ -153,15 +153,22 @@ class Langevin final : public pdyn::Force,
         }
       });
     }
-    const pdyn::Matrix3X& w = lammps_->block(static_cast<long long>(k), in_bath_, p.x, p.domain);
+    const std::vector<double>& u =
+        lammps_->block(static_cast<long long>(k), in_bath_, p.x, p.domain);
+    const std::vector<Index>& first = lammps_->first_of();
     const double amplitude = std::sqrt(24.0 / tau_ / h_);
     const double root_kT = std::sqrt(kT_);
     for_bath(p.size(), [&](Index i) {
-      if (in_bath_[static_cast<std::size_t>(i)] == 0) return;
+      const Index at = first[static_cast<std::size_t>(i)];
+      if (at < 0) return;
       const double m = p.mass(i);
       const double gamma1 = -m / tau_;
       const double gamma2 = std::sqrt(m) * amplitude * root_kT;
-      f.col(i) += gamma1 * p.v.col(i) + gamma2 * w.col(i);
+      for (Index d = 0; d < 3; ++d) {
+        // u - 1/2 is exact: u is a multiple of 2^-24.
+        const double fran = gamma2 * (u[static_cast<std::size_t>(at + d)] - 0.5);
+        f(d, i) += gamma1 * p.v(d, i) + fran;
+      }
     });
   }
 
