@@ -50,10 +50,11 @@ void Ranmar::fill(double* out, std::size_t count, std::vector<double>& history) 
   history.resize(97 + count);
   double* h = history.data();
   for (int m = 0; m < 97; ++m) h[m] = u_[static_cast<std::size_t>((i_ - m + 97) % 97)];
-    // Iteration k reads what iteration k - 33 wrote: 32 at a time are free.
 #pragma omp simd safelen(32)
   for (std::size_t k = 0; k < count; ++k) {
-    const double x = h[k] - h[k + 64];  // x_{n-97} - x_{n-33}
+    // x_{n-97} - x_{n-33}: iteration k reads what iteration k - 33 wrote,
+    // so 32 in a row are independent.
+    const double x = h[k] - h[k + 64];
     h[k + 97] = x + (x < 0.0 ? 1.0 : 0.0);
   }
   // c after k + 1 steps of -cd (mod cm), four chains of -4 cd (mod cm).
