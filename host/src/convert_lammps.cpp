@@ -379,11 +379,13 @@ void Converter::pair_coeff(const Command& c) {
   }
   pair_rows_.push_back(fmt::format("{} {} {} {}{}", c.words[1].text, c.words[2].text, *eps, *sigma,
                                    rc ? fmt::format(" {}", *rc) : std::string()));
-  if (c.words[1].text == "1" && c.words[2].text == "1" && (rc || cutoff_)) {
-    type_one_ = std::array<double, 3>{*eps, *sigma, rc ? *rc : *cutoff_};
-  }
   // LAMMPS's pair without a cutoff takes the global one as it is now.
-  if (rc || cutoff_) pair_cutoff_max_ = std::max(pair_cutoff_max_, rc ? *rc : *cutoff_);
+  const std::optional<double> pair_cutoff = rc ? rc : cutoff_;
+  if (!pair_cutoff) return;
+  if (c.words[1].text == "1" && c.words[2].text == "1") {
+    type_one_ = std::array<double, 3>{*eps, *sigma, *pair_cutoff};
+  }
+  pair_cutoff_max_ = std::max(pair_cutoff_max_, *pair_cutoff);
 }
 
 void Converter::pair_modify(const Command& c) {
@@ -589,7 +591,7 @@ void Converter::langevin(const Command& c) {
     fail(c, 5, "fix langevin: a ramped temperature is not converted yet (expected TSTOP = TSTART)");
     return;
   }
-  if (*seed != std::floor(*seed) || *seed < 1 || *seed > 900000000) {
+  if (!whole_in(*seed, 1, 900000000)) {
     fail(c, 7,
          fmt::format("fix langevin: seed {} is not one LAMMPS takes (expected a whole number, 1 "
                      "to 900000000)",

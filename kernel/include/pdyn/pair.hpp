@@ -495,6 +495,30 @@ class PairForce : public Force,
     }
   }
 
+  // g[k] = -U'(r)/r of a block of m pairs of particle type ti with r^2 =
+  // r2s[k] and types tj[k], 0 for those beyond the cutoff: the law on every
+  // pair, in vector registers, and a select, so that a value beyond the
+  // cutoff (even inf or NaN) is never used. The force loop's and the
+  // virial's (kSelect).
+  [[gnu::always_inline]] inline void selected_law(std::int32_t ti, const double* r2s,
+                                                  const std::int32_t* tj, Index m,
+                                                  double* g) const {
+    const double cutoff2 = cutoff2_;
+#ifdef _OPENMP
+#pragma omp simd
+#endif
+    for (Index k = 0; k < m; ++k) {
+      const double v = law_(r2s[k], ti, tj[k]).force_over_r;
+      g[k] = r2s[k] < cutoff2 ? v : 0.0;
+    }
+  }
+
+  // g[k] times the special-bond weight of list entry k0 + k.
+  static void weigh(const Rows& r, Index k0, Index m, double* g) {
+    const std::uint8_t* which = r.which + k0;
+    for (Index k = 0; k < m; ++k) g[k] *= r.scale[which[k]];
+  }
+
   // The own rows of range_forces for a law that may be evaluated beyond its
   // cutoff (kSelect): each row in blocks, first the separations, then the
   // law on every listed pair with the out-of-range values replaced by 0 (a
@@ -514,7 +538,6 @@ class PairForce : public Force,
     alignas(64) double dx[kBlock], dy[kBlock], dz[kBlock], r2s[kBlock], g[kBlock];
     alignas(64) std::int32_t tj[kBlock];
     const double* x = p.x.data();
-    const double cutoff2 = cutoff2_;
     for (Index i = begin; i < end; ++i) {
       const double* xi = x + 3 * i;
       const std::int32_t ti = type_of(p, i);
@@ -530,17 +553,8 @@ class PairForce : public Force,
           r2s[k] = d.squaredNorm();
           tj[k] = type_of(p, row[k]);
         }
-#ifdef _OPENMP
-#pragma omp simd
-#endif
-        for (Index k = 0; k < m; ++k) {
-          const double v = law_(r2s[k], ti, tj[k]).force_over_r;
-          g[k] = r2s[k] < cutoff2 ? v : 0.0;
-        }
-        if constexpr (Weighted) {
-          const std::uint8_t* which = r.which + k0;
-          for (Index k = 0; k < m; ++k) g[k] *= r.scale[which[k]];
-        }
+        selected_law(ti, r2s, tj, m, g);
+        if constexpr (Weighted) weigh(r, k0, m, g);
         for (Index k = 0; k < m; ++k) {
           const Index j = row[k];
           const Vec3 fij = g[k] * Vec3(dx[k], dy[k], dz[k]);
@@ -581,16 +595,10 @@ class PairForce : public Force,
               r2s[k] = separation(x + 3 * i, x + 3 * row[k], im).squaredNorm();
               tj[k] = type_of(p, row[k]);
             }
-#ifdef _OPENMP
-#pragma omp simd
-#endif
-            for (Index k = 0; k < m; ++k) {
-              const double v = law_(r2s[k], ti, tj[k]).force_over_r;
-              g[k] = r2s[k] < cutoff2_ ? v * r2s[k] : 0.0;
-            }
-            if (r.which) {
-              for (Index k = 0; k < m; ++k) g[k] *= r.scale[r.which[k0 + k]];
-            }
+            selected_law(ti, r2s, tj, m, g);
+            // r^2 g; beyond the cutoff 0, whatever r^2 is.
+            for (Index k = 0; k < m; ++k) g[k] *= r2s[k] < cutoff2_ ? r2s[k] : 0.0;
+            if (r.which) weigh(r, k0, m, g);
             for (Index k = 0; k < m; ++k) w += g[k];
           }
         }

@@ -38,9 +38,8 @@ class Ranmar {
 
   // The paper's routine RANMAR: x_n = x_{n-97} - x_{n-33} mod 1, minus the
   // arithmetic sequence c_n = c_{n-1} - 7654321/2^24 mod 16777213/2^24. In
-  // [0, 1). Inline, and each "mod 1" a select rather than a branch: the
-  // signs are random, and mispredicted branches took most of the time (a
-  // bath draws three numbers per particle per step). The same numbers.
+  // [0, 1). Each "mod 1" a select rather than a branch: the signs are
+  // random. fill() gives a bath's block the same numbers faster.
   double uniform() {
     constexpr double kCd = 7654321.0 / 16777216.0;
     constexpr double kCm = 16777213.0 / 16777216.0;
@@ -79,13 +78,12 @@ class LammpsNoise {
   // `bin`: the sort's bin edge (m); 0 keeps the particles' order.
   LammpsNoise(std::int64_t seed, double bin) : seed_(seed), bin_(bin), gen_(seed), before_(seed) {}
 
-  // The numbers of the evaluation at step boundary `k` (>= 0), u - 1/2 per
-  // component of each particle (3 x N; 0 outside the bath). At the first
-  // call `in_bath` (1 for a particle in the bath, N), `x` (m, 3 x N) and
-  // `domain` set the draw order; later calls must give the same N.
-  // Particle i's numbers are numbers[first_of()[i] + 0, 1, 2] (u in [0, 1)),
-  // first_of()[i] < 0 outside the bath: read, not scattered, by the force's
-  // threads.
+  // The numbers u in [0, 1) of the evaluation at step boundary `k` (>= 0),
+  // in draw order: particle i's are those at first_of()[i] + 0, 1, 2, none
+  // where first_of()[i] < 0 (outside the bath), read there by the force's
+  // threads. At the first call `in_bath` (1 for a particle in the bath, N),
+  // `x` (m, 3 x N) and `domain` set the draw order; later calls must give
+  // the same N.
   const std::vector<double>& block(long long k, const std::vector<std::uint8_t>& in_bath,
                                    const Eigen::Ref<const pdyn::Matrix3X>& x,
                                    const pdyn::Domain& domain);
@@ -96,14 +94,12 @@ class LammpsNoise {
   std::vector<std::uint8_t> save() const;
   void restore(std::span<const std::uint8_t> bytes);
 
+  const std::vector<pdyn::Index>& first_of() const noexcept { return first_of_; }
+
  private:
   void set_order(const Eigen::Ref<const pdyn::Matrix3X>& x, const pdyn::Domain& domain);
   void draw(std::vector<double>& into);
 
- public:
-  const std::vector<pdyn::Index>& first_of() const noexcept { return first_of_; }
-
- private:
   std::int64_t seed_;
   double bin_;
   std::vector<pdyn::Index> order_;  // the draw order, set at the first draw
