@@ -434,8 +434,8 @@ inline void apply_laws(const LinearLocalLaw* laws, double m, const double* v, do
 // have one, else by add_forces_range), then each particle's f/m handed to
 // out(i, f_i, 1/m_i). Each column is independent, so the split over
 // threads cannot change a bit.
-template <class Out>
-void System::gather(std::size_t first_local, Out out) {
+template <class Out, class Then>
+void System::gather(std::size_t first_local, Out out, Then then) {
   LinearLocalLaw laws[kMaxLinearLaws];
   const int n_laws = linear_laws(first_local, laws);
   double* f = force_.data();
@@ -448,6 +448,7 @@ void System::gather(std::size_t first_local, Out out) {
         apply_laws<N>(laws, m[i], v + 3 * i, f + 3 * i);
         out(i, f + 3 * i, w[i]);
       }
+      then(b, e);
     };
     static_assert(kMaxLinearLaws == 4, "a case for every count of laws");
     switch (n_laws) {
@@ -464,45 +465,63 @@ void System::gather(std::size_t first_local, Out out) {
     }
     add_local_forces(first_local, b, e);
     for (Index i = b; i < e; ++i) out(i, f + 3 * i, w[i]);
+    then(b, e);
   });
 }
 
 // [v | f/m]. A fixed particle has zero velocity (nailing zeroes it and its
 // acceleration is zero) and zero inverse mass, so both halves vanish for it
 // without a branch.
-void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) {
+void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt) { derivative(dydt, {}); }
+
+void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt, DerivativeChunk then) {
   const std::size_t first_local = evaluate_forces();
   const Index n = size();
   // One pass over the particles writes both halves (both streams are
   // memory-bound at large N; one pass reads the state and f once), over
   // local pointers: through Eigen's expressions they were reloaded per
   // element.
-  Eigen::Map<Matrix3X> a(dydt.data() + 3 * n, 3, n);
   double* out_v = dydt.data();
   double* out_a = dydt.data() + 3 * n;
   const double* in_v = std::as_const(*this).velocities().data();
-  gather(first_local, [&](Index i, const double* fi, double wi) {
-    out_v[3 * i] = in_v[3 * i];
-    out_v[3 * i + 1] = in_v[3 * i + 1];
-    out_v[3 * i + 2] = in_v[3 * i + 2];
-    out_a[3 * i] = fi[0] * wi;
-    out_a[3 * i + 1] = fi[1] * wi;
-    out_a[3 * i + 2] = fi[2] * wi;
-  });
   // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
-  // blew up, so the blow-up is reported at the particle that moved.
-  for (const Index i : fixed_ids_) a.col(i).setZero();
+  // blew up, so the blow-up is reported at the particle that moved. Its
+  // acceleration is zeroed in its own chunk, before `then` reads it: the
+  // sorted fixed ids of [b, e) by binary search, none in most chunks.
+  auto zero_fixed = [&](Index b, Index e) {
+    auto it = std::lower_bound(fixed_ids_.begin(), fixed_ids_.end(), b);
+    for (; it != fixed_ids_.end() && *it < e; ++it) {
+      out_a[3 * *it] = out_a[3 * *it + 1] = out_a[3 * *it + 2] = 0.0;
+    }
+  };
+  gather(
+      first_local,
+      [&](Index i, const double* fi, double wi) {
+        out_v[3 * i] = in_v[3 * i];
+        out_v[3 * i + 1] = in_v[3 * i + 1];
+        out_v[3 * i + 2] = in_v[3 * i + 2];
+        out_a[3 * i] = fi[0] * wi;
+        out_a[3 * i + 1] = fi[1] * wi;
+        out_a[3 * i + 2] = fi[2] * wi;
+      },
+      [&](Index b, Index e) {
+        zero_fixed(b, e);
+        if (then.call != nullptr) then.call(then.context, b, e);
+      });
 }
 
 const Matrix3X& System::compute_accelerations() {
   const std::size_t first_local = evaluate_forces();
   accel_.resize(3, size());  // allocates on the first call only
   double* out = accel_.data();
-  gather(first_local, [&](Index i, const double* fi, double wi) {
-    out[3 * i] = fi[0] * wi;
-    out[3 * i + 1] = fi[1] * wi;
-    out[3 * i + 2] = fi[2] * wi;
-  });
+  gather(
+      first_local,
+      [&](Index i, const double* fi, double wi) {
+        out[3 * i] = fi[0] * wi;
+        out[3 * i + 1] = fi[1] * wi;
+        out[3 * i + 2] = fi[2] * wi;
+      },
+      [](Index, Index) {});
   for (const Index i : fixed_ids_) accel_.col(i).setZero();
   return accel_;
 }

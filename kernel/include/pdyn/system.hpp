@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "pdyn/collider.hpp"
@@ -74,6 +75,31 @@ class PDYN_API System {
   /// dy/dt = [v | f/m] (6N) into `dydt`. Fixed particles get zero. Does not
   /// allocate once the system is assembled.
   void derivative(Eigen::Ref<Eigen::VectorXd> dydt);
+
+  /// Since 0.10.0: what a solver does to a chunk of particles right after
+  /// derivative(dydt, then) has written their entries of dydt, while those
+  /// are in cache: `call(context, begin, end)` for particles [begin, end),
+  /// whose entries are dydt's [3 begin, 3 end) and [3N + 3 begin,
+  /// 3N + 3 end). It may read and write those entries and the same entries
+  /// of the state, nothing else: chunks run on the host's threads, in any
+  /// order. A fused solver step saves a pass over dydt (rk4: the stage's
+  /// sum and next state made from each chunk's slope, plugins/solvers/rk4).
+  struct DerivativeChunk {
+    void (*call)(void* context, Index begin, Index end) = nullptr;
+    void* context = nullptr;
+  };
+  /// Since 0.10.0: derivative(dydt), then `then` on each chunk of particles
+  /// once its entries are written (DerivativeChunk). The values written are
+  /// derivative(dydt)'s, bit for bit.
+  void derivative(Eigen::Ref<Eigen::VectorXd> dydt, DerivativeChunk then);
+  /// derivative(dydt, then) with a callable `f(begin, end)`.
+  template <class F>
+  void derivative_then(Eigen::Ref<Eigen::VectorXd> dydt, F&& f) {
+    auto call = [](void* c, Index b, Index e) {
+      (*static_cast<std::remove_reference_t<F>*>(c))(b, e);
+    };
+    derivative(dydt, DerivativeChunk{call, &f});
+  }
 
   // ---- split views, for symplectic and implicit solvers ----
 
@@ -270,8 +296,8 @@ class PDYN_API System {
   void evaluate_constraints() const;
   void add_local_forces(std::size_t first, Index begin, Index end);
   int linear_laws(std::size_t first, LinearLocalLaw* laws) const;
-  template <class Out>
-  void gather(std::size_t first_local, Out out);
+  template <class Out, class Then>
+  void gather(std::size_t first_local, Out out, Then then);
   void update_inverse_mass();
 
   Eigen::VectorXd state_;     // [x | v], 6N

@@ -45,16 +45,20 @@ struct Hooke {
     const double d0 = xi[0] - xj[0], d1 = xi[1] - xj[1], d2 = xi[2] - xj[2];
     const double len = std::sqrt((d0 * d0 + d1 * d1) + d2 * d2);
     const double stretch = len - p.rest;
+    // One division, not two: 1/L once, both of Witkin's divisions by L
+    // multiplications by it. A division costs as much as a term's other
+    // arithmetic together on a cloth (issue 46's profile).
+    const double inv = 1.0 / len;
     t.energy = 0.5 * c.ks * stretch * stretch;
     double magnitude = c.ks * stretch;
     if (c.kd > 0.0) {
       const double* vi = p.v[0];
       const double* vj = p.v[1];
       const double w0 = vi[0] - vj[0], w1 = vi[1] - vj[1], w2 = vi[2] - vj[2];
-      magnitude += c.kd * ((w0 * d0 + w1 * d1) + w2 * d2) / len;
+      magnitude += c.kd * ((w0 * d0 + w1 * d1) + w2 * d2) * inv;
     }
     // A select, not an early return: the term then stays in registers.
-    const double s = len == 0.0 ? 0.0 : -(magnitude / len);
+    const double s = len == 0.0 ? 0.0 : -(magnitude * inv);
     t.force[0] = pdyn::Vec3(s * d0, s * d1, s * d2);
     t.force[1] = -t.force[0];
     return t;

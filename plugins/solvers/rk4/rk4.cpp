@@ -4,12 +4,10 @@
 //   y1 = y0 + h/6 (k1 + 2 k2 + 2 k3 + k4).
 // Stage states are written straight into the system's state (no set_state
 // copy); the weighted sum is accumulated in `sum_` as the stages arrive so
-// only one derivative buffer is live at a time. Each vector update is one
-// fused pass (sum and next stage state together): at large N the step is
-// memory-bound, so passes, not flops, are what cost. The passes are split
-// over the host's threads; every element is computed alike whatever the
-// split, so the result does not depend on the thread count.
-#include <pdyn/parallel.hpp>
+// only one derivative buffer is live at a time. Each stage's update (sum and
+// next stage state together) is done chunk by chunk inside the derivative's
+// own pass over the particles, as each chunk's slope is written: at large N
+// the step is memory-bound, so passes, not flops, are what cost.
 #include <pdyn/plugin.hpp>
 #include <pdyn/system.hpp>
 
@@ -25,42 +23,44 @@ class Rk4 final : public pdyn::Solver {
     y0_.resize(n);  // these allocate on the first step only
     k_.resize(n);
     sum_.resize(n);
-    auto y = sys.state();
-    // Applies update(segment of y, of y0, of k, of sum) over [0, n) in
-    // parallel, chunk by chunk: the statements of one update then read each
-    // vector from memory once.
-    auto update = [&](auto&& op) {
-      pdyn::parallel_state_chunks(n, pdyn::kChunkElements, [&](Index b, Index e) {
-        op(y.segment(b, e - b), y0_.segment(b, e - b), k_.segment(b, e - b),
-           sum_.segment(b, e - b));
+    double* y = sys.state().data();
+    double* y0 = y0_.data();
+    double* k = k_.data();
+    double* sum = sum_.data();
+    // Applies op(element) to the elements of each chunk of particles as the
+    // system hands it over, right after writing the chunk's slope
+    // (System::derivative_then): the stage's arithmetic reads k from cache,
+    // not from memory, and one loop does all of a stage's statements. Each
+    // element is computed alike whatever the chunking or the thread, so the
+    // result does not depend on the thread count.
+    const Index half = n / 2;
+    auto stage = [&](auto op) {
+      sys.derivative_then(k_, [&](Index b, Index e) {
+        for (const Index at : {3 * b, half + 3 * b}) {
+          const Index end = at + 3 * (e - b);
+#pragma omp simd
+          for (Index i = at; i < end; ++i) op(i);
+        }
       });
     };
-    sys.derivative(k_);  // k1
-    // y0 is saved in the pass that takes the first stage: one pass less.
-    update([h](auto yy, auto y0, auto k, auto sum) {
-      y0 = yy;
-      sum = k;
-      yy = y0 + (0.5 * h) * k;
+    // k1; y0 is saved in the pass that takes the first stage: one pass less.
+    stage([=](Index i) {
+      y0[i] = y[i];
+      sum[i] = k[i];
+      y[i] = y[i] + (0.5 * h) * k[i];
     });
     sys.set_time(t0 + 0.5 * h);
-
-    sys.derivative(k_);  // k2
-    update([h](auto yy, auto y0, auto k, auto sum) {
-      sum += 2.0 * k;
-      yy = y0 + (0.5 * h) * k;
+    stage([=](Index i) {  // k2
+      sum[i] += 2.0 * k[i];
+      y[i] = y0[i] + (0.5 * h) * k[i];
     });
-
-    sys.derivative(k_);  // k3
-    update([h](auto yy, auto y0, auto k, auto sum) {
-      sum += 2.0 * k;
-      yy = y0 + h * k;
+    stage([=](Index i) {  // k3
+      sum[i] += 2.0 * k[i];
+      y[i] = y0[i] + h * k[i];
     });
     sys.set_time(t0 + h);
-
-    sys.derivative(k_);  // k4
-    update([h](auto yy, auto y0, auto k, auto sum) {
-      sum += k;
-      yy = y0 + (h / 6.0) * sum;
+    stage([=](Index i) {  // k4
+      y[i] = y0[i] + (h / 6.0) * (sum[i] + k[i]);
     });
   }
 
