@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <set>
 
+#include "isa_variant.hpp"
 #include "pdyn/host/scene_specs.hpp"
 
 namespace pdyn {
@@ -229,7 +230,7 @@ std::vector<fs::path> PluginRegistry::default_folders() {
 bool PluginRegistry::in_default_folder(const fs::path& library) {
   if (!defaults_) defaults_ = default_folders();
   std::error_code ec;
-  const fs::path dir = fs::weakly_canonical(library.parent_path(), ec);
+  const fs::path dir = fs::weakly_canonical(isa::home_folder(library), ec);
   return !ec && std::find(defaults_->begin(), defaults_->end(), dir) != defaults_->end();
 }
 
@@ -237,7 +238,11 @@ void PluginRegistry::fault(const fs::path& lib, std::string plugin, std::string 
   faults_.push_back({lib, std::move(plugin), std::move(message)});
 }
 
+// Each library is loaded as its variant for the best ISA level this CPU
+// runs, where one was built (isa_variant.hpp); the record names the file
+// loaded.
 void PluginRegistry::discover(const std::vector<fs::path>& dirs) {
+  const std::vector<std::string> levels = isa::usable_levels();
   for (const auto& dir : dirs) {
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) continue;
@@ -247,7 +252,7 @@ void PluginRegistry::discover(const std::vector<fs::path>& dirs) {
       if (entry.path().extension() == ".so") files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    for (const auto& f : files) load_library(f);
+    for (const auto& f : files) load_library(isa::best_variant(f, levels));
   }
 }
 
@@ -323,7 +328,7 @@ bool PluginRegistry::admit(const PluginDescriptor& d, const fs::path& file, cons
     return false;
   }
   if (const PluginRecord* other = find_any(d.name)) {
-    if (file.parent_path() != other->library.parent_path() && in_default_folder(file) &&
+    if (isa::home_folder(file) != isa::home_folder(other->library) && in_default_folder(file) &&
         in_default_folder(other->library)) {
       shadowed_.push_back({file, d.name, other->library});
       return false;

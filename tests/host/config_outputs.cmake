@@ -3,7 +3,8 @@
 # changes no behaviour leaves every byte of every output as it was.
 #
 #   cmake -DPDYN=<pdyn> -DCONFIGS=<configs/> -DREFERENCE=<.sha256> -DWORK=<dir> -P config_outputs.cmake
-#   add -DUPDATE=ON to rewrite the reference (after a deliberate change of output).
+#   add -DUPDATE=ON to rewrite the reference (after a deliberate change of output);
+#   add -DISA=LEVEL under PDYN_ISA=LEVEL to check an ISA level's outputs.
 #
 # The reference lines are "<sha256>  ./<scene>/<path written>", sorted.
 foreach(var PDYN CONFIGS REFERENCE WORK)
@@ -13,6 +14,28 @@ foreach(var PDYN CONFIGS REFERENCE WORK)
 endforeach()
 
 get_filename_component(PDYN "${PDYN}" ABSOLUTE)
+
+# -DISA=LEVEL (the isa.outputs_identical.* tests, run with PDYN_ISA=LEVEL):
+# first make sure the plugins with ISA variants load as LEVEL's (baseline:
+# none of them), so that the same reference checks that every level writes
+# the same bytes (host/src/isa_variant.hpp). A level the CPU does not run
+# is skipped.
+if(ISA)
+  execute_process(COMMAND "${PDYN}" plugins --json OUTPUT_VARIABLE listing RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "pdyn plugins --json failed (exit ${rc})")
+  endif()
+  string(REGEX MATCH "\"library\": \"[^\"]*pdyn_force_spring\\.so\"" spring "${listing}")
+  if(ISA STREQUAL "baseline")
+    if(spring MATCHES "/isa/")
+      message(FATAL_ERROR "PDYN_ISA=baseline loaded a variant: ${spring}")
+    endif()
+  elseif(NOT spring MATCHES "/isa/${ISA}/")
+    message(STATUS "this CPU does not run ${ISA} (spring loads as ${spring}): skipped")
+    return()
+  endif()
+  message(STATUS "PDYN_ISA=${ISA}: ${spring}")
+endif()
 get_filename_component(WORK "${WORK}" ABSOLUTE)
 file(REMOVE_RECURSE "${WORK}")
 file(GLOB scenes "${CONFIGS}/*.yaml")

@@ -42,6 +42,12 @@ fs::path fixture(const std::string& folder) {
   return real_path(fs::path(PDYN_FIXTURE_DIR) / folder);
 }
 fs::path shipped_dir() { return real_path(PDYN_PLUGIN_DIR); }
+// The folder a library was discovered in: its own, or for an ISA variant
+// (FOLDER/isa/LEVEL/NAME, host/src/isa_variant.hpp) FOLDER.
+fs::path home_dir(const fs::path& library) {
+  const fs::path level = real_path(library).parent_path();
+  return level.parent_path().filename() == "isa" ? level.parent_path().parent_path() : level;
+}
 
 // The seven plugins pdyn has shipped from the start (more may be added).
 const std::vector<std::pair<PluginKind, std::string>> kSeedPlugins = {
@@ -115,7 +121,7 @@ TEST(Registry, ShippedPluginsAreDiscoveredFromTheBuildTree) {
     const PluginRecord* rec = r.find(kind, name);
     ASSERT_NE(rec, nullptr) << name;
     EXPECT_EQ(rec->descriptor->name, name);
-    EXPECT_EQ(real_path(rec->library).parent_path(), shipped_dir());
+    EXPECT_EQ(home_dir(rec->library), shipped_dir());
     EXPECT_EQ(rec->library.filename().string(),
               std::string("pdyn_") + kind_name(kind) + "_" + name + ".so");
   }
@@ -139,10 +145,52 @@ TEST(Registry, DefaultSearchPathIsThePluginFolderOfTheBuildTree) {
   std::set<std::string> names;
   for (const auto& p : j["plugins"]) {
     names.insert(p["name"].get<std::string>());
-    EXPECT_EQ(real_path(p["library"].get<std::string>()).parent_path(), shipped_dir());
+    EXPECT_EQ(home_dir(p["library"].get<std::string>()), shipped_dir());
   }
   for (const auto& [kind, name] : kSeedPlugins) EXPECT_TRUE(names.count(name)) << name;
   EXPECT_TRUE(j["faults"].empty()) << j["faults"].dump(2);
+}
+
+// Run-time ISA dispatch: with PDYN_ISA=baseline no library is a variant;
+// capped at a level, the plugins with variants load from isa/LEVEL/ when
+// the CPU runs it (else from a lower level or the baseline), every other
+// plugin from the folder itself; a PDYN_ISA naming no level is refused.
+TEST(Registry, PdynIsaPicksTheVariantOfALevelOrTheBaseline) {
+  ScopedEnv path("PDYN_PLUGIN_PATH", std::nullopt);
+  {
+    ScopedEnv isa("PDYN_ISA", "baseline");
+    PluginRegistry r;
+    r.discover({PDYN_PLUGIN_DIR});
+    for (const auto& rec : r.plugins()) {
+      EXPECT_EQ(real_path(rec.library).parent_path(), shipped_dir()) << rec.library;
+    }
+  }
+  for (const std::string level : {"x86-64-v3", "x86-64-v4"}) {
+    ScopedEnv isa("PDYN_ISA", level);
+    PluginRegistry r;
+    r.discover({PDYN_PLUGIN_DIR});
+    const PluginRecord* spring = r.find(PluginKind::Force, "spring");
+    ASSERT_NE(spring, nullptr);
+    const fs::path variant = shipped_dir() / "isa" / level / spring->library.filename();
+    if (!fs::exists(variant)) GTEST_SKIP() << "built without " << level << " variants";
+    const fs::path folder = real_path(spring->library).parent_path();
+    if (folder != variant.parent_path()) {
+      std::cout << "this CPU does not run " << level << ": spring from " << folder << "\n";
+      continue;
+    }
+    const PluginRecord* gravity = r.find(PluginKind::Force, "gravity");
+    ASSERT_NE(gravity, nullptr);
+    EXPECT_EQ(real_path(gravity->library).parent_path(), shipped_dir());
+  }
+  ScopedEnv isa("PDYN_ISA", "avx2");
+  PluginRegistry r;
+  try {
+    r.discover({PDYN_PLUGIN_DIR});
+    ADD_FAILURE() << "PDYN_ISA=avx2 accepted";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(),
+                 "PDYN_ISA=avx2: no such level (expected baseline, x86-64-v4, x86-64-v3)");
+  }
 }
 
 TEST(Registry, SearchPathIsPluginPathThenEnvironmentThenDefaults) {
