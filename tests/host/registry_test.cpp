@@ -165,6 +165,7 @@ TEST(Registry, PdynIsaPicksTheVariantOfALevelOrTheBaseline) {
       EXPECT_EQ(real_path(rec.library).parent_path(), shipped_dir()) << rec.library;
     }
   }
+  int checked = 0;  // levels built and run by this CPU
   for (const std::string level : {"x86-64-v3", "x86-64-v4"}) {
     ScopedEnv isa("PDYN_ISA", level);
     PluginRegistry r;
@@ -172,7 +173,7 @@ TEST(Registry, PdynIsaPicksTheVariantOfALevelOrTheBaseline) {
     const PluginRecord* spring = r.find(PluginKind::Force, "spring");
     ASSERT_NE(spring, nullptr);
     const fs::path variant = shipped_dir() / "isa" / level / spring->library.filename();
-    if (!fs::exists(variant)) GTEST_SKIP() << "built without " << level << " variants";
+    if (!fs::exists(variant)) continue;  // not built (PDYN_ISA_LEVELS)
     const fs::path folder = real_path(spring->library).parent_path();
     if (folder != variant.parent_path()) {
       std::cout << "this CPU does not run " << level << ": spring from " << folder << "\n";
@@ -181,6 +182,7 @@ TEST(Registry, PdynIsaPicksTheVariantOfALevelOrTheBaseline) {
     const PluginRecord* gravity = r.find(PluginKind::Force, "gravity");
     ASSERT_NE(gravity, nullptr);
     EXPECT_EQ(real_path(gravity->library).parent_path(), shipped_dir());
+    ++checked;
   }
   ScopedEnv isa("PDYN_ISA", "avx2");
   PluginRegistry r;
@@ -191,6 +193,7 @@ TEST(Registry, PdynIsaPicksTheVariantOfALevelOrTheBaseline) {
     EXPECT_STREQ(e.what(),
                  "PDYN_ISA=avx2: no such level (expected baseline, x86-64-v4, x86-64-v3)");
   }
+  if (checked == 0) GTEST_SKIP() << "no ISA variant built, or none this CPU runs";
 }
 
 TEST(Registry, SearchPathIsPluginPathThenEnvironmentThenDefaults) {
