@@ -146,7 +146,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Force;
   d.name = "spring";
-  d.version = "1.2.0";
+  d.version = "1.2.1";
   d.description =
       "damped springs between particle pairs: f_i = -[ks (L - r) + kd (dv.dx)/L] dx/L, f_j = -f_i";
   d.params = {

@@ -72,7 +72,7 @@ pdyn::PluginDescriptor describe() {
   pdyn::PluginDescriptor d;
   d.kind = pdyn::PluginKind::Solver;
   d.name = "rk4";
-  d.version = "1.0.0";
+  d.version = "1.1.0";
   d.description = "classic fourth-order Runge-Kutta; order 4";
   d.solver_traits.order = 4;
   d.create_solver = [](const pdyn::Params&, const pdyn::SceneContext&) {
