@@ -83,7 +83,8 @@ forces:
     std::vector<int> seen(static_cast<std::size_t>(n), 0);
     std::vector<unsigned char> same(static_cast<std::size_t>(n), 0);
     double* y = sys.state().data();
-    sys.derivative_then(k, [&](Index b, Index e) {
+    // A const callable, as a solver may hold one.
+    const auto check = [&](Index b, Index e) {
       for (Index i = b; i < e; ++i) {
         ++seen[static_cast<std::size_t>(i)];
         bool equal = true;
@@ -95,7 +96,8 @@ forces:
         }
         same[static_cast<std::size_t>(i)] = equal ? 1 : 0;
       }
-    });
+    };
+    sys.derivative_then(k, check);
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), n) << threads << " threads";
     EXPECT_EQ(std::count(same.begin(), same.end(), 1), n) << threads << " threads";
     EXPECT_EQ(k, expected) << threads << " threads";

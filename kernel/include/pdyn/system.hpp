@@ -95,10 +95,10 @@ class PDYN_API System {
   /// derivative(dydt, then) with a callable `f(begin, end)`.
   template <class F>
   void derivative_then(Eigen::Ref<Eigen::VectorXd> dydt, F&& f) {
-    auto call = [](void* c, Index b, Index e) {
-      (*static_cast<std::remove_reference_t<F>*>(c))(b, e);
-    };
-    derivative(dydt, DerivativeChunk{call, &f});
+    using Fn = std::remove_reference_t<F>;  // may be const: called as it was given
+    auto call = [](void* c, Index b, Index e) { (*static_cast<Fn*>(c))(b, e); };
+    void* context = const_cast<void*>(static_cast<const volatile void*>(std::addressof(f)));
+    derivative(dydt, DerivativeChunk{call, context});
   }
 
   // ---- split views, for symplectic and implicit solvers ----
