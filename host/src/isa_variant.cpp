@@ -55,7 +55,7 @@ std::vector<std::string> usable_levels() {
 std::filesystem::path best_variant(const std::filesystem::path& library,
                                    const std::vector<std::string>& usable) {
   for (const auto& level : usable) {
-    const auto variant = library.parent_path() / "isa" / level / library.filename();
+    auto variant = library.parent_path() / "isa" / level / library.filename();
     std::error_code ec;
     if (std::filesystem::is_regular_file(variant, ec)) return variant;
   }
