@@ -1,16 +1,16 @@
 // Run-time ISA dispatch of plugin libraries (issue 46 item 3).
 //
 // The hot shipped plugins (the spring, pair and integrator loops) are also
-// built for the x86-64 micro-architecture levels x86-64-v3 (AVX2, FMA) and
+// built for the x86-64 micro-architecture levels x86-64-v3 (AVX2) and
 // x86-64-v4 (AVX-512) into isa/<level>/ beside the baseline library, as
 // glibc's loader does with glibc-hwcaps/<level>/ for libraries it finds on
 // a search path. Discovery loads the best variant this CPU runs. Every
-// variant is compiled without fused multiply-add contraction
-// (-ffp-contract=off, cmake/PdynPlugin.cmake) and GCC reorders no
-// floating-point sums without -ffast-math, so a wider vector register
-// changes how many elements an instruction takes, not one bit of a result:
-// the isa.outputs_identical test runs scenes under each level and compares
-// their output files byte for byte.
+// variant is compiled without fused multiply-adds (-ffp-contract=off for
+// GCC's code, -mno-fma for Eigen's intrinsics; plugins/CMakeLists.txt) and
+// GCC reorders no floating-point sums without -ffast-math, so a wider
+// vector register changes how many elements an instruction takes, not one
+// bit of a result: the isa.outputs_identical tests run scenes under each
+// level and compare their output files byte for byte.
 #pragma once
 
 #include <filesystem>
