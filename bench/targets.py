@@ -200,9 +200,9 @@ THREADS_LEVER = ("below 1.8 and below 0.95 of what a second core added to STREAM
                  "none was above 2%)")
 
 
-def wall(cmd):
+def wall(cmd, env=None):
     t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return time.perf_counter() - t0
 
 
@@ -253,10 +253,7 @@ def isa_pair(cmd, env_key="PDYN_ISA"):
             env.pop(env_key, None)
             if level:
                 env[env_key] = level
-            t0 = time.perf_counter()
-            subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL)
-            times[level] = time.perf_counter() - t0
+            times[level] = wall(cmd, env)
         ratios.append(times["baseline"] / times[None])
     q = statistics.quantiles(ratios, n=4, method="inclusive")
     return q[1], q[0], q[2]

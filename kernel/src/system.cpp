@@ -469,6 +469,20 @@ void System::gather(std::size_t first_local, Out out, Then then) {
   });
 }
 
+namespace {
+
+// 0 * NaN is NaN: a nailed particle must stay put even when a force on it
+// blew up, so the blow-up is reported at the particle that moved. Zeroes
+// the accelerations a (3 per particle) of the fixed particles in [b, e), a
+// gather's chunk, before anything reads them: the sorted fixed ids of the
+// chunk by binary search, none in most chunks.
+void zero_fixed(const std::vector<Index>& fixed_ids, double* a, Index b, Index e) {
+  auto it = std::lower_bound(fixed_ids.begin(), fixed_ids.end(), b);
+  for (; it != fixed_ids.end() && *it < e; ++it) a[3 * *it] = a[3 * *it + 1] = a[3 * *it + 2] = 0.0;
+}
+
+}  // namespace
+
 // [v | f/m]. A fixed particle has zero velocity (nailing zeroes it and its
 // acceleration is zero) and zero inverse mass, so both halves vanish for it
 // without a branch.
@@ -484,16 +498,6 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt, DerivativeChunk then) 
   double* out_v = dydt.data();
   double* out_a = dydt.data() + 3 * n;
   const double* in_v = std::as_const(*this).velocities().data();
-  // 0 * NaN is NaN: a nailed particle must stay put even when a force on it
-  // blew up, so the blow-up is reported at the particle that moved. Its
-  // acceleration is zeroed in its own chunk, before `then` reads it: the
-  // sorted fixed ids of [b, e) by binary search, none in most chunks.
-  auto zero_fixed = [&](Index b, Index e) {
-    auto it = std::lower_bound(fixed_ids_.begin(), fixed_ids_.end(), b);
-    for (; it != fixed_ids_.end() && *it < e; ++it) {
-      out_a[3 * *it] = out_a[3 * *it + 1] = out_a[3 * *it + 2] = 0.0;
-    }
-  };
   gather(
       first_local,
       [&](Index i, const double* fi, double wi) {
@@ -505,7 +509,7 @@ void System::derivative(Eigen::Ref<Eigen::VectorXd> dydt, DerivativeChunk then) 
         out_a[3 * i + 2] = fi[2] * wi;
       },
       [&](Index b, Index e) {
-        zero_fixed(b, e);
+        zero_fixed(fixed_ids_, out_a, b, e);  // before `then` reads them
         if (then.call != nullptr) then.call(then.context, b, e);
       });
 }
@@ -521,8 +525,7 @@ const Matrix3X& System::compute_accelerations() {
         out[3 * i + 1] = fi[1] * wi;
         out[3 * i + 2] = fi[2] * wi;
       },
-      [](Index, Index) {});
-  for (const Index i : fixed_ids_) accel_.col(i).setZero();
+      [&](Index b, Index e) { zero_fixed(fixed_ids_, out, b, e); });
   return accel_;
 }
 
