@@ -1,0 +1,103 @@
+// pdyn/host/halo.hpp — the particles of one rank under MPI (issue 43;
+// docs/parallel.md): the ones it owns and ghost copies of their neighbors'.
+//
+// A rank's System holds its owned particles and its ghosts together, sorted
+// by global id (a particle's index in the same scene run by one process).
+// That order is what keeps a decomposed run bit-identical to the plain one:
+// every force sums a particle's terms in increasing partner index
+// (pdyn/pair.hpp: each neighbor row is sorted by index; pdyn/parallel.hpp),
+// and with local indices in global-id order the increasing local order is
+// the plain run's order, the ghosts standing where their particles stand
+// there. A ghost's own force is partial and never used; the owned
+// particles' forces are the plain run's, bit for bit.
+//
+// exchange() makes the sets, at the start and whenever the neighbor lists
+// are rebuilt (a particle then may have left its subdomain by up to skin /
+// 2); forward() refreshes the ghosts' positions and velocities from their
+// owners before every force evaluation in between, LAMMPS's forward
+// communication (Plimpton 1995). Both are MPI_Alltoallv over the
+// communicator, each rank sending only to the ranks its particles are
+// ghosts on.
+#pragma once
+
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <pdyn/types.hpp>
+
+#include "pdyn/host/decomposition.hpp"
+#include "pdyn/host/export.hpp"
+
+namespace pdyn {
+
+/// One particle as it travels between ranks: everything a System keeps per
+/// particle.
+struct ParticleRecord {
+  std::int64_t id = 0;  ///< global index: the particle's index in the plain run
+  std::array<double, 3> x{};  ///< position, m
+  std::array<double, 3> v{};  ///< velocity, m/s
+  double mass = 0.0;          ///< kg
+  double radius = 0.0;        ///< m
+  std::int32_t type = 0;
+  std::array<std::int32_t, 3> images{};
+  std::uint8_t fixed = 0;
+};
+
+class PDYN_HOST_API Halo {
+ public:
+  /// `comm`: the ranks sharing the scene, as many as `decomposition`'s grid
+  /// has cells (Error otherwise). The communicator is used, not duplicated.
+  Halo(MPI_Comm comm, Decomposition decomposition);
+  ~Halo();
+  Halo(const Halo&) = delete;
+  Halo& operator=(const Halo&) = delete;
+
+  /// Makes this rank's particle sets from `held`, whatever particles it
+  /// holds now (after a step, its owned ones of the last exchange; at the
+  /// start, any share; across the ranks each particle exactly once): every
+  /// particle goes to the rank owning its position, and a ghost copy to each
+  /// rank within reach. Collective.
+  void exchange(const std::vector<ParticleRecord>& held);
+
+  /// Owned particles and ghosts, by increasing id: the local System's order.
+  const std::vector<ParticleRecord>& local() const noexcept { return local_; }
+  /// Per local() entry: 1 for a ghost, 0 for an owned particle.
+  const std::vector<std::uint8_t>& ghost() const noexcept { return ghost_; }
+  /// Number of owned particles among local().
+  Index owned() const noexcept { return owned_; }
+
+  /// Writes each ghost's position and velocity (columns of `x` and `v`, 3 x
+  /// local().size(), in local() order) from its owner's current columns.
+  /// Collective; sends 48 bytes per ghost copy.
+  void forward(Eigen::Ref<Matrix3X> x, Eigen::Ref<Matrix3X> v) const;
+
+  const Decomposition& decomposition() const noexcept { return decomposition_; }
+  int rank() const noexcept { return rank_; }
+  int ranks() const noexcept { return ranks_; }
+  /// Ghost copies this rank sends at each forward() (its halo's size).
+  Index ghosts_sent() const noexcept { return static_cast<Index>(send_local_.size()); }
+
+ private:
+  // Sends `out` (grouped by destination rank, `count[r]` records for rank r)
+  // and returns what arrives, grouped by source rank.
+  std::vector<ParticleRecord> alltoall(const std::vector<ParticleRecord>& out,
+                                       const std::vector<int>& count) const;
+
+  MPI_Comm comm_;
+  MPI_Datatype record_type_ = MPI_DATATYPE_NULL;
+  int rank_ = 0, ranks_ = 1;
+  Decomposition decomposition_;
+  std::vector<ParticleRecord> local_;
+  std::vector<std::uint8_t> ghost_;
+  Index owned_ = 0;
+  // forward(): the local columns sent, grouped by destination rank, and the
+  // local columns the arriving ghosts fill, in arrival order; counts and
+  // displacements in doubles (6 per particle).
+  std::vector<Index> send_local_, recv_local_;
+  std::vector<int> send_count_, send_offset_, recv_count_, recv_offset_;
+};
+
+}  // namespace pdyn

@@ -1,0 +1,151 @@
+// One rank's owned particles and ghosts under MPI (pdyn/host/halo.hpp).
+#include "pdyn/host/halo.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <numeric>
+
+#include "pdyn/error.hpp"
+
+namespace pdyn {
+
+namespace {
+
+// Displacements of consecutive groups of `count` elements.
+std::vector<int> offsets_of(const std::vector<int>& count) {
+  std::vector<int> offset(count.size(), 0);
+  std::exclusive_scan(count.begin(), count.end(), offset.begin(), 0);
+  return offset;
+}
+
+Vec3 position(const ParticleRecord& r) { return {r.x[0], r.x[1], r.x[2]}; }
+
+bool by_id(const ParticleRecord& a, const ParticleRecord& b) { return a.id < b.id; }
+
+}  // namespace
+
+Halo::Halo(MPI_Comm comm, Decomposition decomposition)
+    : comm_(comm), decomposition_(std::move(decomposition)) {
+  MPI_Comm_rank(comm_, &rank_);
+  MPI_Comm_size(comm_, &ranks_);
+  if (decomposition_.grid().ranks() != ranks_) {
+    throw Error(fmt::format("a grid of {} subdomains for {} ranks (expected one per rank)",
+                            decomposition_.grid().ranks(), ranks_));
+  }
+  // Records travel as bytes of one type, so that counts are particles (an
+  // int of bytes would overflow at 27 million particles per rank pair).
+  MPI_Type_contiguous(static_cast<int>(sizeof(ParticleRecord)), MPI_BYTE, &record_type_);
+  MPI_Type_commit(&record_type_);
+}
+
+Halo::~Halo() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (!finalized && record_type_ != MPI_DATATYPE_NULL) MPI_Type_free(&record_type_);
+}
+
+std::vector<ParticleRecord> Halo::alltoall(const std::vector<ParticleRecord>& out,
+                                           const std::vector<int>& count) const {
+  std::vector<int> in_count(static_cast<std::size_t>(ranks_), 0);
+  MPI_Alltoall(count.data(), 1, MPI_INT, in_count.data(), 1, MPI_INT, comm_);
+  const std::vector<int> out_offset = offsets_of(count), in_offset = offsets_of(in_count);
+  std::vector<ParticleRecord> in(static_cast<std::size_t>(in_offset.back() + in_count.back()));
+  MPI_Alltoallv(out.data(), count.data(), out_offset.data(), record_type_, in.data(),
+                in_count.data(), in_offset.data(), record_type_, comm_);
+  return in;
+}
+
+void Halo::exchange(const std::vector<ParticleRecord>& held) {
+  const auto p = static_cast<std::size_t>(ranks_);
+  // 1. Migration: each particle to its owner. Grouped by destination with a
+  // stable counting sort, so a rank's records arrive in the order they were held.
+  std::vector<int> count(p, 0);
+  std::vector<int> dest(held.size());
+  for (std::size_t i = 0; i < held.size(); ++i) {
+    dest[i] = decomposition_.owner(position(held[i]));
+    ++count[static_cast<std::size_t>(dest[i])];
+  }
+  std::vector<int> next = offsets_of(count);
+  std::vector<ParticleRecord> out(held.size());
+  for (std::size_t i = 0; i < held.size(); ++i) out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest[i])]++)] = held[i];
+  std::vector<ParticleRecord> owned = alltoall(out, count);
+  std::sort(owned.begin(), owned.end(), by_id);
+
+  // 2. Ghosts: a copy of each owned particle to every rank within reach, in
+  // increasing id per destination (owned is sorted).
+  std::vector<std::vector<std::size_t>> to(p);
+  std::vector<int> ranks;
+  for (std::size_t i = 0; i < owned.size(); ++i) {
+    ranks.clear();
+    decomposition_.ghost_ranks(position(owned[i]), rank_, ranks);
+    for (const int r : ranks) to[static_cast<std::size_t>(r)].push_back(i);
+  }
+  out.clear();
+  for (std::size_t r = 0; r < p; ++r) {
+    count[r] = static_cast<int>(to[r].size());
+    for (const std::size_t i : to[r]) out.push_back(owned[i]);
+  }
+  const std::vector<ParticleRecord> ghosts = alltoall(out, count);
+
+  // 3. The local order: owned and ghosts merged by id. Where each owned
+  // particle and each arriving ghost lands gives forward()'s maps.
+  local_.clear();
+  local_.reserve(owned.size() + ghosts.size());
+  ghost_.assign(owned.size() + ghosts.size(), 0);
+  std::vector<std::pair<std::int64_t, std::int64_t>> order;  // (id, source): source < 0 owned
+  order.reserve(owned.size() + ghosts.size());
+  for (std::size_t i = 0; i < owned.size(); ++i) order.emplace_back(owned[i].id, -1 - static_cast<std::int64_t>(i));
+  for (std::size_t g = 0; g < ghosts.size(); ++g) order.emplace_back(ghosts[g].id, static_cast<std::int64_t>(g));
+  std::sort(order.begin(), order.end());
+  std::vector<Index> owned_local(owned.size());
+  recv_local_.assign(ghosts.size(), 0);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::int64_t source = order[k].second;
+    if (k > 0 && order[k - 1].first == order[k].first) {
+      throw Error(fmt::format("rank {}: particle {} arrived twice (each particle must be held by one rank)",
+                              rank_, order[k].first));
+    }
+    if (source < 0) {
+      owned_local[static_cast<std::size_t>(-1 - source)] = static_cast<Index>(k);
+      local_.push_back(owned[static_cast<std::size_t>(-1 - source)]);
+    } else {
+      recv_local_[static_cast<std::size_t>(source)] = static_cast<Index>(k);
+      local_.push_back(ghosts[static_cast<std::size_t>(source)]);
+      ghost_[k] = 1;
+    }
+  }
+  owned_ = static_cast<Index>(owned.size());
+
+  // forward()'s plan: the same groups, in doubles.
+  send_local_.clear();
+  send_count_.assign(p, 0);
+  for (std::size_t r = 0; r < p; ++r) {
+    send_count_[r] = 6 * static_cast<int>(to[r].size());
+    for (const std::size_t i : to[r]) send_local_.push_back(owned_local[i]);
+  }
+  send_offset_ = offsets_of(send_count_);
+  recv_count_.assign(p, 0);
+  MPI_Alltoall(send_count_.data(), 1, MPI_INT, recv_count_.data(), 1, MPI_INT, comm_);
+  recv_offset_ = offsets_of(recv_count_);
+}
+
+void Halo::forward(Eigen::Ref<Matrix3X> x, Eigen::Ref<Matrix3X> v) const {
+  std::vector<double> out(6 * send_local_.size()), in(6 * recv_local_.size());
+  for (std::size_t k = 0; k < send_local_.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      out[6 * k + static_cast<std::size_t>(a)] = x(a, send_local_[k]);
+      out[6 * k + 3 + static_cast<std::size_t>(a)] = v(a, send_local_[k]);
+    }
+  }
+  MPI_Alltoallv(out.data(), send_count_.data(), send_offset_.data(), MPI_DOUBLE, in.data(),
+                recv_count_.data(), recv_offset_.data(), MPI_DOUBLE, comm_);
+  for (std::size_t k = 0; k < recv_local_.size(); ++k) {
+    for (int a = 0; a < 3; ++a) {
+      x(a, recv_local_[k]) = in[6 * k + static_cast<std::size_t>(a)];
+      v(a, recv_local_[k]) = in[6 * k + 3 + static_cast<std::size_t>(a)];
+    }
+  }
+}
+
+}  // namespace pdyn

@@ -1,0 +1,212 @@
+// The halo exchange under mpirun (issue 43; pdyn/host/halo.hpp): every rank
+// holds the same plain system and, beside it, its own decomposed share,
+// owned particles and ghosts by global id; the owned particles' forces must
+// be the plain run's bit for bit, for any rank count, grid and thread count
+// (ctest runs this program on 1 to 4 ranks, mpi.halo.*). Run as
+//   mpirun -np N pdyn_mpi_tests [--gtest_filter=...]
+// with PDYN_TEST_GRID=NX,NY,NZ to impose a grid.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/host/halo.hpp"
+#include "pdyn/host/registry.hpp"
+#include "pdyn/host/scene.hpp"
+#include "pdyn/host/threads.hpp"
+#include "pdyn/system.hpp"
+
+namespace pdyn {
+namespace {
+
+int world_rank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+int world_size() {
+  int n = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &n);
+  return n;
+}
+
+const PluginRegistry& plugins() {
+  static const PluginRegistry registry = [] {
+    PluginRegistry r;
+    r.discover({PDYN_PLUGIN_DIR});
+    return r;
+  }();
+  return registry;
+}
+
+// A Lennard-Jones liquid of n^3 particles at LAMMPS's melt density 0.8442
+// (spacing 1.0583 m), each jittered by up to 0.2 m off a simple cubic
+// lattice, with velocities: the scene's cloud is only the particle count.
+constexpr int kSide = 20;
+constexpr double kSpacing = 1.0583;
+const double kBox = kSide * kSpacing;
+
+Scene liquid() {
+  const std::string text = fmt::format(
+      "simulation: {{ dt: 0.005, steps: 1, solver: {{ type: verlet }},\n"
+      "  box: {{ min: [0, 0, 0], max: [{0}, {0}, {0}], periodic: [true, true, true] }} }}\n"
+      "particles:\n"
+      "  - cloud: {{ n: {1}, box: {{ min: [0, 0, 0], max: [1, 1, 1] }}, mass: 1 }}\n"
+      "forces:\n"
+      "  - {{ type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, skin: 0.3, shift: true }}\n",
+      kBox, kSide * kSide * kSide);
+  return load_scene_text(text, "liquid.yaml", plugins());
+}
+
+void jitter(System& s) {
+  std::mt19937_64 g(7);
+  auto u = [&] { return static_cast<double>(g() >> 11) * 0x1p-53 - 0.5; };
+  auto x = s.positions();
+  auto v = s.velocities();
+  for (Index i = 0; i < s.size(); ++i) {
+    const Index a = i % kSide, b = (i / kSide) % kSide, c = i / (kSide * kSide);
+    x.col(i) = kSpacing * Vec3(static_cast<double>(a) + 0.5, static_cast<double>(b) + 0.5,
+                               static_cast<double>(c) + 0.5) +
+               0.4 * Vec3(u(), u(), u());
+    v.col(i) = Vec3(u(), u(), u());
+  }
+}
+
+RankGrid grid_for(const Scene& scene) {
+  const char* text = std::getenv("PDYN_TEST_GRID");
+  if (text != nullptr && *text != '\0') return parse_rank_grid(text, world_size());
+  return choose_rank_grid(world_size(), scene.system->domain().length());
+}
+
+ParticleRecord record_of(const System& s, Index i) {
+  ParticleRecord r;
+  r.id = i;
+  for (int a = 0; a < 3; ++a) {
+    r.x[static_cast<std::size_t>(a)] = s.positions()(a, i);
+    r.v[static_cast<std::size_t>(a)] = s.velocities()(a, i);
+  }
+  r.mass = s.masses()[i];
+  r.fixed = s.fixed()[static_cast<std::size_t>(i)];
+  return r;
+}
+
+// Loads `halo`'s local particles into `s`.
+void load_local(const Halo& halo, System& s) {
+  const auto& local = halo.local();
+  const auto n = static_cast<Index>(local.size());
+  Matrix3X x(3, n), v(3, n);
+  Eigen::VectorXd mass(n);
+  std::vector<std::uint8_t> fixed(local.size());
+  for (Index k = 0; k < n; ++k) {
+    const ParticleRecord& r = local[static_cast<std::size_t>(k)];
+    x.col(k) = Vec3(r.x[0], r.x[1], r.x[2]);
+    v.col(k) = Vec3(r.v[0], r.v[1], r.v[2]);
+    mass[k] = r.mass;
+    fixed[static_cast<std::size_t>(k)] = r.fixed;
+  }
+  SystemAssembly(s).set_particles(x, v, mass, fixed);
+}
+
+// How many owned forces differ from the plain run's in any bit.
+Index differing_forces(const Halo& halo, const System& local, const System& plain) {
+  Index differ = 0;
+  for (std::size_t k = 0; k < halo.local().size(); ++k) {
+    if (halo.ghost()[k] != 0) continue;
+    const Index id = halo.local()[k].id;
+    const auto kk = static_cast<Index>(k);
+    if (std::memcmp(local.forces().col(kk).data(), plain.forces().col(id).data(), 3 * sizeof(double)) != 0) {
+      ++differ;
+    }
+  }
+  return differ;
+}
+
+Index total(Index mine) {
+  long long sum = 0, v = mine;
+  MPI_Allreduce(&v, &sum, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  return static_cast<Index>(sum);
+}
+
+TEST(Halo, OwnedForcesAreThePlainRunsBitForBitOnEveryRank) {
+  // Threads differ by rank (1 or 2): the result must not depend on them.
+  set_threads(1 + world_rank() % 2);
+  Scene plain_scene = liquid();
+  System& plain = *plain_scene.system;
+  jitter(plain);
+  plain.compute_accelerations();
+
+  Scene local_scene = liquid();
+  const Domain& box = plain.domain();
+  Halo halo(MPI_COMM_WORLD, Decomposition(grid_for(plain_scene), box.min, box.max, box.periodic, 2.8));
+  // Each rank starts with every ranks()-th particle: all of them migrate.
+  std::vector<ParticleRecord> held;
+  for (Index i = world_rank(); i < plain.size(); i += world_size()) held.push_back(record_of(plain, i));
+  halo.exchange(held);
+  EXPECT_EQ(total(halo.owned()), plain.size());
+  for (std::size_t k = 0; k < halo.local().size(); ++k) {
+    const ParticleRecord& r = halo.local()[k];
+    const bool mine = halo.decomposition().owner(Vec3(r.x[0], r.x[1], r.x[2])) == world_rank();
+    ASSERT_EQ(mine, halo.ghost()[k] == 0) << "particle " << r.id;
+    if (k > 0) {
+      ASSERT_LT(halo.local()[k - 1].id, r.id);
+    }
+  }
+  load_local(halo, *local_scene.system);
+  local_scene.system->compute_accelerations();
+  EXPECT_EQ(total(differing_forces(halo, *local_scene.system, plain)), 0);
+
+  // Everyone moves by up to 0.1 m (< skin / 2): forward() brings the ghosts
+  // along, and the forces stay the plain run's without a new exchange.
+  std::mt19937_64 g(11);
+  Matrix3X step(3, plain.size());
+  for (Index i = 0; i < plain.size(); ++i) {
+    for (int a = 0; a < 3; ++a) step(a, i) = 0.1 * (static_cast<double>(g() >> 11) * 0x1p-53 - 0.5);
+  }
+  plain.positions() += step;
+  plain.compute_accelerations();
+  System& mine = *local_scene.system;
+  for (std::size_t k = 0; k < halo.local().size(); ++k) {
+    const auto kk = static_cast<Index>(k);
+    if (halo.ghost()[k] == 0) {
+      mine.positions().col(kk) += step.col(halo.local()[k].id);
+    } else {
+      mine.positions().col(kk).setConstant(std::nan(""));  // forward() must overwrite it
+    }
+  }
+  halo.forward(mine.positions(), mine.velocities());
+  mine.compute_accelerations();
+  EXPECT_EQ(total(differing_forces(halo, mine, plain)), 0);
+}
+
+TEST(Halo, AGridOfTheWrongSizeIsRefused) {
+  const Decomposition d(RankGrid{{world_size() + 1, 1, 1}}, Vec3::Zero(), Vec3::Ones(), {true, true, true}, 0.1);
+  try {
+    Halo halo(MPI_COMM_WORLD, d);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), fmt::format("a grid of {} subdomains for {} ranks (expected one per rank)",
+                                                 world_size() + 1, world_size()));
+  }
+}
+
+}  // namespace
+}  // namespace pdyn
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  if (pdyn::world_rank() != 0) {
+    // One report: the other ranks print only their failures.
+    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
+    delete listeners.Release(listeners.default_result_printer());
+  }
+  int failed = RUN_ALL_TESTS() != 0 ? 1 : 0, any = 0;
+  MPI_Allreduce(&failed, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return any;
+}
