@@ -16,7 +16,8 @@ RankGrid choose_rank_grid(int ranks, const Vec3& lengths) {
   if (ranks < 1) throw Error(fmt::format("{} ranks: no grid (expected at least 1)", ranks));
   for (int k = 0; k < 3; ++k) {
     if (!(lengths[k] > 0.0 && std::isfinite(lengths[k]))) {
-      throw Error(fmt::format("region edge {} m along axis {}: no grid (expected > 0)", lengths[k], k));
+      throw Error(
+          fmt::format("region edge {} m along axis {}: no grid (expected > 0)", lengths[k], k));
     }
   }
   RankGrid best;
@@ -47,7 +48,8 @@ RankGrid parse_rank_grid(const std::string& text, int ranks) {
     const auto [next, ec] = std::from_chars(p, end, grid.n[k]);
     const bool separated = k == 2 ? next == end : next != end && (*next == ',' || *next == 'x');
     if (ec != std::errc{} || grid.n[k] < 1 || !separated) {
-      throw Error(fmt::format("--grid {}: not a grid (expected three positive integers, NX,NY,NZ)", text));
+      throw Error(
+          fmt::format("--grid {}: not a grid (expected three positive integers, NX,NY,NZ)", text));
     }
     p = next + 1;
   }
@@ -62,10 +64,13 @@ Decomposition::Decomposition(const RankGrid& grid, const Vec3& lo, const Vec3& h
                              const std::array<bool, 3>& periodic, double reach)
     : grid_(grid), lo_(lo), hi_(hi), periodic_(periodic), reach_(reach) {
   for (int k = 0; k < 3; ++k) {
-    if (grid.n[k] < 1) throw Error(fmt::format("rank grid has {} cells along axis {} (expected >= 1)", grid.n[k], k));
+    if (grid.n[k] < 1)
+      throw Error(
+          fmt::format("rank grid has {} cells along axis {} (expected >= 1)", grid.n[k], k));
     if (!(lo[k] < hi[k]) || !std::isfinite(lo[k]) || !std::isfinite(hi[k])) {
-      throw Error(fmt::format("region [{}, {}] m along axis {}: cannot be cut (expected finite, lo < hi)",
-                              lo[k], hi[k], k));
+      throw Error(
+          fmt::format("region [{}, {}] m along axis {}: cannot be cut (expected finite, lo < hi)",
+                      lo[k], hi[k], k));
     }
   }
   if (!(reach >= 0.0) || !std::isfinite(reach)) {

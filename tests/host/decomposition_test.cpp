@@ -3,12 +3,13 @@
 // agree bit for bit, and ghost_ranks() lists exactly the subdomains within
 // reach, checked against the distance from a point to each subdomain's
 // box over every periodic image.
+#include "pdyn/host/decomposition.hpp"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
 #include "pdyn/error.hpp"
-#include "pdyn/host/decomposition.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
@@ -42,17 +43,22 @@ TEST(Decomposition, BadGridsAreRefusedWithTheirValue) {
   EXPECT_EQ(parse_rank_grid("2,1,2", 4).n, (std::array<int, 3>{2, 1, 2}));
   EXPECT_EQ(parse_rank_grid("1x3x1", 3).n, (std::array<int, 3>{1, 3, 1}));
   expect_decomposition_error([] { parse_rank_grid("2,2", 4); },
-                     "--grid 2,2: not a grid (expected three positive integers, NX,NY,NZ)");
-  expect_decomposition_error([] { parse_rank_grid("2,0,2", 0); },
-                     "--grid 2,0,2: not a grid (expected three positive integers, NX,NY,NZ)");
-  expect_decomposition_error([] { parse_rank_grid("2,2,2 ", 8); },
-                     "--grid 2,2,2 : not a grid (expected three positive integers, NX,NY,NZ)");
-  expect_decomposition_error([] { parse_rank_grid("2,2,2", 4); },
-                     "--grid 2,2,2: 8 subdomains for 4 ranks (expected the product to be 4)");
-  expect_decomposition_error([] { choose_rank_grid(0, Vec3(1, 1, 1)); },
-                     "0 ranks: no grid (expected at least 1)");
+                             "--grid 2,2: not a grid (expected three positive integers, NX,NY,NZ)");
   expect_decomposition_error(
-      [] { Decomposition(RankGrid{}, Vec3(0, 0, 0), Vec3(1, 0, 1), {false, false, false}, 0.1); },
+      [] { parse_rank_grid("2,0,2", 0); },
+      "--grid 2,0,2: not a grid (expected three positive integers, NX,NY,NZ)");
+  expect_decomposition_error(
+      [] { parse_rank_grid("2,2,2 ", 8); },
+      "--grid 2,2,2 : not a grid (expected three positive integers, NX,NY,NZ)");
+  expect_decomposition_error(
+      [] { parse_rank_grid("2,2,2", 4); },
+      "--grid 2,2,2: 8 subdomains for 4 ranks (expected the product to be 4)");
+  expect_decomposition_error([] { choose_rank_grid(0, Vec3(1, 1, 1)); },
+                             "0 ranks: no grid (expected at least 1)");
+  expect_decomposition_error(
+      [] {
+        Decomposition(RankGrid{}, Vec3(0, 0, 0), Vec3(1, 0, 1), {false, false, false}, 0.1);
+      },
       "region [0, 0] m along axis 1: cannot be cut (expected finite, lo < hi)");
 }
 
@@ -68,7 +74,8 @@ double distance_to(const Vec3& x, const std::array<Vec3, 2>& box, const Vec3& le
         double d2 = 0;
         bool ok = true;
         for (int a = 0; a < 3; ++a) {
-          if (!periodic[static_cast<std::size_t>(a)] && s[static_cast<std::size_t>(a)] != 0) ok = false;
+          if (!periodic[static_cast<std::size_t>(a)] && s[static_cast<std::size_t>(a)] != 0)
+            ok = false;
           const double c = x[a] + s[static_cast<std::size_t>(a)] * length[a];
           const double g = c < box[0][a] ? box[0][a] - c : (c > box[1][a] ? c - box[1][a] : 0.0);
           d2 += g * g;
@@ -91,15 +98,18 @@ TEST(Decomposition, OwnersAndGhostRanksMatchTheGeometry) {
     std::vector<int> ghosts;
     for (int n = 0; n < 2000; ++n) {
       Vec3 x;
-      for (int a = 0; a < 3; ++a) x[a] = lo[a] + (hi[a] - lo[a]) * static_cast<double>(g() >> 11) * 0x1p-53;
+      for (int a = 0; a < 3; ++a)
+        x[a] = lo[a] + (hi[a] - lo[a]) * static_cast<double>(g() >> 11) * 0x1p-53;
       const int owner = d.owner(x);
       const auto b = d.bounds(owner);
-      ASSERT_TRUE((x.array() >= b[0].array()).all() && (x.array() < b[1].array()).all()) << x.transpose();
+      ASSERT_TRUE((x.array() >= b[0].array()).all() && (x.array() < b[1].array()).all())
+          << x.transpose();
       ghosts.clear();
       d.ghost_ranks(x, owner, ghosts);
       std::vector<int> expected;
       for (int r = 0; r < grid.ranks(); ++r) {
-        if (r != owner && distance_to(x, d.bounds(r), hi - lo, periodic) <= 1.3) expected.push_back(r);
+        if (r != owner && distance_to(x, d.bounds(r), hi - lo, periodic) <= 1.3)
+          expected.push_back(r);
       }
       ASSERT_EQ(ghosts, expected) << x.transpose();
     }

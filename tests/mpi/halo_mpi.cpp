@@ -15,9 +15,11 @@
 #include <random>
 
 #include "pdyn/host/assembly.hpp"
+#include "pdyn/host/decomposed.hpp"
 #include "pdyn/host/halo.hpp"
 #include "pdyn/host/registry.hpp"
 #include "pdyn/host/scene.hpp"
+#include "pdyn/host/simulation.hpp"
 #include "pdyn/host/threads.hpp"
 #include "pdyn/system.hpp"
 
@@ -51,19 +53,19 @@ constexpr int kSide = 20;
 constexpr double kSpacing = 1.0583;
 const double kBox = kSide * kSpacing;
 
-Scene liquid() {
+Scene liquid(const std::string& solver = "verlet") {
   const std::string text = fmt::format(
-      "simulation: {{ dt: 0.005, steps: 1, solver: {{ type: verlet }},\n"
+      "simulation: {{ dt: 0.005, steps: 1, solver: {{ type: {2} }},\n"
       "  box: {{ min: [0, 0, 0], max: [{0}, {0}, {0}], periodic: [true, true, true] }} }}\n"
       "particles:\n"
       "  - cloud: {{ n: {1}, box: {{ min: [0, 0, 0], max: [1, 1, 1] }}, mass: 1 }}\n"
       "forces:\n"
       "  - {{ type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, skin: 0.3, shift: true }}\n",
-      kBox, kSide * kSide * kSide);
+      kBox, kSide * kSide * kSide, solver);
   return load_scene_text(text, "liquid.yaml", plugins());
 }
 
-void jitter(System& s) {
+void jitter(System& s, double amplitude = 0.4) {
   std::mt19937_64 g(7);
   auto u = [&] { return static_cast<double>(g() >> 11) * 0x1p-53 - 0.5; };
   auto x = s.positions();
@@ -72,7 +74,7 @@ void jitter(System& s) {
     const Index a = i % kSide, b = (i / kSide) % kSide, c = i / (kSide * kSide);
     x.col(i) = kSpacing * Vec3(static_cast<double>(a) + 0.5, static_cast<double>(b) + 0.5,
                                static_cast<double>(c) + 0.5) +
-               0.4 * Vec3(u(), u(), u());
+               amplitude * Vec3(u(), u(), u());
     v.col(i) = Vec3(u(), u(), u());
   }
 }
@@ -119,7 +121,8 @@ Index differing_forces(const Halo& halo, const System& local, const System& plai
     if (halo.ghost()[k] != 0) continue;
     const Index id = halo.local()[k].id;
     const auto kk = static_cast<Index>(k);
-    if (std::memcmp(local.forces().col(kk).data(), plain.forces().col(id).data(), 3 * sizeof(double)) != 0) {
+    if (std::memcmp(local.forces().col(kk).data(), plain.forces().col(id).data(),
+                    3 * sizeof(double)) != 0) {
       ++differ;
     }
   }
@@ -142,10 +145,12 @@ TEST(Halo, OwnedForcesAreThePlainRunsBitForBitOnEveryRank) {
 
   Scene local_scene = liquid();
   const Domain& box = plain.domain();
-  Halo halo(MPI_COMM_WORLD, Decomposition(grid_for(plain_scene), box.min, box.max, box.periodic, 2.8));
+  Halo halo(MPI_COMM_WORLD,
+            Decomposition(grid_for(plain_scene), box.min, box.max, box.periodic, 2.8));
   // Each rank starts with every ranks()-th particle: all of them migrate.
   std::vector<ParticleRecord> held;
-  for (Index i = world_rank(); i < plain.size(); i += world_size()) held.push_back(record_of(plain, i));
+  for (Index i = world_rank(); i < plain.size(); i += world_size())
+    held.push_back(record_of(plain, i));
   halo.exchange(held);
   EXPECT_EQ(total(halo.owned()), plain.size());
   for (std::size_t k = 0; k < halo.local().size(); ++k) {
@@ -183,14 +188,74 @@ TEST(Halo, OwnedForcesAreThePlainRunsBitForBitOnEveryRank) {
   EXPECT_EQ(total(differing_forces(halo, mine, plain)), 0);
 }
 
+// `steps` steps of the liquid under `solver`, plain on every rank and
+// decomposed, compared bit for bit on rank 0: positions, velocities and
+// image counts. Returns the decomposed run's exchanges.
+std::int64_t expect_plain_steps(const std::string& solver, std::int64_t steps) {
+  const int threads = 1 + world_rank() % 2;
+  Scene plain_scene = liquid(solver), local_scene = liquid(solver);
+  jitter(*plain_scene.system, 0.1);
+  jitter(*local_scene.system, 0.1);
+  Simulation plain(std::move(plain_scene), threads), mine(std::move(local_scene), threads);
+  DecomposedSystem decomposed(MPI_COMM_WORLD, mine.scene(), grid_for(mine.scene()));
+  plain.step(steps);
+  for (std::int64_t k = 0; k < steps; ++k) {
+    decomposed.before_step();
+    mine.step(1);
+  }
+  Matrix3X x, v;
+  std::vector<std::array<std::int32_t, 3>> images;
+  decomposed.gather(0, x, v, images);
+  if (world_rank() == 0) {
+    const System& p = plain.system();
+    EXPECT_EQ(x.cols(), p.size());
+    EXPECT_EQ(std::memcmp(x.data(), p.positions().data(), sizeof(double) * 3 * p.size()), 0);
+    EXPECT_EQ(std::memcmp(v.data(), p.velocities().data(), sizeof(double) * 3 * p.size()), 0);
+    EXPECT_EQ(images, p.images());
+    EXPECT_NE(x, Matrix3X(liquid(solver).system->positions()));  // they moved
+  }
+  return decomposed.exchanges();
+}
+
+TEST(Decomposed, VelocityVerletStepsAreThePlainRunsBitForBit) {
+  // 200 steps, t = 1: the particles move past the skin several times, so
+  // they migrate and the kept forces travel with them.
+  EXPECT_GE(expect_plain_steps("verlet", 200), 3);
+}
+
+TEST(Decomposed, Rk4StepsAreThePlainRunsBitForBit) { expect_plain_steps("rk4", 40); }
+
+TEST(Decomposed, WhatCannotRunDecomposedYetIsRefusedByName) {
+  Scene scene = load_scene_text(
+      "simulation: { dt: 0.01, steps: 1, solver: { type: verlet } }\n"
+      "particles:\n  - { position: [0, 0, 0], mass: 1 }\n  - { position: [1, 0, 0], mass: 1 }\n"
+      "forces:\n  - { type: spring, pairs: [[0, 1]], ks: 10 }\n",
+      "chain.yaml", plugins());
+  try {
+    DecomposedSystem d(MPI_COMM_WORLD, scene);
+    FAIL() << "no error";
+  } catch (const DecompositionError& e) {
+    EXPECT_EQ(
+        std::string(e.what()),
+        fmt::format(
+            "spring (chain.yaml:6:5): cannot run on {} yet (a force that declares no "
+            "decomposed loop; runs decomposed: pair forces without a group, gravity, drag, "
+            "field; the solvers verlet, symplectic_euler, euler, midpoint, rk4; or run one "
+            "process)",
+            world_size() == 1 ? std::string("1 rank") : fmt::format("{} ranks", world_size())));
+  }
+}
+
 TEST(Halo, AGridOfTheWrongSizeIsRefused) {
-  const Decomposition d(RankGrid{{world_size() + 1, 1, 1}}, Vec3::Zero(), Vec3::Ones(), {true, true, true}, 0.1);
+  const Decomposition d(RankGrid{{world_size() + 1, 1, 1}}, Vec3::Zero(), Vec3::Ones(),
+                        {true, true, true}, 0.1);
   try {
     Halo halo(MPI_COMM_WORLD, d);
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), fmt::format("a grid of {} subdomains for {} ranks (expected one per rank)",
-                                                 world_size() + 1, world_size()));
+    EXPECT_EQ(std::string(e.what()),
+              fmt::format("a grid of {} subdomains for {} ranks (expected one per rank)",
+                          world_size() + 1, world_size()));
   }
 }
 

@@ -68,7 +68,8 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
   }
   std::vector<int> next = offsets_of(count);
   std::vector<ParticleRecord> out(held.size());
-  for (std::size_t i = 0; i < held.size(); ++i) out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest[i])]++)] = held[i];
+  for (std::size_t i = 0; i < held.size(); ++i)
+    out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest[i])]++)] = held[i];
   std::vector<ParticleRecord> owned = alltoall(out, count);
   std::sort(owned.begin(), owned.end(), by_id);
 
@@ -95,16 +96,19 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
   ghost_.assign(owned.size() + ghosts.size(), 0);
   std::vector<std::pair<std::int64_t, std::int64_t>> order;  // (id, source): source < 0 owned
   order.reserve(owned.size() + ghosts.size());
-  for (std::size_t i = 0; i < owned.size(); ++i) order.emplace_back(owned[i].id, -1 - static_cast<std::int64_t>(i));
-  for (std::size_t g = 0; g < ghosts.size(); ++g) order.emplace_back(ghosts[g].id, static_cast<std::int64_t>(g));
+  for (std::size_t i = 0; i < owned.size(); ++i)
+    order.emplace_back(owned[i].id, -1 - static_cast<std::int64_t>(i));
+  for (std::size_t g = 0; g < ghosts.size(); ++g)
+    order.emplace_back(ghosts[g].id, static_cast<std::int64_t>(g));
   std::sort(order.begin(), order.end());
   std::vector<Index> owned_local(owned.size());
   recv_local_.assign(ghosts.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) {
     const std::int64_t source = order[k].second;
     if (k > 0 && order[k - 1].first == order[k].first) {
-      throw Error(fmt::format("rank {}: particle {} arrived twice (each particle must be held by one rank)",
-                              rank_, order[k].first));
+      throw Error(
+          fmt::format("rank {}: particle {} arrived twice (each particle must be held by one rank)",
+                      rank_, order[k].first));
     }
     if (source < 0) {
       owned_local[static_cast<std::size_t>(-1 - source)] = static_cast<Index>(k);

@@ -22,10 +22,9 @@
 #pragma once
 
 #include <array>
+#include <pdyn/types.hpp>
 #include <string>
 #include <vector>
-
-#include <pdyn/types.hpp>
 
 #include "pdyn/host/export.hpp"
 

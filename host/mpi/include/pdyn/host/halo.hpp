@@ -24,9 +24,8 @@
 
 #include <array>
 #include <cstdint>
-#include <vector>
-
 #include <pdyn/types.hpp>
+#include <vector>
 
 #include "pdyn/host/decomposition.hpp"
 #include "pdyn/host/export.hpp"
@@ -36,11 +35,15 @@ namespace pdyn {
 /// One particle as it travels between ranks: everything a System keeps per
 /// particle.
 struct ParticleRecord {
-  std::int64_t id = 0;  ///< global index: the particle's index in the plain run
+  std::int64_t id = 0;        ///< global index: the particle's index in the plain run
   std::array<double, 3> x{};  ///< position, m
   std::array<double, 3> v{};  ///< velocity, m/s
-  double mass = 0.0;          ///< kg
-  double radius = 0.0;        ///< m
+  /// The acceleration (m/s^2) a solver that reuses its end-of-step forces
+  /// keeps for the next step (pdyn/force_reuse.hpp), carried across an
+  /// exchange so that the step after it reuses what the plain run reuses.
+  std::array<double, 3> a{};
+  double mass = 0.0;    ///< kg
+  double radius = 0.0;  ///< m
   std::int32_t type = 0;
   std::array<std::int32_t, 3> images{};
   std::uint8_t fixed = 0;
@@ -74,6 +77,8 @@ class PDYN_HOST_API Halo {
   /// Collective; sends 48 bytes per ghost copy.
   void forward(Eigen::Ref<Matrix3X> x, Eigen::Ref<Matrix3X> v) const;
 
+  /// The MPI datatype of one ParticleRecord (its bytes), committed.
+  MPI_Datatype record_type() const noexcept { return record_type_; }
   const Decomposition& decomposition() const noexcept { return decomposition_; }
   int rank() const noexcept { return rank_; }
   int ranks() const noexcept { return ranks_; }

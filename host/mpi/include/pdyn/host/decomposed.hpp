@@ -1,0 +1,84 @@
+// pdyn/host/decomposed.hpp — one loaded scene run by several MPI ranks
+// (issue 43; docs/parallel.md), each stepping its own subdomain.
+//
+// Every rank loads the scene; DecomposedSystem then replaces the particles
+// of the rank's System by its owned particles and their ghosts (Halo), and
+// puts a halo object first in the force list, which refreshes the ghosts
+// from their owners at every force evaluation before any force reads them.
+// The solver steps the local System as it would the whole one: the owned
+// particles' forces, and so their steps, are the plain run's bit for bit
+// (pdyn/host/halo.hpp). Before each step, when some owned particle has
+// moved more than half the neighbor lists' skin since the last exchange
+// (on any rank), the particles are exchanged again: migrated to their new
+// owners and the ghosts chosen anew.
+//
+// What runs decomposed so far: pair forces (PairForce<Law>, any plugin, no
+// selection), gravity, drag and field, and the fixed-step solvers that read
+// no global sum (verlet, symplectic_euler, euler, midpoint, rk4). Anything
+// else is refused, naming the object and what would make it run.
+#pragma once
+
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "pdyn/host/halo.hpp"
+#include "pdyn/host/scene.hpp"
+
+namespace pdyn {
+
+/// Why a scene cannot run decomposed: what() names the plugin object (its
+/// label) and what would make it run.
+class PDYN_HOST_API DecompositionError : public Error {
+ public:
+  using Error::Error;
+};
+
+class PDYN_HOST_API DecomposedSystem {
+ public:
+  /// `scene`: loaded on every rank of `comm`, all particles. Collective.
+  /// `grid`: the ranks' grid, or choose_rank_grid's. Throws
+  /// DecompositionError when the scene holds what cannot run decomposed yet.
+  DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<RankGrid> grid = std::nullopt);
+  ~DecomposedSystem();
+  DecomposedSystem(const DecomposedSystem&) = delete;
+  DecomposedSystem& operator=(const DecomposedSystem&) = delete;
+
+  /// Call before each step: exchanges the particles again when one has
+  /// moved more than skin / 2 since the last exchange. Collective. Returns
+  /// whether it exchanged.
+  bool before_step();
+
+  /// Every particle's position, velocity and image counts, by global id, on
+  /// rank `root` (3 x N, N; the other ranks' arguments are left alone).
+  /// Collective.
+  void gather(int root, Matrix3X& x, Matrix3X& v,
+              std::vector<std::array<std::int32_t, 3>>& images) const;
+
+  const Halo& halo() const noexcept { return *halo_; }
+  /// Exchanges so far, the first included.
+  std::int64_t exchanges() const noexcept { return exchanges_; }
+  /// Total number of particles, on every rank.
+  Index particles() const noexcept { return total_; }
+
+ private:
+  void load_local();
+  std::vector<ParticleRecord> owned_records() const;
+
+  MPI_Comm comm_;
+  Scene& scene_;
+  std::unique_ptr<Halo> halo_;
+  std::shared_ptr<Force> halo_force_;
+  double half_skin_ = 0.0;
+  Matrix3X x_at_exchange_;  // the owned particles' positions at the last exchange (local order)
+  bool radii_ = false, types_ = false;
+  mutable bool kept_ = false;  // the last owned_records() found kept accelerations
+  Index total_ = 0;
+  std::int64_t exchanges_ = 0;
+};
+
+}  // namespace pdyn

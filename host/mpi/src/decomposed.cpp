@@ -1,0 +1,263 @@
+// One scene run by several MPI ranks (pdyn/host/decomposed.hpp).
+#include "pdyn/host/decomposed.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <string_view>
+
+#include "pdyn/force_reuse.hpp"
+#include "pdyn/host/assembly.hpp"
+#include "pdyn/local_force.hpp"
+#include "pdyn/pair.hpp"
+#include "pdyn/periodic_invariant.hpp"
+#include "pdyn/system.hpp"
+
+namespace pdyn {
+
+namespace {
+
+// The first force object of a decomposed System: it adds nothing, and
+// refreshes the ghosts' positions and velocities from their owners before
+// the scene's forces read them (LAMMPS's forward communication). It writes
+// through the view's memory rather than System::positions(), which would
+// count as a change of state and stop velocity Verlet from reusing its
+// forces; the ghosts it writes are the owners' values, which the state
+// already stands for.
+class HaloForce final : public Force, public PeriodicInvariant {
+ public:
+  explicit HaloForce(const Halo& halo) : halo_(halo) {}
+  void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X>) override {
+    const Index n = p.size();
+    Eigen::Map<Matrix3X> x(const_cast<double*>(p.x.data()), 3, n);
+    Eigen::Map<Matrix3X> v(const_cast<double*>(p.v.data()), 3, n);
+    halo_.forward(x, v);
+  }
+  // The ghosts follow their owners; the owned particles' forces depend on
+  // nothing through this object.
+  StateDependence dependence() const override { return {false, false}; }
+
+ private:
+  const Halo& halo_;
+};
+
+// The plugins whose local forces read nothing but the particle's own
+// position, velocity and mass (not its index): they run unchanged on a
+// rank's particles.
+bool index_free_local(std::string_view type) {
+  return type == "gravity" || type == "drag" || type == "field";
+}
+
+constexpr std::string_view kRuns =
+    "runs decomposed: pair forces without a group, gravity, drag, field; the solvers verlet, "
+    "symplectic_euler, euler, midpoint, rk4";
+
+}  // namespace
+
+DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<RankGrid> grid)
+    : comm_(comm), scene_(scene) {
+  int ranks = 1;
+  MPI_Comm_size(comm_, &ranks);
+  System& sys = *scene.system;
+  auto refuse = [&](const std::string& label, std::string_view why) {
+    const std::string on = ranks == 1 ? std::string("1 rank") : fmt::format("{} ranks", ranks);
+    throw DecompositionError(fmt::format("{}: cannot run on {} yet ({}; {}; or run one process)",
+                                         label, on, why, kRuns));
+  };
+  static const std::set<std::string, std::less<>> solvers{"verlet", "symplectic_euler", "euler",
+                                                          "midpoint", "rk4"};
+  if (scene.solver->adaptive() || !solvers.contains(scene.solver_name)) {
+    refuse(scene.solver_label, "a solver not yet decomposed");
+  }
+  if (!sys.collider_objects().empty()) refuse(sys.collider_objects().front().label, "a collider");
+  if (!sys.constraint_objects().empty())
+    refuse(sys.constraint_objects().front().label, "a constraint");
+  if (scene.special_bonds) refuse("special_bonds", "special bonds");
+  // A pair force's list, which knows its reach, exists after its first
+  // evaluation.
+  for (const auto& entry : sys.force_objects()) {
+    const auto* pair = dynamic_cast<const PairReference*>(entry.force.get());
+    if (pair != nullptr && pair->pair_neighbors() == nullptr) {
+      sys.compute_accelerations();
+      break;
+    }
+  }
+  double reach = 0.0, skin = std::numeric_limits<double>::infinity();
+  for (const auto& entry : sys.force_objects()) {
+    if (const auto* pair = dynamic_cast<const PairReference*>(entry.force.get())) {
+      const NeighborList* list = pair->pair_neighbors();
+      if (list == nullptr) refuse(entry.label, "a pair force without a neighbor list");
+      reach = std::max(reach, list->reach());
+      skin = std::min(skin, list->skin());
+      continue;
+    }
+    const auto use = std::find_if(scene.uses.begin(), scene.uses.end(),
+                                  [&](const PluginUse& u) { return u.label == entry.label; });
+    if (use == scene.uses.end() || !index_free_local(use->type)) {
+      refuse(entry.label, "a force that declares no decomposed loop");
+    }
+  }
+  half_skin_ = 0.5 * skin;
+  total_ = sys.size();
+  radii_ = !sys.radii().empty();
+  types_ = !sys.types().empty();
+
+  // The region: the box along periodic axes, the particles' bounds along
+  // open ones (the same numbers on every rank: every rank loaded them all).
+  const Domain& box = sys.domain();
+  Vec3 lo = box.min, hi = box.max;
+  for (int a = 0; a < 3; ++a) {
+    if (box.periodic[static_cast<std::size_t>(a)]) continue;
+    lo[a] = total_ > 0 ? sys.positions().row(a).minCoeff() : 0.0;
+    hi[a] = total_ > 0 ? sys.positions().row(a).maxCoeff() : 0.0;
+    if (!(hi[a] > lo[a])) hi[a] = lo[a] + 1.0;  // flat along this axis: one slab
+  }
+  const RankGrid g = grid ? *grid : choose_rank_grid(ranks, hi - lo);
+  halo_ = std::make_unique<Halo>(comm_, Decomposition(g, lo, hi, box.periodic, reach));
+
+  // Each rank starts with a contiguous share of the ids.
+  std::vector<ParticleRecord> held;
+  const Index r = halo_->rank(), p = halo_->ranks();
+  for (Index i = total_ * r / p; i < total_ * (r + 1) / p; ++i) {
+    ParticleRecord rec;
+    rec.id = i;
+    for (int a = 0; a < 3; ++a) {
+      rec.x[static_cast<std::size_t>(a)] = sys.positions()(a, i);
+      rec.v[static_cast<std::size_t>(a)] = sys.velocities()(a, i);
+    }
+    rec.mass = sys.masses()[i];
+    rec.fixed = sys.fixed()[static_cast<std::size_t>(i)];
+    if (radii_) rec.radius = sys.radii()[static_cast<std::size_t>(i)];
+    if (types_) rec.type = sys.types()[static_cast<std::size_t>(i)];
+    rec.images = sys.images()[static_cast<std::size_t>(i)];
+    held.push_back(rec);
+  }
+  halo_->exchange(held);
+  ++exchanges_;
+
+  // The halo first, then the scene's forces in their order.
+  const std::vector<System::ForceEntry> forces = sys.force_objects();
+  const SystemAssembly assembly(sys);
+  for (const auto& entry : forces) assembly.remove_force(entry.force.get());
+  halo_force_ = std::make_shared<HaloForce>(*halo_);
+  assembly.add_force(halo_force_, "halo exchange (mpi)");
+  for (const auto& entry : forces) assembly.add_force(entry.force, entry.label);
+  load_local();
+}
+
+DecomposedSystem::~DecomposedSystem() = default;
+
+void DecomposedSystem::load_local() {
+  System& sys = *scene_.system;
+  const auto& local = halo_->local();
+  const auto n = static_cast<Index>(local.size());
+  Matrix3X x(3, n), v(3, n), a(3, n);
+  Eigen::VectorXd mass(n);
+  std::vector<std::uint8_t> fixed(local.size());
+  std::vector<double> radius(radii_ ? local.size() : 0);
+  std::vector<std::int32_t> type(types_ ? local.size() : 0);
+  std::vector<std::array<std::int32_t, 3>> images(local.size());
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    const ParticleRecord& rec = local[k];
+    const auto kk = static_cast<Index>(k);
+    x.col(kk) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
+    v.col(kk) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
+    a.col(kk) = Vec3(rec.a[0], rec.a[1], rec.a[2]);
+    mass[kk] = rec.mass;
+    fixed[k] = rec.fixed;
+    if (radii_) radius[k] = rec.radius;
+    if (types_) type[k] = rec.type;
+    images[k] = rec.images;
+  }
+  const SystemAssembly assembly(sys);
+  const double t = sys.time();
+  assembly.set_particles(x, v, mass, fixed);
+  sys.set_time(t);
+  if (radii_) assembly.set_radii(std::move(radius));
+  if (types_) assembly.set_types(std::move(type));
+  assembly.set_images(std::move(images));
+  x_at_exchange_ = x;
+  // A solver that reuses its end-of-step forces gets the owned particles'
+  // kept accelerations back (the ghosts' are never read): recomputed after
+  // the wrap into the box they could differ in the last bit (pdyn/
+  // periodic_invariant.hpp).
+  if (exchanges_ > 1 && kept_) {
+    if (auto* holder = dynamic_cast<ForceReuseHolder*>(scene_.solver.get()))
+      holder->restore_kept_accelerations(sys, a);
+  }
+}
+
+std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
+  const System& sys = *scene_.system;
+  const Matrix3X* kept = nullptr;
+  if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene_.solver.get())) {
+    kept = holder->kept_accelerations(sys);
+  }
+  kept_ = kept != nullptr;
+  std::vector<ParticleRecord> out;
+  out.reserve(static_cast<std::size_t>(halo_->owned()));
+  for (std::size_t k = 0; k < halo_->local().size(); ++k) {
+    if (halo_->ghost()[k] != 0) continue;
+    const auto kk = static_cast<Index>(k);
+    ParticleRecord rec = halo_->local()[k];
+    for (int a = 0; a < 3; ++a) {
+      const auto aa = static_cast<std::size_t>(a);
+      rec.x[aa] = sys.positions()(a, kk);
+      rec.v[aa] = sys.velocities()(a, kk);
+      rec.a[aa] = kept != nullptr ? (*kept)(a, kk) : 0.0;
+    }
+    rec.images = sys.images()[k];
+    out.push_back(rec);
+  }
+  return out;
+}
+
+bool DecomposedSystem::before_step() {
+  const System& sys = *scene_.system;
+  int moved = 0;
+  if (std::isfinite(half_skin_)) {
+    const double limit2 = half_skin_ * half_skin_;
+    for (std::size_t k = 0; k < halo_->local().size() && moved == 0; ++k) {
+      if (halo_->ghost()[k] != 0) continue;
+      const auto kk = static_cast<Index>(k);
+      const Vec3 d = sys.domain().minimum_image(sys.positions().col(kk) - x_at_exchange_.col(kk));
+      if (!(d.squaredNorm() <= limit2)) moved = 1;
+    }
+  }
+  int any = 0;
+  MPI_Allreduce(&moved, &any, 1, MPI_INT, MPI_MAX, comm_);
+  if (any == 0) return false;
+  const std::vector<ParticleRecord> held = owned_records();
+  halo_->exchange(held);
+  ++exchanges_;
+  load_local();
+  return true;
+}
+
+void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
+                              std::vector<std::array<std::int32_t, 3>>& images) const {
+  const std::vector<ParticleRecord> mine = owned_records();
+  const int count = static_cast<int>(mine.size());
+  const bool at_root = halo_->rank() == root;
+  std::vector<int> counts(at_root ? static_cast<std::size_t>(halo_->ranks()) : 0, 0);
+  MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_);
+  std::vector<int> offsets(counts.size(), 0);
+  for (std::size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+  std::vector<ParticleRecord> all(at_root ? static_cast<std::size_t>(total_) : 0);
+  MPI_Gatherv(mine.data(), count, halo_->record_type(), all.data(), counts.data(), offsets.data(),
+              halo_->record_type(), root, comm_);
+  if (halo_->rank() != root) return;
+  x.resize(3, total_);
+  v.resize(3, total_);
+  images.resize(static_cast<std::size_t>(total_));
+  for (const ParticleRecord& rec : all) {
+    x.col(rec.id) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
+    v.col(rec.id) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
+    images[static_cast<std::size_t>(rec.id)] = rec.images;
+  }
+}
+
+}  // namespace pdyn
