@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
+#include <sstream>
 
 #include "mpi_launch.hpp"
 #include "pdyn/host/crash_report.hpp"
@@ -71,6 +72,7 @@ struct RunArgs {
   bool force = false;             // resume even if the scene changed
   bool strict = false;            // an energy that grows without a driving force: exit 4
   int threads = 0;                // --threads; 0: simulation.threads, else pdyn::default_threads
+  std::string grid;               // --grid NX,NY,NZ under mpirun; "": the automatic grid
   std::vector<std::string> argv;  // the command as given, to print how to resume
 };
 
@@ -143,7 +145,7 @@ int cmd_validate(const RunArgs& a, const Common& c, std::ostream& out, std::ostr
 // time, force evaluations, where the outputs went.
 void print_run_summary(std::ostream& out, const Scene& scene, const RunResult& r,
                        const std::optional<Checkpoint>& checkpoint, double wall,
-                       std::uint64_t evaluations_before) {
+                       std::uint64_t evaluations) {
   // A resumed run took only the steps after its checkpoint's.
   const std::int64_t first = checkpoint ? checkpoint->step : 0;
   const std::string steps =
@@ -157,7 +159,6 @@ void print_run_summary(std::ostream& out, const Scene& scene, const RunResult& r
                                              count_of(r.counts.accepted, "step"), r.counts.rejected)
                                : "");
   // The cost of the run: what a solver or a plugin change is judged by.
-  const std::uint64_t evaluations = scene.system->force_evaluations() - evaluations_before;
   const double particle_steps =
       static_cast<double>(r.steps_done - first) * static_cast<double>(scene.system->size());
   out << fmt::format("pdyn: {}, {:.3g} particle-steps/s\n",
@@ -177,57 +178,88 @@ void print_run_summary(std::ostream& out, const Scene& scene, const RunResult& r
   if (!r.energy_warning.empty()) out << "pdyn: warning: " << r.energy_warning << "\n";
 }
 
+// Restores a --resume checkpoint into `scene`; the differences a --force
+// resume accepts are told on `err`.
+std::optional<Checkpoint> restore_resumed(const RunArgs& a, Scene& scene, std::ostream& err) {
+  if (a.resume.empty()) return std::nullopt;
+  Checkpoint checkpoint = read_checkpoint(a.resume);
+  std::vector<std::string> differences;
+  restore_checkpoint(scene, checkpoint, a.force, &differences);
+  for (const auto& d : differences) {
+    err << fmt::format("pdyn: warning: resuming with a changed scene (--force): {}\n", d);
+  }
+  return checkpoint;
+}
+
+// The exit status of a finished run, with its one line on `err`.
+std::optional<int> failed_run(const RunArgs& a, const RunResult& r, std::ostream& err) {
+  switch (r.exit_code) {
+    case 0:
+      return std::nullopt;
+    case 130:
+      err << fmt::format("pdyn: interrupted at step {} (t = {} s); resume with: {}\n", r.steps_done,
+                         r.time, resume_command(a, r.checkpoint));
+      return kInterrupted;
+    case 3:
+      err << fmt::format("pdyn: {}; the last good frame and a checkpoint ({}) were written\n",
+                         r.message, r.checkpoint.string());
+      return kPluginFault;
+    default:
+      err << "pdyn: " << r.message << "\n";
+      return kNonFinite;
+  }
+}
+
 int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& err,
             bool terminal) {
+  // Under several MPI ranks (a pdyn built with MPI; docs/parallel.md) every
+  // rank loads the scene, rank 0 a second copy that its output reads; only
+  // rank 0 speaks, but for a rank's own failed step.
+  const std::unique_ptr<MpiRun> mpi = mpi_world_size() > 1 ? start_mpi_run() : nullptr;
+  const bool root = mpi == nullptr || mpi->rank() == 0;
+  std::ostringstream quiet_sink;
+  std::ostream& say = root ? err : quiet_sink;
   const PluginRegistry registry = discover(c);
-  if (!c.quiet) warn_faults(registry, err);
+  if (!c.quiet) warn_faults(registry, say);
   try {
     Scene scene = load(a, c, registry);
-    warn_scene(scene, err);
+    warn_scene(scene, say);
     RunOptions options;
-    options.progress = terminal && !c.quiet;
+    options.progress = terminal && !c.quiet && root;
     options.log = &err;
     options.handle_signals = true;
     options.threads = a.threads;
     options.strict = a.strict;
-    std::optional<Checkpoint> checkpoint;
-    if (!a.resume.empty()) {
-      checkpoint = read_checkpoint(a.resume);
-      std::vector<std::string> differences;
-      restore_checkpoint(scene, *checkpoint, a.force, &differences);
-      for (const auto& d : differences) {
-        err << fmt::format("pdyn: warning: resuming with a changed scene (--force): {}\n", d);
-      }
-      options.resume = &*checkpoint;
-    }
+    const std::optional<Checkpoint> checkpoint = restore_resumed(a, scene, say);
+    if (checkpoint) options.resume = &*checkpoint;
     // A plugin that crashes is named in one line (crash_report.hpp).
     const crash::ReportCrashes report_crashes;
     const std::uint64_t evaluations_before = scene.system->force_evaluations();
     const auto start = std::chrono::steady_clock::now();
-    const RunResult r = run_scene(scene, options);
+    std::optional<Scene> whole;
+    if (mpi != nullptr && root) {
+      whole.emplace(load(a, c, registry));
+      quiet_sink.str("");
+      restore_resumed(a, *whole, quiet_sink);
+    }
+    const RunResult r = mpi == nullptr
+                            ? run_scene(scene, options)
+                            : mpi->run(scene, whole ? &*whole : nullptr, options, a.grid, err);
+    if (!root) return r.exit_code;
     // Printed even with --quiet: the run's result is probably wrong.
     if (!r.energy_warning.empty()) err << "pdyn: warning: " << r.energy_warning << "\n";
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    switch (r.exit_code) {
-      case 0:
-        break;
-      case 130:
-        err << fmt::format("pdyn: interrupted at step {} (t = {} s); resume with: {}\n",
-                           r.steps_done, r.time, resume_command(a, r.checkpoint));
-        return kInterrupted;
-      case 3:
-        err << fmt::format("pdyn: {}; the last good frame and a checkpoint ({}) were written\n",
-                           r.message, r.checkpoint.string());
-        return kPluginFault;
-      default:
-        err << "pdyn: " << r.message << "\n";
-        return kNonFinite;
-    }
-    if (!c.quiet) print_run_summary(out, scene, r, checkpoint, wall, evaluations_before);
+    if (const auto status = failed_run(a, r, err)) return *status;
+    const std::uint64_t evaluations = mpi != nullptr
+                                          ? mpi->evaluations()
+                                          : scene.system->force_evaluations() - evaluations_before;
+    if (!c.quiet) print_run_summary(out, whole ? *whole : scene, r, checkpoint, wall, evaluations);
     return kOk;
   } catch (...) {
-    return report_error(std::current_exception(), err);
+    const int status = report_error(std::current_exception(), say);
+    if (mpi != nullptr) mpi->abort_if_running(status);
+    return status;
   }
 }
 
@@ -508,7 +540,9 @@ std::optional<int> parse_command_line(CLI::App& app, const std::vector<std::stri
     err << "pdyn: " << e.what() << " (see pdyn --help)\n";
     return kBadInput;
   }
-  if (const std::string why = several_mpi_ranks(); !why.empty()) {
+  const std::string command =
+      app.get_subcommands().empty() ? "" : app.get_subcommands().front()->get_name();
+  if (const std::string why = several_mpi_ranks(command); !why.empty()) {
     err << "pdyn: " << why << "\n";
     return kBadInput;
   }
@@ -548,6 +582,9 @@ int run_command(const std::vector<std::string>& args, std::ostream& out, std::os
                   "continue from a checkpoint written by an earlier run of this scene");
   run->add_flag("--force", run_args.force,
                 "with --resume: continue even if the scene changed (says what differs)");
+  run->add_option("--grid", run_args.grid,
+                  "under mpirun: the ranks' grid of subdomains, NX,NY,NZ (default: the grid with "
+                  "the least subdomain surface; docs/parallel.md)");
   run->add_flag("--strict", run_args.strict,
                 "stop with exit status 4 when the total energy grows more than a millionfold "
                 "with no force driving it (default: a warning)");

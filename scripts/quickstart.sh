@@ -28,6 +28,7 @@ packages=(
   libcairo2-dev                    # pdyn render (PNG pictures)
   libhdf5-dev                      # the h5md writer (HDF5 C library)
   libopenblas-serial-dev           # implicit_euler's dense kernels (BLAS, LAPACK)
+  libopenmpi-dev openmpi-bin       # one scene across MPI ranks (docs/parallel.md)
   pybind11-dev python3-dev python3-numpy   # `import pdyn` (python/)
 )
 # The tests, the benchmarks and CI's other builds need more; the demo does

@@ -275,6 +275,14 @@ struct Loop {
   bool has_dense = false;
   EnergyWatch* energy = nullptr;
   bool strict = false;
+  // Under MPI ranks (RunOptions::ranks): the steps are the ranks', `scene`
+  // is rank 0's copy of the whole, current after each gather.
+  RankDriver* ranks = nullptr;
+  bool interrupt_seen = false;  // the interrupt as the ranks agreed on it at the last step
+  // Whether the run was interrupted: under MPI ranks, as of the last
+  // gather, so that a signal that arrives later does not make a stale
+  // state the final frame (it stops the next step).
+  bool interrupted() const { return ranks != nullptr ? interrupt_seen : signals.raised(); }
 
   // After step k (`last`: the run's final step): the energy check. Returns
   // false if the run must stop (--strict), like a blow-up, with exit code 4.
@@ -323,8 +331,32 @@ struct Loop {
   std::nullopt_t stop(const StepFault& f, std::string message) {
     result.exit_code = f.exit_code();
     result.message = std::move(message);
-    out.emit_extra(result.steps_done);
+    // Under MPI ranks the whole scene holds the last gathered state, not
+    // the last good one: no final frame (docs/parallel.md).
+    if (ranks == nullptr) out.emit_extra(result.steps_done);
     return std::nullopt;
+  }
+
+  // Under MPI ranks, after step k (`ok`: it succeeded here): every rank
+  // learns whether another failed, and the particles are gathered into the
+  // whole scene when a frame, an energy check or a checkpoint needs them,
+  // at the end and on an interrupt. False when the run must stop.
+  bool ranks_agree(std::int64_t k, bool ok, bool due) {
+    if (ranks == nullptr) return ok;
+    const bool last = k == scene.steps;
+    interrupt_seen = signals.raised();
+    const bool need =
+        ok && (due || last || interrupt_seen || (energy != nullptr && energy->due(k, last)));
+    const int failed = ranks->end_step(scene, need, !ok);
+    if (ok && failed >= 0) {
+      result.exit_code = 4;
+      result.message = fmt::format(
+          "step {} failed on MPI rank {} (that rank's standard error names the plugin object); "
+          "under MPI no final frame is written yet",
+          k, failed);
+      return false;
+    }
+    return ok;
   }
 };
 
@@ -338,7 +370,10 @@ void run_fixed(Loop& loop, std::int64_t k0) {
   const std::int64_t ckpt_every = scene.output.checkpoint_every;
   for (std::int64_t k = k0 + 1; k <= n_steps; ++k) {
     const double t_end = k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
-    if (!loop.guarded_step([&] { return loop.stepper.step_to(t_end); }, k)) return;
+    if (loop.ranks != nullptr && !loop.ranks->begin_step()) return;
+    const bool ok = loop.guarded_step([&] { return loop.stepper.step_to(t_end); }, k).has_value();
+    const bool due = (every > 0 && k % every == 0) || (ckpt_every > 0 && k % ckpt_every == 0);
+    if (!loop.ranks_agree(k, ok, due)) return;
     loop.result.steps_done = k;
     // The final frame is extra unless it falls on the schedule: a longer
     // run resumed from this one's checkpoint does not write it.
@@ -351,7 +386,7 @@ void run_fixed(Loop& loop, std::int64_t k0) {
       if (!loop.writes_ok()) return;
     }
     loop.progress.update(k, t_end);
-    if (k == n_steps || loop.signals.raised()) {
+    if (k == n_steps || loop.interrupted()) {
       if (k != n_steps) loop.result.exit_code = 130;
       loop.out.emit_extra(k);
       loop.writes_ok();
@@ -483,7 +518,7 @@ void set_up_forces(Scene& scene) {
 
 // The steps after the set-up, timed as LAMMPS times its loop; returns s.
 double run_steps(Loop& loop, std::int64_t k0, bool adaptive) {
-  if (!adaptive) set_up_forces(loop.scene);
+  if (!adaptive) set_up_forces(loop.ranks != nullptr ? loop.ranks->local() : loop.scene);
   const auto start = std::chrono::steady_clock::now();
   if (adaptive) {
     run_adaptive(loop, k0);
@@ -493,11 +528,16 @@ double run_steps(Loop& loop, std::int64_t k0, bool adaptive) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+RankDriver::~RankDriver() = default;
+
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;
+  // The scene stepped: this one, or under MPI ranks this rank's share (a
+  // fixed-step solver: DecomposedSystem refuses the others).
+  Scene& stepped = options.ranks != nullptr ? options.ranks->local() : scene;
   set_threads(options.threads > 0 ? options.threads
               : scene.threads > 0 ? scene.threads
-                                  : default_threads(sys.size()));
+                                  : default_threads(stepped.system->size()));
   RunResult result;
   SignalGuard signals(options.handle_signals);
   Output out(scene, options.resume);
@@ -516,11 +556,13 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
       result.message = failure;
     }
   }
-  Stepper stepper(sys, *scene.solver, scene.solver_label, scene.neighbor_schedule);
+  Stepper stepper(*stepped.system, *stepped.solver, stepped.solver_label,
+                  stepped.neighbor_schedule);
   Loop loop{scene, out, progress, signals, result, stepper};
   EnergyWatch energy(scene);
   loop.energy = &energy;
   loop.strict = options.strict;
+  loop.ranks = options.ranks;
   const bool adaptive = scene.solver->adaptive();
   if (options.resume) {
     loop.next_frame = options.resume->next_frame;
@@ -541,6 +583,7 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   }
   result.steps_done = k0;
   if (result.exit_code == 0) result.loop_seconds = run_steps(loop, k0, adaptive);
+  if (options.ranks != nullptr) options.ranks->finish();
   // A run resumed at its very end takes no step; its final frame is due.
   if (result.exit_code == 0) {
     out.emit_extra(result.steps_done);

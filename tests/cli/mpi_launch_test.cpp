@@ -1,7 +1,9 @@
-// `mpirun -np N pdyn ...` on a pdyn without MPI (issue 43): each rank would
-// run the whole scene and write the same files over the others', so pdyn
-// refuses as soon as it sees a launcher's world size above 1, before it
-// reads or writes anything; one rank, or no launcher, runs as before. The
+// `mpirun -np N pdyn ...` (issue 43): every command but `run` refuses as
+// soon as it sees a launcher's world size above 1, before it reads or
+// writes anything, and so does `run` on a pdyn without MPI (each rank would
+// run the whole scene and write the same files over the others'); one
+// rank, or no launcher, runs as before. `run` on several ranks is tested
+// under mpirun (tests/mpi/). The
 // launchers are imitated by their environment variables (what mpirun sets
 // in each process it starts).
 #include <gtest/gtest.h>
@@ -10,6 +12,7 @@
 #include <filesystem>
 #include <string>
 
+#include "mpi_launch.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {
@@ -43,13 +46,24 @@ TEST(MpiLaunch, SeveralRanksAreRefusedBeforeAnythingIsWritten) {
        {std::pair{"OMPI_COMM_WORLD_SIZE", "2"}, {"PMI_SIZE", "4"}, {"MV2_COMM_WORLD_SIZE", "3"}}) {
     const fs::path scene = SceneWritingFrames(std::string("mpi-ranks-") + name);
     const ScopedEnv env(name, value);
-    const auto r = test::pdyn({"run", scene.string()});
-    EXPECT_EQ(r.status, 2) << name;
-    EXPECT_EQ(r.err, std::string("pdyn: started as one of ") + value + " MPI ranks (" + name + "=" +
-                         value +
-                         "): this pdyn runs a scene in one process, so each rank would run the "
-                         "whole scene and write the same files (expected pdyn without mpirun, "
-                         "or mpirun -np 1; several scenes at once: pdyn.sweep in Python)\n");
+    const std::string launcher = std::string(value) + " MPI ranks (" + name + "=" + value + ")";
+    // Every command but run, whatever the build.
+    const auto v = test::pdyn({"validate", scene.string()});
+    EXPECT_EQ(v.status, 2) << name;
+    EXPECT_EQ(v.err, "pdyn: started as one of " + launcher +
+                         ": only `pdyn run` runs on several ranks (expected pdyn validate without "
+                         "mpirun, or mpirun -np 1)\n");
+    // run, in a pdyn built without MPI (with MPI, mpi.run.* runs it under
+    // mpirun: an imitated launcher would start MPI in this test program).
+    if (!cli::built_with_mpi()) {
+      const auto r = test::pdyn({"run", scene.string()});
+      EXPECT_EQ(r.status, 2) << name;
+      EXPECT_EQ(r.err, "pdyn: started as one of " + launcher +
+                           ": this pdyn was built without MPI and runs a scene in one process, so "
+                           "each rank would run the whole scene and write the same files "
+                           "(expected pdyn without mpirun, or mpirun -np 1, or a pdyn built with "
+                           "MPI; several scenes at once: pdyn.sweep in Python)\n");
+    }
     EXPECT_EQ(test::snapshot(scene.parent_path()).size(), 1u) << "only the scene: " << name;
   }
 }

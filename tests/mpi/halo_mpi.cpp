@@ -200,7 +200,7 @@ std::int64_t expect_plain_steps(const std::string& solver, std::int64_t steps) {
   DecomposedSystem decomposed(MPI_COMM_WORLD, mine.scene(), grid_for(mine.scene()));
   plain.step(steps);
   for (std::int64_t k = 0; k < steps; ++k) {
-    decomposed.before_step();
+    decomposed.begin_step();
     mine.step(1);
   }
   Matrix3X x, v;

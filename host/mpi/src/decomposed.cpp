@@ -6,11 +6,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <ostream>
 #include <set>
 #include <string_view>
 
 #include "pdyn/force_reuse.hpp"
 #include "pdyn/host/assembly.hpp"
+#include "pdyn/host/stepper.hpp"
+#include "pdyn/host/threads.hpp"
 #include "pdyn/local_force.hpp"
 #include "pdyn/pair.hpp"
 #include "pdyn/periodic_invariant.hpp"
@@ -55,12 +58,10 @@ constexpr std::string_view kRuns =
     "runs decomposed: pair forces without a group, gravity, drag, field; the solvers verlet, "
     "symplectic_euler, euler, midpoint, rk4";
 
-}  // namespace
-
-DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<RankGrid> grid)
-    : comm_(comm), scene_(scene) {
-  int ranks = 1;
-  MPI_Comm_size(comm_, &ranks);
+// The ghost reach (the largest cutoff + skin of the scene's pair forces, m)
+// and the smallest skin (m), once the scene is known to run decomposed;
+// throws DecompositionError naming the first object that cannot.
+std::pair<double, double> reach_and_skin(Scene& scene, int ranks) {
   System& sys = *scene.system;
   auto refuse = [&](const std::string& label, std::string_view why) {
     const std::string on = ranks == 1 ? std::string("1 rank") : fmt::format("{} ranks", ranks);
@@ -100,6 +101,17 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
       refuse(entry.label, "a force that declares no decomposed loop");
     }
   }
+  return {reach, skin};
+}
+
+}  // namespace
+
+DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<RankGrid> grid)
+    : comm_(comm), scene_(scene) {
+  int ranks = 1;
+  MPI_Comm_size(comm_, &ranks);
+  System& sys = *scene.system;
+  const auto [reach, skin] = reach_and_skin(scene, ranks);
   half_skin_ = 0.5 * skin;
   total_ = sys.size();
   radii_ = !sys.radii().empty();
@@ -118,15 +130,23 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
   const RankGrid g = grid ? *grid : choose_rank_grid(ranks, hi - lo);
   halo_ = std::make_unique<Halo>(comm_, Decomposition(g, lo, hi, box.periodic, reach));
 
-  // Each rank starts with a contiguous share of the ids.
+  // Each rank starts with a contiguous share of the ids, with the
+  // accelerations a resumed solver keeps (pdyn/force_reuse.hpp).
+  const Matrix3X* kept = nullptr;
+  if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene.solver.get())) {
+    kept = holder->kept_accelerations(sys);
+  }
+  kept_ = kept != nullptr;
   std::vector<ParticleRecord> held;
   const Index r = halo_->rank(), p = halo_->ranks();
   for (Index i = total_ * r / p; i < total_ * (r + 1) / p; ++i) {
     ParticleRecord rec;
     rec.id = i;
     for (int a = 0; a < 3; ++a) {
-      rec.x[static_cast<std::size_t>(a)] = sys.positions()(a, i);
-      rec.v[static_cast<std::size_t>(a)] = sys.velocities()(a, i);
+      const auto aa = static_cast<std::size_t>(a);
+      rec.x[aa] = sys.positions()(a, i);
+      rec.v[aa] = sys.velocities()(a, i);
+      rec.a[aa] = kept != nullptr ? (*kept)(a, i) : 0.0;
     }
     rec.mass = sys.masses()[i];
     rec.fixed = sys.fixed()[static_cast<std::size_t>(i)];
@@ -184,7 +204,7 @@ void DecomposedSystem::load_local() {
   // kept accelerations back (the ghosts' are never read): recomputed after
   // the wrap into the box they could differ in the last bit (pdyn/
   // periodic_invariant.hpp).
-  if (exchanges_ > 1 && kept_) {
+  if (kept_) {
     if (auto* holder = dynamic_cast<ForceReuseHolder*>(scene_.solver.get()))
       holder->restore_kept_accelerations(sys, a);
   }
@@ -215,21 +235,22 @@ std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
   return out;
 }
 
-bool DecomposedSystem::before_step() {
+bool DecomposedSystem::begin_step(bool stop) {
   const System& sys = *scene_.system;
-  int moved = 0;
-  if (std::isfinite(half_skin_)) {
+  int flags[2] = {0, stop ? 1 : 0};  // moved, stop
+  if (std::isfinite(half_skin_) && !stop) {
     const double limit2 = half_skin_ * half_skin_;
-    for (std::size_t k = 0; k < halo_->local().size() && moved == 0; ++k) {
+    for (std::size_t k = 0; k < halo_->local().size() && flags[0] == 0; ++k) {
       if (halo_->ghost()[k] != 0) continue;
       const auto kk = static_cast<Index>(k);
       const Vec3 d = sys.domain().minimum_image(sys.positions().col(kk) - x_at_exchange_.col(kk));
-      if (!(d.squaredNorm() <= limit2)) moved = 1;
+      if (!(d.squaredNorm() <= limit2)) flags[0] = 1;
     }
   }
-  int any = 0;
-  MPI_Allreduce(&moved, &any, 1, MPI_INT, MPI_MAX, comm_);
-  if (any == 0) return false;
+  int agreed[2] = {0, 0};
+  MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, comm_);
+  if (agreed[1] != 0) return false;
+  if (agreed[0] == 0) return true;
   const std::vector<ParticleRecord> held = owned_records();
   halo_->exchange(held);
   ++exchanges_;
@@ -237,8 +258,7 @@ bool DecomposedSystem::before_step() {
   return true;
 }
 
-void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
-                              std::vector<std::array<std::int32_t, 3>>& images) const {
+std::vector<ParticleRecord> DecomposedSystem::gathered(int root) const {
   const std::vector<ParticleRecord> mine = owned_records();
   const int count = static_cast<int>(mine.size());
   const bool at_root = halo_->rank() == root;
@@ -249,6 +269,35 @@ void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
   std::vector<ParticleRecord> all(at_root ? static_cast<std::size_t>(total_) : 0);
   MPI_Gatherv(mine.data(), count, halo_->record_type(), all.data(), counts.data(), offsets.data(),
               halo_->record_type(), root, comm_);
+  return all;
+}
+
+void DecomposedSystem::gather_into(Scene& whole) const {
+  const std::vector<ParticleRecord> all = gathered(0);
+  if (halo_->rank() != 0) return;
+  System& sys = *whole.system;
+  auto x = sys.positions();
+  auto v = sys.velocities();
+  Matrix3X a(3, total_);
+  std::vector<std::array<std::int32_t, 3>> images(static_cast<std::size_t>(total_));
+  for (const ParticleRecord& rec : all) {
+    x.col(rec.id) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
+    v.col(rec.id) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
+    a.col(rec.id) = Vec3(rec.a[0], rec.a[1], rec.a[2]);
+    images[static_cast<std::size_t>(rec.id)] = rec.images;
+  }
+  SystemAssembly(sys).set_images(std::move(images));
+  sys.set_time(scene_.system->time());
+  if (kept_) {
+    if (auto* holder = dynamic_cast<ForceReuseHolder*>(whole.solver.get())) {
+      holder->restore_kept_accelerations(sys, a);
+    }
+  }
+}
+
+void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
+                              std::vector<std::array<std::int32_t, 3>>& images) const {
+  const std::vector<ParticleRecord> all = gathered(root);
   if (halo_->rank() != root) return;
   x.resize(3, total_);
   v.resize(3, total_);
@@ -258,6 +307,40 @@ void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
     v.col(rec.id) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
     images[static_cast<std::size_t>(rec.id)] = rec.images;
   }
+}
+
+int MpiRankDriver::end_step(Scene& whole, bool gather, bool failed) {
+  // One reduction: rank 0's wish to gather, and the lowest failing rank as
+  // ranks - rank (the largest), 0 for none.
+  const int ranks = d_.halo().ranks(), rank = d_.halo().rank();
+  int flags[2] = {gather ? 1 : 0, failed ? ranks - rank : 0}, agreed[2] = {0, 0};
+  MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (agreed[0] != 0) d_.gather_into(whole);
+  return agreed[1] != 0 ? ranks - agreed[1] : -1;
+}
+
+int follow_run(DecomposedSystem& decomposed, std::int64_t k0, int threads, std::ostream& err) {
+  Scene& scene = decomposed.scene();
+  set_threads(threads > 0         ? threads
+              : scene.threads > 0 ? scene.threads
+                                  : default_threads(scene.system->size()));
+  MpiRankDriver driver(decomposed);
+  Stepper stepper(*scene.system, *scene.solver, scene.solver_label, scene.neighbor_schedule);
+  set_up_forces(scene);
+  int status = 0;
+  for (std::int64_t k = k0 + 1; driver.begin_step(); ++k) {
+    // The step's end time as run_fixed computes it; after the scene's last
+    // step rank 0 finishes, so k never passes it.
+    const double t_end = k >= scene.steps ? scene.end_time : static_cast<double>(k) * scene.dt;
+    const bool ok = stepper.step_to(t_end).has_value();
+    if (!ok) {
+      err << fmt::format("pdyn (MPI rank {}): {}\n", decomposed.halo().rank(),
+                         step_fault_message(stepper.fault(), scene, k, "is on this rank"));
+      status = 4;
+    }
+    driver.end_step(scene, false, !ok);
+  }
+  return status;
 }
 
 }  // namespace pdyn

@@ -15,6 +15,32 @@
 
 namespace pdyn {
 
+/// Since 0.10.0 (issue 43; docs/parallel.md): rank 0's side of a scene run
+/// by several MPI ranks (pdyn/host/decomposed.hpp implements it). The scene
+/// run_scene is given is then rank 0's copy of the whole scene, which is
+/// never stepped: the steps are taken on local(), which holds this rank's
+/// particles, and the writers, the energy check and the checkpoints read
+/// the whole scene once the particles have been gathered into it. Every
+/// other rank calls the same collectives in the same order.
+class PDYN_HOST_API RankDriver {
+ public:
+  virtual ~RankDriver();
+  /// The scene whose System holds this rank's owned particles and ghosts:
+  /// the one the Stepper steps.
+  virtual Scene& local() = 0;
+  /// Before each step (collective): false when the run stops here (only
+  /// finish() asks for that). Exchanges the particles when due.
+  virtual bool begin_step() = 0;
+  /// After each step (collective): `gather` rank 0's wish to read the
+  /// state, `failed` whether this rank's step failed. When gathering, every
+  /// particle's state, the time and a solver's kept accelerations are put
+  /// into `whole`. Returns the lowest rank whose step failed, or -1.
+  virtual int end_step(Scene& whole, bool gather, bool failed) = 0;
+  /// Ends the run on every rank (collective): called once, when run_scene
+  /// stops stepping for whatever reason.
+  virtual void finish() = 0;
+};
+
 struct PDYN_HOST_API RunOptions {
   bool progress = false;        ///< draw a progress bar on `log`
   std::ostream* log = nullptr;  ///< where the progress bar goes
@@ -34,6 +60,10 @@ struct PDYN_HOST_API RunOptions {
   /// (see EnergyWatch in runner.cpp) stops with exit code 4 instead of
   /// finishing with a warning.
   bool strict = false;
+  /// Since 0.10.0: the scene's particles live on MPI ranks (RankDriver):
+  /// steps are taken on ranks->local(), and `scene` is rank 0's copy of the
+  /// whole scene that the output reads. Fixed-step solvers only.
+  RankDriver* ranks = nullptr;
 };
 
 struct PDYN_HOST_API RunResult {
@@ -66,6 +96,12 @@ struct PDYN_HOST_API RunResult {
 /// step, the last good state is restored, written as the final frame and
 /// checkpointed. Throws CheckpointError if resumed output files do not match.
 PDYN_HOST_API RunResult run_scene(Scene& scene, const RunOptions& options = {});
+
+/// The set-up run_scene makes before its steps, as LAMMPS's `run` computes
+/// the forces before its loop: a solver that reuses its end-of-step forces
+/// gets the first step's evaluated. Since 0.10.0 public, for the other MPI
+/// ranks, which step their share without run_scene (pdyn/host/decomposed.hpp).
+PDYN_HOST_API void set_up_forces(Scene& scene);
 
 /// One line for the user on a failed step `k` (Stepper::fault()): which
 /// plugin object is at fault and its library, or where the state became

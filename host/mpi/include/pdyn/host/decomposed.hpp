@@ -22,11 +22,13 @@
 
 #include <array>
 #include <cstdint>
+#include <iosfwd>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include "pdyn/host/halo.hpp"
+#include "pdyn/host/runner.hpp"
 #include "pdyn/host/scene.hpp"
 
 namespace pdyn {
@@ -48,17 +50,26 @@ class PDYN_HOST_API DecomposedSystem {
   DecomposedSystem(const DecomposedSystem&) = delete;
   DecomposedSystem& operator=(const DecomposedSystem&) = delete;
 
-  /// Call before each step: exchanges the particles again when one has
-  /// moved more than skin / 2 since the last exchange. Collective. Returns
-  /// whether it exchanged.
-  bool before_step();
+  /// Call before each step (collective): the ranks agree whether to stop
+  /// (some rank's `stop`; it then returns false and does nothing else) and
+  /// exchange the particles again when one has moved more than skin / 2
+  /// since the last exchange.
+  bool begin_step(bool stop = false);
 
   /// Every particle's position, velocity and image counts, by global id, on
   /// rank `root` (3 x N, N; the other ranks' arguments are left alone).
   /// Collective.
   void gather(int root, Matrix3X& x, Matrix3X& v,
               std::vector<std::array<std::int32_t, 3>>& images) const;
+  /// The same into rank 0's copy of the whole scene `whole` (the same scene
+  /// loaded there): positions, velocities, image counts, the time, and the
+  /// accelerations a solver that reuses its forces keeps (restored into
+  /// whole's solver, so that a checkpoint written from it carries them).
+  /// Collective; the other ranks' `whole` is not touched.
+  void gather_into(Scene& whole) const;
 
+  /// The scene stepped on this rank.
+  Scene& scene() noexcept { return scene_; }
   const Halo& halo() const noexcept { return *halo_; }
   /// Exchanges so far, the first included.
   std::int64_t exchanges() const noexcept { return exchanges_; }
@@ -68,6 +79,7 @@ class PDYN_HOST_API DecomposedSystem {
  private:
   void load_local();
   std::vector<ParticleRecord> owned_records() const;
+  std::vector<ParticleRecord> gathered(int root) const;
 
   MPI_Comm comm_;
   Scene& scene_;
@@ -80,5 +92,28 @@ class PDYN_HOST_API DecomposedSystem {
   Index total_ = 0;
   std::int64_t exchanges_ = 0;
 };
+
+/// Rank 0's RankDriver (pdyn/host/runner.hpp) on a DecomposedSystem; the
+/// other ranks call follow_run with theirs.
+class PDYN_HOST_API MpiRankDriver final : public RankDriver {
+ public:
+  explicit MpiRankDriver(DecomposedSystem& decomposed) : d_(decomposed) {}
+  Scene& local() override { return d_.scene(); }
+  bool begin_step() override { return d_.begin_step(false); }
+  int end_step(Scene& whole, bool gather, bool failed) override;
+  void finish() override { d_.begin_step(true); }
+
+ private:
+  DecomposedSystem& d_;
+};
+
+/// What a rank other than 0 does while rank 0 runs run_scene with an
+/// MpiRankDriver: the same set-up, steps and collectives on its share,
+/// until rank 0 finishes. `k0`: the steps taken before (a resumed
+/// checkpoint's). `threads` as RunOptions::threads. A failed step
+/// is reported on `err`, prefixed with the rank. Returns the rank's exit
+/// status: 0, or 4 if one of its steps failed.
+PDYN_HOST_API int follow_run(DecomposedSystem& decomposed, std::int64_t k0, int threads,
+                             std::ostream& err);
 
 }  // namespace pdyn
