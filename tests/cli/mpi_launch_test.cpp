@@ -6,13 +6,14 @@
 // under mpirun (tests/mpi/). The
 // launchers are imitated by their environment variables (what mpirun sets
 // in each process it starts).
+#include "mpi_launch.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <string>
 
-#include "mpi_launch.hpp"
 #include "support/test_support.hpp"
 
 namespace pdyn {

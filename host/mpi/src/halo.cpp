@@ -135,7 +135,11 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
 }
 
 void Halo::forward(Eigen::Ref<Matrix3X> x, Eigen::Ref<Matrix3X> v) const {
-  std::vector<double> out(6 * send_local_.size()), in(6 * recv_local_.size());
+  // Buffers kept between calls: forward() runs at every force evaluation.
+  std::vector<double>& out = send_buffer_;
+  std::vector<double>& in = recv_buffer_;
+  out.resize(6 * send_local_.size());
+  in.resize(6 * recv_local_.size());
   for (std::size_t k = 0; k < send_local_.size(); ++k) {
     for (int a = 0; a < 3; ++a) {
       out[6 * k + static_cast<std::size_t>(a)] = x(a, send_local_[k]);

@@ -103,6 +103,7 @@ class PDYN_HOST_API Halo {
   // displacements in doubles (6 per particle).
   std::vector<Index> send_local_, recv_local_;
   std::vector<int> send_count_, send_offset_, recv_count_, recv_offset_;
+  mutable std::vector<double> send_buffer_, recv_buffer_;
 };
 
 }  // namespace pdyn
