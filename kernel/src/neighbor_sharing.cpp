@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <atomic>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -50,6 +51,11 @@ struct SharedNeighborList::Entry {
   // move of its faces since (NeighborList::UpdateRule::box_moved).
   Domain built_in;
   double box_moved = 0.0;
+  // Under MPI ranks (set_neighbor_ghosts): the member mask the list is
+  // built with, 2 marking a ghost member, and the ghosts' generation it
+  // was made from (0: none).
+  std::vector<std::uint8_t> with_ghosts;
+  std::uint64_t ghost_generation = 0;
 
   Entry(const double* x_, Index n_, const Domain& d, NeighborList::Kind k,
         const std::vector<std::uint8_t>* members, double c, double s)
@@ -114,6 +120,44 @@ std::optional<StepClock> clock_of(const double* x) {
 
 // LAMMPS's Neighbor::decide(): a step counts once; at a decision step the
 // list rebuilds always (check no) or if a particle moved beyond skin / 2.
+// The ghosts a host named per positions array (set_neighbor_ghosts), each
+// with a generation that changes at every call; `any` spares the lookup
+// when no host named any.
+struct Ghosts {
+  std::mutex mutex;
+  std::atomic<bool> any{false};
+  std::uint64_t last = 0;
+  std::map<const double*, std::pair<std::uint64_t, std::vector<std::uint8_t>>> of;
+};
+
+Ghosts& ghosts() {
+  static Ghosts g;
+  return g;
+}
+
+// The member mask of a list on `x` of n particles under ghosts: the force's
+// own members (or all), a ghost member marked 2 (NeighborList drops pairs
+// of two). Remade only when the ghosts' generation changed; nullptr
+// (`members` as given) without ghosts for x.
+const std::vector<std::uint8_t>* with_ghosts(SharedNeighborList::Entry& e, const double* x, Index n,
+                                             const std::vector<std::uint8_t>* members) {
+  Ghosts& g = ghosts();
+  if (!g.any.load(std::memory_order_acquire)) return members;
+  const std::lock_guard lock(g.mutex);
+  const auto it = g.of.find(x);
+  if (it == g.of.end() || static_cast<Index>(it->second.second.size()) != n) return members;
+  if (e.ghost_generation != it->second.first) {
+    e.ghost_generation = it->second.first;
+    const auto& ghost = it->second.second;
+    e.with_ghosts.resize(ghost.size());
+    for (std::size_t i = 0; i < ghost.size(); ++i) {
+      const bool member = members == nullptr || (*members)[i] != 0;
+      e.with_ghosts[i] = member ? (ghost[i] != 0 ? 2 : 1) : 0;
+    }
+  }
+  return &e.with_ghosts;
+}
+
 NeighborList::Rebuild decide(SharedNeighborList::Entry& e, const StepClock& clock) {
   if (clock.time == e.step_time) return NeighborList::Rebuild::IfForced;
   e.step_time = clock.time;
@@ -143,6 +187,17 @@ void begin_neighbor_step(const double* x, double t, const RebuildSchedule& sched
     it->second = StepClock{schedule, t};
   }
   s.any.store(!s.clocks.empty(), std::memory_order_release);
+}
+
+void set_neighbor_ghosts(const double* x, const std::uint8_t* ghost, std::int64_t n) {
+  Ghosts& g = ghosts();
+  const std::lock_guard lock(g.mutex);
+  if (ghost == nullptr) {
+    g.of.erase(x);
+  } else {
+    g.of[x] = {++g.last, std::vector<std::uint8_t>(ghost, ghost + n)};
+  }
+  g.any.store(!g.of.empty(), std::memory_order_release);
 }
 
 SharedNeighborList::SharedNeighborList(double cutoff, double skin, NeighborList::Kind kind)
@@ -191,7 +246,7 @@ const NeighborList& SharedNeighborList::update(const Eigen::Ref<const Matrix3X>&
           ? (domain.min - e.built_in.min).norm() + (domain.max - e.built_in.max).norm()
           : 0.0;
   rule.box_moved = std::max(e.box_moved, moved);
-  if (e.list.update(x, domain, members, rule)) {
+  if (e.list.update(x, domain, with_ghosts(e, key, n, members), rule)) {
     e.ago = 0;
     e.built_in = domain;
     e.box_moved = 0.0;

@@ -47,6 +47,26 @@
 namespace pdyn {
 namespace {
 
+// Under MPI ranks a member mask marks a rank's ghosts 2 (set_neighbor_ghosts
+// in pdyn/kernel/neighbor_schedule.hpp): a pair of two ghosts gives no owned
+// particle a force, and is dropped from the rows, which stay sorted.
+void drop_ghost_pairs(const std::vector<std::uint8_t>& mask, std::vector<Index>& offsets,
+                      std::vector<Index>& indices) {
+  Index kept = 0;
+  for (std::size_t i = 0; i + 1 < offsets.size(); ++i) {
+    const Index begin = offsets[i], end = offsets[i + 1];
+    offsets[i] = kept;
+    const bool ghost = mask[i] == 2;
+    for (Index k = begin; k < end; ++k) {
+      const Index j = indices[static_cast<std::size_t>(k)];
+      if (ghost && mask[static_cast<std::size_t>(j)] == 2) continue;
+      indices[static_cast<std::size_t>(kept++)] = j;
+    }
+  }
+  offsets.back() = kept;
+  indices.resize(static_cast<std::size_t>(kept));
+}
+
 // Cells are made this much (relatively) wider than reach, so that rounding
 // in a cell index (a few 1e-16 times the number of cells along the axis, in
 // cells) can never put two particles closer than reach in cells two apart.
@@ -308,6 +328,9 @@ void NeighborList::build(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
     fill_half_rows(n);
   } else {
     fill_rows(n);
+  }
+  if (std::find(mask_.begin(), mask_.end(), std::uint8_t{2}) != mask_.end()) {
+    drop_ghost_pairs(mask_, offsets_, indices_);
   }
 
   built_ = true;

@@ -9,11 +9,13 @@
 #include <ostream>
 #include <set>
 #include <string_view>
+#include <utility>
 
 #include "pdyn/force_reuse.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/stepper.hpp"
 #include "pdyn/host/threads.hpp"
+#include "pdyn/kernel/neighbor_schedule.hpp"
 #include "pdyn/local_force.hpp"
 #include "pdyn/pair.hpp"
 #include "pdyn/periodic_invariant.hpp"
@@ -168,7 +170,9 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
   load_local();
 }
 
-DecomposedSystem::~DecomposedSystem() = default;
+DecomposedSystem::~DecomposedSystem() {
+  set_neighbor_ghosts(std::as_const(*scene_.system).positions().data(), nullptr, 0);
+}
 
 void DecomposedSystem::load_local() {
   System& sys = *scene_.system;
@@ -194,7 +198,12 @@ void DecomposedSystem::load_local() {
   }
   const SystemAssembly assembly(sys);
   const double t = sys.time();
+  set_neighbor_ghosts(std::as_const(sys).positions().data(), nullptr, 0);
   assembly.set_particles(x, v, mass, fixed);
+  // The pair loops skip pairs of two ghosts (they give no owned particle a
+  // force): about a third of a 2-rank slab's pairs on the LJ melt.
+  set_neighbor_ghosts(std::as_const(sys).positions().data(), halo_->ghost().data(),
+                      static_cast<std::int64_t>(halo_->ghost().size()));
   sys.set_time(t);
   if (radii_) assembly.set_radii(std::move(radius));
   if (types_) assembly.set_types(std::move(type));

@@ -39,4 +39,13 @@ struct RebuildSchedule {
 /// Throws std::invalid_argument when every < 1 or delay < 0.
 PDYN_API void begin_neighbor_step(const double* x, double t, const RebuildSchedule& schedule);
 
+/// Since 0.10.0, for a host that runs a scene on MPI ranks (pdyn/host/
+/// halo.hpp): which of the `n` particles of the system whose positions
+/// array is `x` are ghosts, copies of particles another rank owns (`ghost`:
+/// n flags, non-zero for a ghost), or none (`ghost` nullptr: forgets `x`).
+/// The shared lists on `x` then leave out every pair of two ghosts, which
+/// gives no owned particle a force, so that the pair loops skip them; they
+/// rebuild at their next update. The flags are copied.
+PDYN_API void set_neighbor_ghosts(const double* x, const std::uint8_t* ghost, std::int64_t n);
+
 }  // namespace pdyn
