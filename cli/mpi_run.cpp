@@ -19,10 +19,7 @@ class OpenMpiRun final : public MpiRun {
     MPI_Init(nullptr, nullptr);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   }
-  ~OpenMpiRun() override {
-    decomposed_.reset();
-    MPI_Finalize();
-  }
+  ~OpenMpiRun() override { MPI_Finalize(); }
   OpenMpiRun(const OpenMpiRun&) = delete;
   OpenMpiRun& operator=(const OpenMpiRun&) = delete;
 
@@ -34,26 +31,25 @@ class OpenMpiRun final : public MpiRun {
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
     std::optional<RankGrid> g;
     if (!grid.empty()) g = parse_rank_grid(grid, ranks);
-    decomposed_ = std::make_unique<DecomposedSystem>(MPI_COMM_WORLD, local, g);
-    local_ = &local;
-    evaluations_before_ = local.system->force_evaluations();
+    // Within this call: it refers to `local`, which the caller owns.
+    DecomposedSystem decomposed(MPI_COMM_WORLD, local, g);
+    const std::uint64_t evaluations_before = local.system->force_evaluations();
     running_ = true;
     const std::int64_t k0 = options.resume ? options.resume->step : 0;
     RunResult result;
     if (whole != nullptr) {
-      MpiRankDriver driver(*decomposed_);
+      MpiRankDriver driver(decomposed);
       options.ranks = &driver;
       result = run_scene(*whole, options);
     } else {
-      result.exit_code = follow_run(*decomposed_, k0, options.threads, err);
+      result.exit_code = follow_run(decomposed, k0, options.threads, err);
     }
     running_ = false;
+    evaluations_ = local.system->force_evaluations() - evaluations_before;
     return result;
   }
 
-  std::uint64_t evaluations() const override {
-    return local_ != nullptr ? local_->system->force_evaluations() - evaluations_before_ : 0;
-  }
+  std::uint64_t evaluations() const override { return evaluations_; }
 
   void abort_if_running(int status) override {
     if (running_) MPI_Abort(MPI_COMM_WORLD, status);
@@ -61,9 +57,7 @@ class OpenMpiRun final : public MpiRun {
 
  private:
   int rank_ = 0;
-  std::unique_ptr<DecomposedSystem> decomposed_;
-  Scene* local_ = nullptr;
-  std::uint64_t evaluations_before_ = 0;
+  std::uint64_t evaluations_ = 0;
   bool running_ = false;
 };
 

@@ -56,6 +56,19 @@ bool index_free_local(std::string_view type) {
   return type == "gravity" || type == "drag" || type == "field";
 }
 
+// What changes as particle i of `sys` moves, into its record: position,
+// velocity, image counts and, if `kept` (a solver's kept accelerations,
+// pdyn/force_reuse.hpp), its acceleration.
+void copy_state(const System& sys, Index i, const Matrix3X* kept, ParticleRecord& rec) {
+  for (int a = 0; a < 3; ++a) {
+    const auto aa = static_cast<std::size_t>(a);
+    rec.x[aa] = sys.positions()(a, i);
+    rec.v[aa] = sys.velocities()(a, i);
+    rec.a[aa] = kept != nullptr ? (*kept)(a, i) : 0.0;
+  }
+  rec.images = sys.images()[static_cast<std::size_t>(i)];
+}
+
 constexpr std::string_view kRuns =
     "runs decomposed: pair forces without a group, gravity, drag, field; the solvers verlet, "
     "symplectic_euler, euler, midpoint, rk4";
@@ -144,17 +157,11 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
   for (Index i = total_ * r / p; i < total_ * (r + 1) / p; ++i) {
     ParticleRecord rec;
     rec.id = i;
-    for (int a = 0; a < 3; ++a) {
-      const auto aa = static_cast<std::size_t>(a);
-      rec.x[aa] = sys.positions()(a, i);
-      rec.v[aa] = sys.velocities()(a, i);
-      rec.a[aa] = kept != nullptr ? (*kept)(a, i) : 0.0;
-    }
+    copy_state(sys, i, kept, rec);
     rec.mass = sys.masses()[i];
     rec.fixed = sys.fixed()[static_cast<std::size_t>(i)];
     if (radii_) rec.radius = sys.radii()[static_cast<std::size_t>(i)];
     if (types_) rec.type = sys.types()[static_cast<std::size_t>(i)];
-    rec.images = sys.images()[static_cast<std::size_t>(i)];
     held.push_back(rec);
   }
   halo_->exchange(held);
@@ -232,13 +239,7 @@ std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
     if (halo_->ghost()[k] != 0) continue;
     const auto kk = static_cast<Index>(k);
     ParticleRecord rec = halo_->local()[k];
-    for (int a = 0; a < 3; ++a) {
-      const auto aa = static_cast<std::size_t>(a);
-      rec.x[aa] = sys.positions()(a, kk);
-      rec.v[aa] = sys.velocities()(a, kk);
-      rec.a[aa] = kept != nullptr ? (*kept)(a, kk) : 0.0;
-    }
-    rec.images = sys.images()[k];
+    copy_state(sys, kk, kept, rec);
     out.push_back(rec);
   }
   return out;
