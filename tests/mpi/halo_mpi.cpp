@@ -225,6 +225,45 @@ TEST(Decomposed, VelocityVerletStepsAreThePlainRunsBitForBit) {
 
 TEST(Decomposed, Rk4StepsAreThePlainRunsBitForBit) { expect_plain_steps("rk4", 40); }
 
+TEST(Decomposed, AStepThatOutrunsTheGhostsIsRefusedNotComputed) {
+  // Skin 0.001 m, speeds near 1 m/s, dt 0.005 s: a particle moves five
+  // half-skins in one step, so the ghosts chosen before it may miss a
+  // partner at its force evaluation. The step must fail, on the rank that
+  // saw it, rather than give a force without that partner.
+  Scene tight = load_scene_text(
+      fmt::format(
+          "simulation: {{ dt: 0.005, steps: 1, solver: {{ type: verlet }},\n"
+          "  box: {{ min: [0, 0, 0], max: [{0}, {0}, {0}], periodic: [true, true, true] }} }}\n"
+          "particles:\n"
+          "  - cloud: {{ n: {1}, box: {{ min: [0, 0, 0], max: [1, 1, 1] }}, mass: 1 }}\n"
+          "forces:\n"
+          "  - {{ type: lennard_jones, epsilon: 1, sigma: 1, cutoff: 2.5, skin: 0.001, shift: true "
+          "}}\n",
+          kBox, kSide * kSide * kSide),
+      "tight.yaml", plugins());
+  jitter(*tight.system, 0.1);
+  tight.system->velocities() *= 2.0;
+  Simulation sim(std::move(tight), 1);
+  DecomposedSystem decomposed(MPI_COMM_WORLD, sim.scene(), grid_for(sim.scene()));
+  MpiRankDriver driver(decomposed);
+  int failed = -1;
+  for (int k = 0; k < 3 && failed < 0; ++k) {
+    ASSERT_TRUE(driver.begin_step());
+    sim.step(1);
+    failed = driver.end_step(sim.scene(), false, false);
+  }
+  EXPECT_GE(failed, 0);
+  int mine = decomposed.violation().empty() ? 0 : 1, any = 0;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  EXPECT_EQ(any, 1);
+  if (mine != 0) {
+    EXPECT_NE(decomposed.violation().find("more than half the skin (0.0005 m), within one step"),
+              std::string::npos)
+        << decomposed.violation();
+  }
+  driver.finish();
+}
+
 TEST(Decomposed, WhatCannotRunDecomposedYetIsRefusedByName) {
   Scene scene = load_scene_text(
       "simulation: { dt: 0.01, steps: 1, solver: { type: verlet } }\n"

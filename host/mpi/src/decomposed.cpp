@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <limits>
 #include <ostream>
 #include <set>
@@ -34,19 +35,20 @@ namespace {
 // already stands for.
 class HaloForce final : public Force, public PeriodicInvariant {
  public:
-  explicit HaloForce(const Halo& halo) : halo_(halo) {}
+  explicit HaloForce(DecomposedSystem& d) : d_(d) {}
   void add_forces(const ParticleView& p, Eigen::Ref<Matrix3X>) override {
     const Index n = p.size();
     Eigen::Map<Matrix3X> x(const_cast<double*>(p.x.data()), 3, n);
     Eigen::Map<Matrix3X> v(const_cast<double*>(p.v.data()), 3, n);
-    halo_.forward(x, v);
+    d_.halo().forward(x, v);
+    d_.check_reach(p);
   }
   // The ghosts follow their owners; the owned particles' forces depend on
   // nothing through this object.
   StateDependence dependence() const override { return {false, false}; }
 
  private:
-  const Halo& halo_;
+  DecomposedSystem& d_;
 };
 
 // The plugins whose local forces read nothing but the particle's own
@@ -171,7 +173,7 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
   const std::vector<System::ForceEntry> forces = sys.force_objects();
   const SystemAssembly assembly(sys);
   for (const auto& entry : forces) assembly.remove_force(entry.force.get());
-  halo_force_ = std::make_shared<HaloForce>(*halo_);
+  halo_force_ = std::make_shared<HaloForce>(*this);
   assembly.add_force(halo_force_, "halo exchange (mpi)");
   for (const auto& entry : forces) assembly.add_force(entry.force, entry.label);
   load_local();
@@ -247,15 +249,29 @@ std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
 
 bool DecomposedSystem::begin_step(bool stop) {
   const System& sys = *scene_.system;
-  int flags[2] = {0, stop ? 1 : 0};  // moved, stop
+  int flags[2] = {0, stop ? 1 : 0};  // exchange, stop
   if (std::isfinite(half_skin_) && !stop) {
-    const double limit2 = half_skin_ * half_skin_;
-    for (std::size_t k = 0; k < halo_->local().size() && flags[0] == 0; ++k) {
+    // Exchanged when a particle has moved more than skin / 2 less twice
+    // what the fastest may move in this step (h |v| + h^2 |a| / 2, with the
+    // acceleration a Verlet solver keeps): the ghosts must hold every
+    // partner at the step's force evaluations too, which check_reach
+    // verifies.
+    const Matrix3X* kept = nullptr;
+    if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene_.solver.get())) {
+      kept = holder->kept_accelerations(sys);
+    }
+    const double h = scene_.dt;
+    double moved = 0.0, stride = 0.0;
+    for (std::size_t k = 0; k < halo_->local().size(); ++k) {
       if (halo_->ghost()[k] != 0) continue;
       const auto kk = static_cast<Index>(k);
       const Vec3 d = sys.domain().minimum_image(sys.positions().col(kk) - x_at_exchange_.col(kk));
-      if (!(d.squaredNorm() <= limit2)) flags[0] = 1;
+      moved = std::max(moved, d.norm());
+      double s = h * sys.velocities().col(kk).norm();
+      if (kept != nullptr && kept->cols() == sys.size()) s += 0.5 * h * h * kept->col(kk).norm();
+      stride = std::max(stride, s);
     }
+    if (!(moved + 2.0 * stride <= half_skin_)) flags[0] = 1;
   }
   int agreed[2] = {0, 0};
   MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, comm_);
@@ -266,6 +282,22 @@ bool DecomposedSystem::begin_step(bool stop) {
   ++exchanges_;
   load_local();
   return true;
+}
+
+void DecomposedSystem::check_reach(const ParticleView& p) {
+  if (!std::isfinite(half_skin_) || !violation_.empty()) return;
+  for (std::size_t k = 0; k < halo_->local().size(); ++k) {
+    if (halo_->ghost()[k] != 0) continue;
+    const auto kk = static_cast<Index>(k);
+    const double d = p.domain.minimum_image(p.x.col(kk) - x_at_exchange_.col(kk)).norm();
+    if (d <= half_skin_) continue;
+    violation_ = fmt::format(
+        "particle {} moved {:.6g} m since the particles were last exchanged, more than half the "
+        "skin ({:.6g} m), within one step: its rank's ghosts may miss a partner, so the step is "
+        "refused (expected a smaller dt or a larger skin)",
+        halo_->local()[k].id, d, half_skin_);
+    return;
+  }
 }
 
 std::vector<ParticleRecord> DecomposedSystem::gathered(int root) const {
@@ -323,9 +355,13 @@ int MpiRankDriver::end_step(Scene& whole, bool gather, bool failed) {
   // One reduction: rank 0's wish to gather, and the lowest failing rank as
   // ranks - rank (the largest), 0 for none.
   const int ranks = d_.halo().ranks(), rank = d_.halo().rank();
+  if (!d_.violation().empty()) {
+    std::cerr << fmt::format("pdyn (MPI rank {}): {}\n", rank, d_.violation());
+    failed = true;
+  }
   int flags[2] = {gather ? 1 : 0, failed ? ranks - rank : 0}, agreed[2] = {0, 0};
   MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  if (agreed[0] != 0) d_.gather_into(whole);
+  if (agreed[0] != 0 && agreed[1] == 0) d_.gather_into(whole);
   return agreed[1] != 0 ? ranks - agreed[1] : -1;
 }
 

@@ -25,6 +25,7 @@
 #include <iosfwd>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "pdyn/host/halo.hpp"
@@ -68,6 +69,14 @@ class PDYN_HOST_API DecomposedSystem {
   /// Collective; the other ranks' `whole` is not touched.
   void gather_into(Scene& whole) const;
 
+  /// Called by the halo object at every force evaluation, after the
+  /// forward: records a violation() when an owned particle has moved more
+  /// than half the skin since the last exchange, where the ghosts chosen
+  /// then may no longer hold all of its partners.
+  void check_reach(const ParticleView& p);
+  /// What made the last steps' forces unsafe (check_reach), or "".
+  const std::string& violation() const noexcept { return violation_; }
+
   /// The scene stepped on this rank.
   Scene& scene() noexcept { return scene_; }
   const Halo& halo() const noexcept { return *halo_; }
@@ -88,7 +97,8 @@ class PDYN_HOST_API DecomposedSystem {
   double half_skin_ = 0.0;
   Matrix3X x_at_exchange_;  // the owned particles' positions at the last exchange (local order)
   bool radii_ = false, types_ = false;
-  mutable bool kept_ = false;  // the last owned_records() found kept accelerations
+  mutable bool kept_ = false;
+  std::string violation_;  // the last owned_records() found kept accelerations
   Index total_ = 0;
   std::int64_t exchanges_ = 0;
 };
