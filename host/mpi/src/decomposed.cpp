@@ -251,11 +251,11 @@ bool DecomposedSystem::begin_step(bool stop) {
   const System& sys = *scene_.system;
   int flags[2] = {0, stop ? 1 : 0};  // exchange, stop
   if (std::isfinite(half_skin_) && !stop) {
-    // Exchanged when a particle has moved more than skin / 2 less twice
-    // what the fastest may move in this step (h |v| + h^2 |a| / 2, with the
-    // acceleration a Verlet solver keeps): the ghosts must hold every
-    // partner at the step's force evaluations too, which check_reach
-    // verifies.
+    // Exchanged when a particle has moved more than skin / 2 less what the
+    // fastest may move in this step (h |v| + h^2 |a| / 2, with the
+    // acceleration a Verlet solver keeps: velocity Verlet's drift, exactly):
+    // the ghosts must hold every partner at the step's force evaluations
+    // too, which check_reach verifies.
     const Matrix3X* kept = nullptr;
     if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene_.solver.get())) {
       kept = holder->kept_accelerations(sys);
@@ -271,7 +271,7 @@ bool DecomposedSystem::begin_step(bool stop) {
       if (kept != nullptr && kept->cols() == sys.size()) s += 0.5 * h * h * kept->col(kk).norm();
       stride = std::max(stride, s);
     }
-    if (!(moved + 2.0 * stride <= half_skin_)) flags[0] = 1;
+    if (!(moved + stride <= half_skin_)) flags[0] = 1;
   }
   int agreed[2] = {0, 0};
   MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, comm_);
