@@ -518,6 +518,10 @@ void set_up_forces(Scene& scene) {
 
 // The steps after the set-up, timed as LAMMPS times its loop; returns s.
 double run_steps(Loop& loop, std::int64_t k0, bool adaptive) {
+  // Under MPI ranks the ranks first agree to start (the others wait there
+  // when rank 0 stops before its first step, a first frame it could not
+  // write), then set up their shares' forces together.
+  if (loop.ranks != nullptr && !loop.ranks->begin_step()) return 0.0;
   if (!adaptive) set_up_forces(loop.ranks != nullptr ? loop.ranks->local() : loop.scene);
   const auto start = std::chrono::steady_clock::now();
   if (adaptive) {

@@ -372,6 +372,9 @@ int follow_run(DecomposedSystem& decomposed, std::int64_t k0, int threads, std::
                                   : default_threads(scene.system->size()));
   MpiRankDriver driver(decomposed);
   Stepper stepper(*scene.system, *scene.solver, scene.solver_label, scene.neighbor_schedule);
+  // As rank 0's run_steps: agree to start (rank 0 may have stopped before
+  // its first step), then set up the forces together.
+  if (!driver.begin_step()) return 0;
   set_up_forces(scene);
   int status = 0;
   for (std::int64_t k = k0 + 1; driver.begin_step(); ++k) {
