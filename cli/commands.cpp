@@ -254,7 +254,10 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     const std::uint64_t evaluations = mpi != nullptr
                                           ? mpi->evaluations()
                                           : scene.system->force_evaluations() - evaluations_before;
-    if (!c.quiet) print_run_summary(out, whole ? *whole : scene, r, checkpoint, wall, evaluations);
+    if (!c.quiet) {
+      print_run_summary(out, whole ? *whole : scene, r, checkpoint, wall, evaluations);
+      if (mpi != nullptr) out << mpi->summary() << "\n";
+    }
     return kOk;
   } catch (...) {
     const int status = report_error(std::current_exception(), say);

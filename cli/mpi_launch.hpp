@@ -42,6 +42,9 @@ class MpiRun {
                         std::ostream& err) = 0;
   /// Force evaluations on this rank's share so far.
   virtual std::uint64_t evaluations() const = 0;
+  /// One line on the decomposition of the last run: ranks, grid,
+  /// exchanges, rank 0's halo, for `pdyn run`'s summary.
+  virtual std::string summary() const = 0;
   /// After an error on this rank once the run has started, the other ranks
   /// wait for it: ends the whole job with `status`.
   virtual void abort_if_running(int status) = 0;

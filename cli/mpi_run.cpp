@@ -1,6 +1,7 @@
 // `pdyn run` on several MPI ranks (cli/mpi_launch.hpp; docs/parallel.md):
 // MPI_Init, the scene decomposed (pdyn/host/decomposed.hpp), rank 0 running
 // run_scene on its copy of the whole scene while the others follow.
+#include <fmt/format.h>
 #include <mpi.h>
 
 #include <ostream>
@@ -46,10 +47,17 @@ class OpenMpiRun final : public MpiRun {
     }
     running_ = false;
     evaluations_ = local.system->force_evaluations() - evaluations_before;
+    const RankGrid& used = decomposed.halo().decomposition().grid();
+    summary_ = fmt::format(
+        "pdyn: {} MPI ranks on a {} x {} x {} grid, {} exchanges of particles; rank 0 holds {} "
+        "particles and sends {} ghost copies per force evaluation",
+        ranks, used.n[0], used.n[1], used.n[2], decomposed.exchanges(), decomposed.halo().owned(),
+        decomposed.halo().ghosts_sent());
     return result;
   }
 
   std::uint64_t evaluations() const override { return evaluations_; }
+  std::string summary() const override { return summary_; }
 
   void abort_if_running(int status) override {
     if (running_) MPI_Abort(MPI_COMM_WORLD, status);
@@ -58,6 +66,7 @@ class OpenMpiRun final : public MpiRun {
  private:
   int rank_ = 0;
   std::uint64_t evaluations_ = 0;
+  std::string summary_;
   bool running_ = false;
 };
 
