@@ -118,8 +118,6 @@ std::optional<StepClock> clock_of(const double* x) {
   return std::nullopt;
 }
 
-// LAMMPS's Neighbor::decide(): a step counts once; at a decision step the
-// list rebuilds always (check no) or if a particle moved beyond skin / 2.
 // The ghosts a host named per positions array (set_neighbor_ghosts), each
 // with a generation that changes at every call; `any` spares the lookup
 // when no host named any.
@@ -158,6 +156,8 @@ const std::vector<std::uint8_t>* with_ghosts(SharedNeighborList::Entry& e, const
   return &e.with_ghosts;
 }
 
+// LAMMPS's Neighbor::decide(): a step counts once; at a decision step the
+// list rebuilds always (check no) or if a particle moved beyond skin / 2.
 NeighborList::Rebuild decide(SharedNeighborList::Entry& e, const StepClock& clock) {
   if (clock.time == e.step_time) return NeighborList::Rebuild::IfForced;
   e.step_time = clock.time;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <numeric>
 #include <ostream>
 #include <set>
 #include <string_view>
@@ -69,6 +70,19 @@ void copy_state(const System& sys, Index i, const Matrix3X* kept, ParticleRecord
     rec.a[aa] = kept != nullptr ? (*kept)(a, i) : 0.0;
   }
   rec.images = sys.images()[static_cast<std::size_t>(i)];
+}
+
+// Every particle's record, gathered, into columns by id: positions,
+// velocities, accelerations (if `a`) and image counts (N each).
+void unpack(const std::vector<ParticleRecord>& all, Eigen::Ref<Matrix3X> x, Eigen::Ref<Matrix3X> v,
+            Matrix3X* a, std::vector<std::array<std::int32_t, 3>>& images) {
+  images.resize(all.size());
+  for (const ParticleRecord& rec : all) {
+    x.col(rec.id) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
+    v.col(rec.id) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
+    if (a != nullptr) a->col(rec.id) = Vec3(rec.a[0], rec.a[1], rec.a[2]);
+    images[static_cast<std::size_t>(rec.id)] = rec.images;
+  }
 }
 
 constexpr std::string_view kRuns =
@@ -148,11 +162,8 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
   halo_ = std::make_unique<Halo>(comm_, Decomposition(g, lo, hi, box.periodic, reach));
 
   // Each rank starts with a contiguous share of the ids, with the
-  // accelerations a resumed solver keeps (pdyn/force_reuse.hpp).
-  const Matrix3X* kept = nullptr;
-  if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene.solver.get())) {
-    kept = holder->kept_accelerations(sys);
-  }
+  // accelerations a resumed solver keeps.
+  const Matrix3X* kept = kept_accelerations();
   kept_ = kept != nullptr;
   std::vector<ParticleRecord> held;
   const Index r = halo_->rank(), p = halo_->ranks();
@@ -228,12 +239,14 @@ void DecomposedSystem::load_local() {
   }
 }
 
+const Matrix3X* DecomposedSystem::kept_accelerations() const {
+  const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene_.solver.get());
+  return holder != nullptr ? holder->kept_accelerations(*scene_.system) : nullptr;
+}
+
 std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
   const System& sys = *scene_.system;
-  const Matrix3X* kept = nullptr;
-  if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene_.solver.get())) {
-    kept = holder->kept_accelerations(sys);
-  }
+  const Matrix3X* kept = kept_accelerations();
   kept_ = kept != nullptr;
   std::vector<ParticleRecord> out;
   out.reserve(static_cast<std::size_t>(halo_->owned()));
@@ -256,10 +269,7 @@ bool DecomposedSystem::begin_step(bool stop) {
     // acceleration a Verlet solver keeps: velocity Verlet's drift, exactly):
     // the ghosts must hold every partner at the step's force evaluations
     // too, which check_reach verifies.
-    const Matrix3X* kept = nullptr;
-    if (const auto* holder = dynamic_cast<const ForceReuseHolder*>(scene_.solver.get())) {
-      kept = holder->kept_accelerations(sys);
-    }
+    const Matrix3X* kept = kept_accelerations();
     const double h = scene_.dt;
     double moved = 0.0, stride = 0.0;
     for (std::size_t k = 0; k < halo_->local().size(); ++k) {
@@ -307,7 +317,7 @@ std::vector<ParticleRecord> DecomposedSystem::gathered(int root) const {
   std::vector<int> counts(at_root ? static_cast<std::size_t>(halo_->ranks()) : 0, 0);
   MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_);
   std::vector<int> offsets(counts.size(), 0);
-  for (std::size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+  std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
   std::vector<ParticleRecord> all(at_root ? static_cast<std::size_t>(total_) : 0);
   MPI_Gatherv(mine.data(), count, halo_->record_type(), all.data(), counts.data(), offsets.data(),
               halo_->record_type(), root, comm_);
@@ -318,16 +328,9 @@ void DecomposedSystem::gather_into(Scene& whole) const {
   const std::vector<ParticleRecord> all = gathered(0);
   if (halo_->rank() != 0) return;
   System& sys = *whole.system;
-  auto x = sys.positions();
-  auto v = sys.velocities();
   Matrix3X a(3, total_);
-  std::vector<std::array<std::int32_t, 3>> images(static_cast<std::size_t>(total_));
-  for (const ParticleRecord& rec : all) {
-    x.col(rec.id) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
-    v.col(rec.id) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
-    a.col(rec.id) = Vec3(rec.a[0], rec.a[1], rec.a[2]);
-    images[static_cast<std::size_t>(rec.id)] = rec.images;
-  }
+  std::vector<std::array<std::int32_t, 3>> images;
+  unpack(all, sys.positions(), sys.velocities(), &a, images);
   SystemAssembly(sys).set_images(std::move(images));
   sys.set_time(scene_.system->time());
   if (kept_) {
@@ -343,12 +346,7 @@ void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
   if (halo_->rank() != root) return;
   x.resize(3, total_);
   v.resize(3, total_);
-  images.resize(static_cast<std::size_t>(total_));
-  for (const ParticleRecord& rec : all) {
-    x.col(rec.id) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
-    v.col(rec.id) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
-    images[static_cast<std::size_t>(rec.id)] = rec.images;
-  }
+  unpack(all, x, v, nullptr, images);
 }
 
 int MpiRankDriver::end_step(Scene& whole, bool gather, bool failed) {

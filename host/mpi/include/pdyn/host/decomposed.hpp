@@ -87,6 +87,9 @@ class PDYN_HOST_API DecomposedSystem {
 
  private:
   void load_local();
+  // The accelerations the solver keeps for its next step
+  // (pdyn/force_reuse.hpp), or nullptr.
+  const Matrix3X* kept_accelerations() const;
   std::vector<ParticleRecord> owned_records() const;
   std::vector<ParticleRecord> gathered(int root) const;
 
