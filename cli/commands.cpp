@@ -178,17 +178,15 @@ void print_run_summary(std::ostream& out, const Scene& scene, const RunResult& r
   if (!r.energy_warning.empty()) out << "pdyn: warning: " << r.energy_warning << "\n";
 }
 
-// Restores a --resume checkpoint into `scene`; the differences a --force
+// Restores the --resume checkpoint into `scene`; the differences a --force
 // resume accepts are told on `err`.
-std::optional<Checkpoint> restore_resumed(const RunArgs& a, Scene& scene, std::ostream& err) {
-  if (a.resume.empty()) return std::nullopt;
-  Checkpoint checkpoint = read_checkpoint(a.resume);
+void restore_resumed(const RunArgs& a, const Checkpoint& checkpoint, Scene& scene,
+                     std::ostream& err) {
   std::vector<std::string> differences;
   restore_checkpoint(scene, checkpoint, a.force, &differences);
   for (const auto& d : differences) {
     err << fmt::format("pdyn: warning: resuming with a changed scene (--force): {}\n", d);
   }
-  return checkpoint;
 }
 
 // The exit status of a finished run, with its one line on `err`.
@@ -215,6 +213,13 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
   // Under several MPI ranks (a pdyn built with MPI; docs/parallel.md) every
   // rank loads the scene, rank 0 a second copy that its output reads; only
   // rank 0 speaks, but for a rank's own failed step.
+  if (!a.grid.empty() && mpi_world_size() <= 1) {
+    err << fmt::format(
+        "pdyn: --grid {}: a grid of MPI ranks, but this run has one process "
+        "(expected mpirun -np N pdyn run ... --grid NX,NY,NZ)\n",
+        a.grid);
+    return kBadInput;
+  }
   const std::unique_ptr<MpiRun> mpi = mpi_world_size() > 1 ? start_mpi_run() : nullptr;
   const bool root = mpi == nullptr || mpi->rank() == 0;
   std::ostringstream quiet_sink;
@@ -230,8 +235,12 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     options.handle_signals = true;
     options.threads = a.threads;
     options.strict = a.strict;
-    const std::optional<Checkpoint> checkpoint = restore_resumed(a, scene, say);
-    if (checkpoint) options.resume = &*checkpoint;
+    std::optional<Checkpoint> checkpoint;
+    if (!a.resume.empty()) {
+      checkpoint = read_checkpoint(a.resume);
+      restore_resumed(a, *checkpoint, scene, say);
+      options.resume = &*checkpoint;
+    }
     // A plugin that crashes is named in one line (crash_report.hpp).
     const crash::ReportCrashes report_crashes;
     const std::uint64_t evaluations_before = scene.system->force_evaluations();
@@ -239,8 +248,8 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     std::optional<Scene> whole;
     if (mpi != nullptr && root) {
       whole.emplace(load(a, c, registry));
-      quiet_sink.str("");
-      restore_resumed(a, *whole, quiet_sink);
+      // Its warnings were told for the first copy.
+      if (checkpoint) restore_resumed(a, *checkpoint, *whole, quiet_sink);
     }
     const RunResult r = mpi == nullptr
                             ? run_scene(scene, options)

@@ -79,6 +79,12 @@ TEST(MpiLaunch, OneRankOrNoLauncherRunsAsBefore) {
   EXPECT_TRUE(fs::exists(scene.parent_path() / "frames.csv"));
   const auto plain = test::pdyn({"validate", scene.string(), "-q"});
   EXPECT_EQ(plain.status, 0) << plain.err;
+  // --grid cuts the box among MPI ranks: without them it is a mistake.
+  const auto grid = test::pdyn({"run", scene.string(), "-q", "--grid", "2,1,1"});
+  EXPECT_EQ(grid.status, 2);
+  EXPECT_EQ(grid.err,
+            "pdyn: --grid 2,1,1: a grid of MPI ranks, but this run has one process (expected "
+            "mpirun -np N pdyn run ... --grid NX,NY,NZ)\n");
   // --version and --help answer under any launcher.
   const ScopedEnv env("PMI_SIZE", "2");
   EXPECT_EQ(test::pdyn({"--version"}).status, 0);
