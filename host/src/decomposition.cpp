@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <tuple>
 
 #include "pdyn/error.hpp"
 
@@ -83,6 +84,16 @@ double Decomposition::plane(int axis, int k) const noexcept {
   return lo_[axis] + (hi_[axis] - lo_[axis]) * k / grid_.n[axis];
 }
 
+std::pair<double, double> Decomposition::slab(int axis, int k) const noexcept {
+  // Along an open axis the end cells reach to infinity: particles leave the
+  // region their first bounds gave, and stay owned by the edge cell (cell()
+  // clamps), so ghosts must be measured to where those particles may be.
+  const bool open = !periodic_[axis];
+  const double inf = std::numeric_limits<double>::infinity();
+  return {open && k == 0 ? -inf : plane(axis, k),
+          open && k + 1 == grid_.n[axis] ? inf : plane(axis, k + 1)};
+}
+
 int Decomposition::cell(int axis, double c) const noexcept {
   const int n = grid_.n[axis];
   if (!(c >= lo_[axis])) return 0;  // below the region, or NaN
@@ -95,7 +106,7 @@ int Decomposition::cell(int axis, double c) const noexcept {
 }
 
 double Decomposition::gap(int axis, double c, int k) const noexcept {
-  const double a = plane(axis, k), b = plane(axis, k + 1);
+  const auto [a, b] = slab(axis, k);
   auto outside = [&](double y) { return y < a ? a - y : (y > b ? y - b : 0.0); };
   double d = outside(c);
   if (periodic_[axis]) {
@@ -116,8 +127,21 @@ void Decomposition::ghost_ranks(const Vec3& x, int owner, std::vector<int>& out)
   // A hair of slack makes rounding in the planes err towards a ghost too
   // many, which costs nothing but a copy.
   const double r2 = reach_ * reach_ * (1.0 + 1e-12);
-  std::array<std::vector<std::pair<int, double>>, 3> near;
+  // Most particles lie deeper than reach inside the owner's subdomain along
+  // every cut axis: no other subdomain is nearer than its nearest face.
+  bool inside = owner == this->owner(x);
+  for (int a = 0; a < 3 && inside; ++a) {
+    if (grid_.n[a] == 1) continue;
+    const auto [lo, hi] = slab(a, cell(a, x[a]));
+    const double depth = std::min(x[a] - lo, hi - x[a]);
+    inside = depth * depth > r2;
+  }
+  if (inside) return;
+  // The per-axis lists, kept between calls (an exchange calls this for
+  // every particle near a face).
+  thread_local std::array<std::vector<std::pair<int, double>>, 3> near;
   for (int a = 0; a < 3; ++a) {
+    near[a].clear();
     for (int k = 0; k < grid_.n[a]; ++k) {
       const double g = gap(a, std::isfinite(x[a]) ? x[a] : lo_[a], k);
       if (g * g <= r2) near[a].emplace_back(k, g * g);
@@ -136,8 +160,10 @@ void Decomposition::ghost_ranks(const Vec3& x, int owner, std::vector<int>& out)
 std::array<Vec3, 2> Decomposition::bounds(int rank) const {
   const int k0 = rank % grid_.n[0], k1 = (rank / grid_.n[0]) % grid_.n[1],
             k2 = rank / (grid_.n[0] * grid_.n[1]);
-  return {Vec3(plane(0, k0), plane(1, k1), plane(2, k2)),
-          Vec3(plane(0, k0 + 1), plane(1, k1 + 1), plane(2, k2 + 1))};
+  const std::array<int, 3> k{k0, k1, k2};
+  std::array<Vec3, 2> b;
+  for (int a = 0; a < 3; ++a) std::tie(b[0][a], b[1][a]) = slab(a, k[static_cast<std::size_t>(a)]);
+  return b;
 }
 
 }  // namespace pdyn

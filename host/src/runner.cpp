@@ -222,10 +222,14 @@ class EnergyWatch {
     return active_ && !tripped_ && (last || k % kEvery == 0);
   }
 
-  // True once when the energy has grown past the bound; `message` then says so.
-  bool grew(std::int64_t k, const Scene& scene, std::string& message) {
+  // True once when the energy has grown past the bound; `message` then says
+  // so. `summed`: the energy and magnitude summed over MPI ranks
+  // (RankDriver::end_step), else the system's own.
+  bool grew(std::int64_t k, const Scene& scene, std::string& message,
+            const std::array<double, 2>* summed = nullptr) {
     double magnitude = 0.0;
-    const double e = energy(magnitude);
+    const double e = summed != nullptr ? (*summed)[0] : energy(magnitude);
+    if (summed != nullptr) magnitude = (*summed)[1];
     if (!(scale_ > 0.0)) {  // no scale yet: the first nonzero magnitude is it
       scale_ = magnitude;
       return false;
@@ -238,6 +242,11 @@ class EnergyWatch {
         "probably unstable at dt = {} s. Try a smaller dt or a stable solver (implicit_euler, "
         "verlet)",
         e0_, e, k, sys_.time(), kFactor, scale_, scene.solver_name, scene.dt);
+    if (summed != nullptr) {
+      message +=
+          " (under MPI ranks the energy at the step is summed over the ranks' subdomains, a pair "
+          "across two of them counted on both)";
+    }
     return true;
   }
 
@@ -278,7 +287,8 @@ struct Loop {
   // Under MPI ranks (RunOptions::ranks): the steps are the ranks', `scene`
   // is rank 0's copy of the whole, current after each gather.
   RankDriver* ranks = nullptr;
-  bool interrupt_seen = false;  // the interrupt as the ranks agreed on it at the last step
+  std::array<double, 2> ranks_energy{};  // the ranks' energy and magnitude at the last check
+  bool interrupt_seen = false;           // the interrupt as the ranks agreed on it at the last step
   // Whether the run was interrupted: under MPI ranks, as of the last
   // gather, so that a signal that arrives later does not make a stale
   // state the final frame (it stops the next step).
@@ -289,7 +299,7 @@ struct Loop {
   bool energy_ok(std::int64_t k, bool last) {
     if (!energy || !energy->due(k, last)) return true;
     std::string message;
-    if (!energy->grew(k, scene, message)) return true;
+    if (!energy->grew(k, scene, message, ranks != nullptr ? &ranks_energy : nullptr)) return true;
     if (!strict) {
       result.energy_warning = std::move(message);
       return true;
@@ -345,9 +355,11 @@ struct Loop {
     if (ranks == nullptr) return ok;
     const bool last = k == scene.steps;
     interrupt_seen = signals.raised();
-    const bool need =
-        ok && (due || last || interrupt_seen || (energy != nullptr && energy->due(k, last)));
-    const int failed = ranks->end_step(scene, need, !ok);
+    const bool need = ok && (due || last || interrupt_seen);
+    // The energy check sums the ranks' energies instead of gathering: a
+    // whole-scene evaluation on rank 0 alone would hold the others up.
+    const bool check = ok && energy != nullptr && energy->due(k, last);
+    const int failed = ranks->end_step(scene, need, !ok, check ? &ranks_energy : nullptr);
     if (ok && failed >= 0) {
       result.exit_code = 4;
       result.message = fmt::format(
@@ -372,7 +384,10 @@ void run_fixed(Loop& loop, std::int64_t k0) {
     const double t_end = k == n_steps ? scene.end_time : static_cast<double>(k) * scene.dt;
     if (loop.ranks != nullptr && !loop.ranks->begin_step()) return;
     const bool ok = loop.guarded_step([&] { return loop.stepper.step_to(t_end); }, k).has_value();
-    const bool due = (every > 0 && k % every == 0) || (ckpt_every > 0 && k % ckpt_every == 0);
+    // A scene without writers has a frame schedule (it shapes adaptive
+    // steps) but nothing to write: no gather for it under MPI ranks.
+    const bool frame = !scene.output.writers.empty() && every > 0 && k % every == 0;
+    const bool due = frame || (ckpt_every > 0 && k % ckpt_every == 0);
     if (!loop.ranks_agree(k, ok, due)) return;
     loop.result.steps_done = k;
     // The final frame is extra unless it falls on the schedule: a longer

@@ -68,6 +68,27 @@ struct SharedNeighborList::Entry {
         reach(c + s),
         list(c, s, k) {}
 
+  // The same list's memory for other particles of the same kind, as new
+  // but for its buffers (a System whose arrays were reallocated, as an MPI
+  // rank's at each exchange of particles): it rebuilds at its next update
+  // without allocating what it had.
+  void rebind(const double* x_, Index n_, const Domain& d, const std::vector<std::uint8_t>* members,
+              double c, double s) {
+    x = x_;
+    n = n_;
+    domain = d;
+    mask = members ? *members : std::vector<std::uint8_t>{};
+    cutoff = c;
+    reach = c + s;
+    list.set_range(c, s);
+    step_time = std::numeric_limits<double>::quiet_NaN();
+    ago = 0;
+    built_in = Domain{};
+    box_moved = 0.0;
+    with_ghosts.clear();
+    ghost_generation = 0;
+  }
+
   bool matches(const double* x_, Index n_, const Domain& d, NeighborList::Kind k,
                const std::vector<std::uint8_t>* members) const {
     if (x != x_ || n != n_ || kind != k || !NeighborList::resizes(domain, d)) return false;
@@ -135,10 +156,13 @@ Ghosts& ghosts() {
 
 // The member mask of a list on `x` of n particles under ghosts: the force's
 // own members (or all), a ghost member marked 2 (NeighborList drops pairs
-// of two). Remade only when the ghosts' generation changed; nullptr
-// (`members` as given) without ghosts for x.
+// of two). Remade only when the ghosts' generation changed, and then
+// `renamed` is set: the host has exchanged the particles, so that index i
+// may be another particle even where N and the mask are unchanged, and the
+// list must be rebuilt. `members` as given without ghosts for x.
 const std::vector<std::uint8_t>* with_ghosts(SharedNeighborList::Entry& e, const double* x, Index n,
-                                             const std::vector<std::uint8_t>* members) {
+                                             const std::vector<std::uint8_t>* members,
+                                             bool& renamed) {
   Ghosts& g = ghosts();
   if (!g.any.load(std::memory_order_acquire)) return members;
   const std::lock_guard lock(g.mutex);
@@ -146,6 +170,7 @@ const std::vector<std::uint8_t>* with_ghosts(SharedNeighborList::Entry& e, const
   if (it == g.of.end() || static_cast<Index>(it->second.second.size()) != n) return members;
   if (e.ghost_generation != it->second.first) {
     e.ghost_generation = it->second.first;
+    renamed = true;
     const auto& ghost = it->second.second;
     e.with_ghosts.resize(ghost.size());
     for (std::size_t i = 0; i < ghost.size(); ++i) {
@@ -218,7 +243,7 @@ const NeighborList& SharedNeighborList::update(const Eigen::Ref<const Matrix3X>&
     Registry& r = registry();
     const std::lock_guard lock(r.mutex);
     std::erase_if(r.entries, [](const auto& e) { return e.expired(); });
-    entry_.reset();
+    std::shared_ptr<Entry> old = std::move(entry_);
     for (const auto& weak : r.entries) {
       auto live = weak.lock();
       if (live && live->matches(key, n, domain, kind_, members)) {
@@ -226,7 +251,10 @@ const NeighborList& SharedNeighborList::update(const Eigen::Ref<const Matrix3X>&
         break;
       }
     }
-    if (!entry_) {
+    if (!entry_ && old && old.use_count() == 1) {  // no other force shares it
+      old->rebind(key, n, domain, members, cutoff_, skin_);
+      entry_ = std::move(old);
+    } else if (!entry_) {
       entry_ = std::make_shared<Entry>(key, n, domain, kind_, members, cutoff_, skin_);
       r.entries.push_back(entry_);
     }
@@ -246,7 +274,10 @@ const NeighborList& SharedNeighborList::update(const Eigen::Ref<const Matrix3X>&
           ? (domain.min - e.built_in.min).norm() + (domain.max - e.built_in.max).norm()
           : 0.0;
   rule.box_moved = std::max(e.box_moved, moved);
-  if (e.list.update(x, domain, with_ghosts(e, key, n, members), rule)) {
+  bool renamed = false;
+  const std::vector<std::uint8_t>* mask = with_ghosts(e, key, n, members, renamed);
+  if (renamed) rule.when = NeighborList::Rebuild::Always;
+  if (e.list.update(x, domain, mask, rule)) {
     e.ago = 0;
     e.built_in = domain;
     e.box_moved = 0.0;

@@ -325,12 +325,11 @@ void NeighborList::build(const Eigen::Ref<const Matrix3X>& x, const Domain& doma
   bin(x, domain);
   make_stencil();
   if (kind_ == Kind::Half && !grid_.fold) {
-    fill_half_rows(n);
+    fill_half_rows(n);  // drops the pairs of two ghosts as it finds them (half_pairs)
   } else {
     fill_rows(n);
-  }
-  if (std::find(mask_.begin(), mask_.end(), std::uint8_t{2}) != mask_.end()) {
-    drop_ghost_pairs(mask_, offsets_, indices_);
+    if (std::find(mask_.begin(), mask_.end(), std::uint8_t{2}) != mask_.end())
+      drop_ghost_pairs(mask_, offsets_, indices_);
   }
 
   built_ = true;
@@ -706,6 +705,10 @@ Index NeighborList::half_pairs(Index slot, std::vector<Index>& buf, Index used) 
   const Index* index = sorted_index_.data();
   const Point* pos = sorted_pos_.data();
   Index count = 0;
+  // A ghost (member mask 2, set_neighbor_ghosts) keeps no pair with another
+  // ghost: dropped here, before the rows are counted, scattered and sorted.
+  const std::uint8_t* ghost_of =
+      !mask_.empty() && mask_[static_cast<std::size_t>(i)] == 2 ? mask_.data() : nullptr;
 
   // Slots [begin, end) shifted by (sx, sy, sz); the candidate is written
   // before the test and kept by advancing: no branch on the outcome.
@@ -714,14 +717,21 @@ Index NeighborList::half_pairs(Index slot, std::vector<Index>& buf, Index used) 
     make_room(buf, static_cast<std::size_t>(used + count + 2 * (end - begin)));
     Index* out = buf.data() + used;
     Index kept = count;
-    for (Index s = begin; s < end; ++s) {
-      const Index j = index[s];
-      const Point& q = pos[s];
-      const double dx = q[0] + sx - p[0], dy = q[1] + sy - p[1], dz = q[2] + sz - p[2];
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      out[kept] = std::min(i, j);
-      out[kept + 1] = std::max(i, j);
-      kept += 2 * static_cast<Index>(r2 <= reach2);
+    const auto candidates = [&](auto keep) {
+      for (Index s = begin; s < end; ++s) {
+        const Index j = index[s];
+        const Point& q = pos[s];
+        const double dx = q[0] + sx - p[0], dy = q[1] + sy - p[1], dz = q[2] + sz - p[2];
+        const double r2 = dx * dx + dy * dy + dz * dz;
+        out[kept] = std::min(i, j);
+        out[kept + 1] = std::max(i, j);
+        kept += 2 * static_cast<Index>(keep(r2, j));
+      }
+    };
+    if (ghost_of == nullptr) {
+      candidates([&](double r2, Index) { return r2 <= reach2; });
+    } else {
+      candidates([&](double r2, Index j) { return r2 <= reach2 && ghost_of[j] != 2; });
     }
     count = kept;
   };

@@ -6,8 +6,29 @@
 #   cmake -DPDYN=<pdyn> -DMPIEXEC=<mpiexec> -DSCENE=<scene.yaml> -DWORK=<dir>
 #         -DRANKS=2 [-DSTEPS=N] [-DRESUME_RANKS=3] [-DGRID=NX,NY,NZ] -P run_identical.cmake
 #
-# The scene's folder is copied (its side files with it), so that each run
-# writes its own out/.
+# -DLAMMPS_INPUT=<in.file> instead of -DSCENE: the scene is that LAMMPS
+# input converted by `pdyn convert` first. The scene's folder is copied
+# (its side files with it), so that each run writes its own out/.
+if(DEFINED LAMMPS_INPUT AND DEFINED WORK)
+  file(REMOVE_RECURSE "${WORK}")
+  get_filename_component(input_stem "${LAMMPS_INPUT}" NAME_WE)
+  set(SCENE "${WORK}/converted/${input_stem}.yaml")
+  file(MAKE_DIRECTORY "${WORK}/converted")
+  execute_process(COMMAND "${PDYN}" convert "${LAMMPS_INPUT}" -o "${SCENE}"
+                  RESULT_VARIABLE rc ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "pdyn convert ${LAMMPS_INPUT}: exit ${rc}\n${err}")
+  endif()
+  # Its thermo goes under out/ with the rest, and its checkpoint is a
+  # top-level key (the scene's outputs are a list).
+  file(READ "${SCENE}" text)
+  string(REPLACE "path: ${input_stem}" "path: out/${input_stem}" text "${text}")
+  file(WRITE "${SCENE}" "${text}")
+  set(CHECKPOINT_KEY checkpoint)
+endif()
+if(NOT DEFINED CHECKPOINT_KEY)
+  set(CHECKPOINT_KEY output.checkpoint)
+endif()
 foreach(var PDYN MPIEXEC SCENE WORK RANKS)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "run_identical.cmake: -D${var}=... is required")
@@ -19,8 +40,10 @@ endif()
 get_filename_component(scene_dir "${SCENE}" DIRECTORY)
 get_filename_component(scene_name "${SCENE}" NAME)
 get_filename_component(stem "${SCENE}" NAME_WE)
-file(REMOVE_RECURSE "${WORK}")
-set(checkpoint "--set=output.checkpoint={path: out/run.ckpt}")
+foreach(name plain ranks${RANKS} resumed)
+  file(REMOVE_RECURSE "${WORK}/${name}")
+endforeach()
+set(checkpoint "--set=${CHECKPOINT_KEY}={path: out/run.ckpt}")
 
 # Runs `pdyn run` in a fresh copy of the scene's folder named `name`,
 # under `ranks` MPI ranks (0: no mpirun), with the extra arguments.

@@ -66,6 +66,7 @@ void copy_state(const System& sys, Index i, const Matrix3X* kept, ParticleRecord
   for (int a = 0; a < 3; ++a) {
     const auto aa = static_cast<std::size_t>(a);
     rec.x[aa] = sys.positions()(a, i);
+    rec.place[aa] = rec.x[aa];
     rec.v[aa] = sys.velocities()(a, i);
     rec.a[aa] = kept != nullptr ? (*kept)(a, i) : 0.0;
   }
@@ -83,6 +84,22 @@ void unpack(const std::vector<ParticleRecord>& all, Eigen::Ref<Matrix3X> x, Eige
     if (a != nullptr) a->col(rec.id) = Vec3(rec.a[0], rec.a[1], rec.a[2]);
     images[static_cast<std::size_t>(rec.id)] = rec.images;
   }
+}
+
+// Below this squared length (m^2) a displacement is its own nearest image
+// (half the shortest periodic edge, squared; infinite without one).
+double unwrapped_below2(const Domain& box) {
+  double half = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (box.periodic[static_cast<std::size_t>(a)]) half = std::min(half, 0.5 * box.length()[a]);
+  }
+  return half * half;
+}
+
+// The displacement `raw` (m) at its nearest image, rounding only the few
+// that could differ (`near2`: unwrapped_below2).
+Vec3 displacement(const Domain& box, const Vec3& raw, double near2) {
+  return raw.squaredNorm() < near2 ? raw : box.minimum_image(raw);
 }
 
 constexpr std::string_view kRuns =
@@ -142,7 +159,17 @@ DecomposedSystem::DecomposedSystem(MPI_Comm comm, Scene& scene, std::optional<Ra
   int ranks = 1;
   MPI_Comm_size(comm_, &ranks);
   System& sys = *scene.system;
+  // A resumed solver's kept accelerations (pdyn/force_reuse.hpp) would not
+  // survive the force evaluation reach_and_skin may make: kept aside and
+  // restored, or the first step would evaluate them afresh, which differs
+  // in the last bits after a wrap.
+  std::optional<Matrix3X> resumed;
+  if (const Matrix3X* kept = kept_accelerations()) resumed = *kept;
   const auto [reach, skin] = reach_and_skin(scene, ranks);
+  if (resumed) {
+    if (auto* holder = dynamic_cast<ForceReuseHolder*>(scene.solver.get()))
+      holder->restore_kept_accelerations(sys, *resumed);
+  }
   half_skin_ = 0.5 * skin;
   total_ = sys.size();
   radii_ = !sys.radii().empty();
@@ -198,7 +225,7 @@ void DecomposedSystem::load_local() {
   System& sys = *scene_.system;
   const auto& local = halo_->local();
   const auto n = static_cast<Index>(local.size());
-  Matrix3X x(3, n), v(3, n), a(3, n);
+  Matrix3X x(3, n), v(3, n), a(3, n), placed(3, n);
   Eigen::VectorXd mass(n);
   std::vector<std::uint8_t> fixed(local.size());
   std::vector<double> radius(radii_ ? local.size() : 0);
@@ -208,6 +235,7 @@ void DecomposedSystem::load_local() {
     const ParticleRecord& rec = local[k];
     const auto kk = static_cast<Index>(k);
     x.col(kk) = Vec3(rec.x[0], rec.x[1], rec.x[2]);
+    placed.col(kk) = Vec3(rec.place[0], rec.place[1], rec.place[2]);
     v.col(kk) = Vec3(rec.v[0], rec.v[1], rec.v[2]);
     a.col(kk) = Vec3(rec.a[0], rec.a[1], rec.a[2]);
     mass[kk] = rec.mass;
@@ -228,7 +256,11 @@ void DecomposedSystem::load_local() {
   if (radii_) assembly.set_radii(std::move(radius));
   if (types_) assembly.set_types(std::move(type));
   assembly.set_images(std::move(images));
-  x_at_exchange_ = x;
+  placed_ = std::move(placed);
+  owned_.clear();
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    if (halo_->ghost()[k] == 0) owned_.push_back(static_cast<Index>(k));
+  }
   // A solver that reuses its end-of-step forces gets the owned particles'
   // kept accelerations back (the ghosts' are never read): recomputed after
   // the wrap into the box they could differ in the last bit (pdyn/
@@ -244,10 +276,12 @@ const Matrix3X* DecomposedSystem::kept_accelerations() const {
   return holder != nullptr ? holder->kept_accelerations(*scene_.system) : nullptr;
 }
 
-std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
+std::vector<ParticleRecord> DecomposedSystem::owned_records(bool place_ahead) const {
   const System& sys = *scene_.system;
   const Matrix3X* kept = kept_accelerations();
   kept_ = kept != nullptr;
+  const bool drift = place_ahead && verlet_drift();
+  const double h = scene_.dt;
   std::vector<ParticleRecord> out;
   out.reserve(static_cast<std::size_t>(halo_->owned()));
   for (std::size_t k = 0; k < halo_->local().size(); ++k) {
@@ -255,39 +289,66 @@ std::vector<ParticleRecord> DecomposedSystem::owned_records() const {
     const auto kk = static_cast<Index>(k);
     ParticleRecord rec = halo_->local()[k];
     copy_state(sys, kk, kept, rec);
+    if (drift) {
+      const Vec3 next = sys.domain().wrap(sys.positions().col(kk) + h * sys.velocities().col(kk) +
+                                          0.5 * h * h * kept->col(kk));
+      for (int a = 0; a < 3; ++a) rec.place[static_cast<std::size_t>(a)] = next[a];
+    }
     out.push_back(rec);
   }
   return out;
 }
 
-bool DecomposedSystem::begin_step(bool stop) {
+bool DecomposedSystem::verlet_drift() const {
+  const Matrix3X* kept = kept_accelerations();
+  return kept != nullptr && kept->cols() == scene_.system->size() && scene_.solver_name == "verlet";
+}
+
+bool DecomposedSystem::exchange_due() const {
+  if (!std::isfinite(half_skin_)) return false;
   const System& sys = *scene_.system;
-  int flags[2] = {0, stop ? 1 : 0};  // exchange, stop
-  if (std::isfinite(half_skin_) && !stop) {
-    // Exchanged when a particle has moved more than skin / 2 less what the
-    // fastest may move in this step (h |v| + h^2 |a| / 2, with the
-    // acceleration a Verlet solver keeps: velocity Verlet's drift, exactly):
-    // the ghosts must hold every partner at the step's force evaluations
-    // too, which check_reach verifies.
-    const Matrix3X* kept = kept_accelerations();
-    const double h = scene_.dt;
-    double moved = 0.0, stride = 0.0;
-    for (std::size_t k = 0; k < halo_->local().size(); ++k) {
-      if (halo_->ghost()[k] != 0) continue;
-      const auto kk = static_cast<Index>(k);
-      const Vec3 d = sys.domain().minimum_image(sys.positions().col(kk) - x_at_exchange_.col(kk));
-      moved = std::max(moved, d.norm());
-      double s = h * sys.velocities().col(kk).norm();
-      if (kept != nullptr && kept->cols() == sys.size()) s += 0.5 * h * h * kept->col(kk).norm();
-      stride = std::max(stride, s);
+  // Velocity Verlet's drift is x + h v + h^2 a / 2 with the kept a, so
+  // each owned particle's next position is known before the step: the
+  // exchange comes at the step whose force evaluation would find a
+  // particle past skin / 2, as LAMMPS's decide() after its drift (a relative
+  // 1e-9 covers the rounding of the two sums), and places the particles
+  // where that evaluation will find them (owned_records). Other solvers
+  // move by h |v| + h^2 |a| / 2 to second order, with a the last
+  // evaluation's: the exchange then comes when the farthest moved plus the
+  // fastest's stride passes skin / 2 (check_reach catches a step that
+  // outruns it). Squared lengths throughout: one square root per step.
+  const bool exact = verlet_drift();
+  const Matrix3X* kept = exact ? kept_accelerations() : nullptr;
+  const double h = scene_.dt, limit = exact ? half_skin_ * (1.0 - 1e-9) : half_skin_;
+  const Matrix3X& f = sys.forces();
+  const bool have_f = f.cols() == sys.size();
+  const Domain& box = sys.domain();
+  const double near2 = unwrapped_below2(box);
+  double moved2 = 0.0, v2 = 0.0, a2 = 0.0;
+  for (const Index k : owned_) {
+    const Vec3 d = displacement(box, sys.positions().col(k) - placed_.col(k), near2);
+    const Vec3 v = sys.velocities().col(k);
+    if (exact) {
+      moved2 = std::max(moved2, (d + h * v + 0.5 * h * h * kept->col(k)).squaredNorm());
+      continue;
     }
-    if (!(moved + stride <= half_skin_)) flags[0] = 1;
+    moved2 = std::max(moved2, d.squaredNorm());
+    v2 = std::max(v2, v.squaredNorm());
+    if (have_f) {
+      const double w = sys.inverse_masses()[k];
+      a2 = std::max(a2, f.col(k).squaredNorm() * w * w);
+    }
   }
+  return !(std::sqrt(moved2) + h * std::sqrt(v2) + 0.5 * h * h * std::sqrt(a2) <= limit);
+}
+
+bool DecomposedSystem::begin_step(bool stop) {
+  int flags[2] = {!stop && exchange_due() ? 1 : 0, stop ? 1 : 0};  // exchange, stop
   int agreed[2] = {0, 0};
   MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, comm_);
   if (agreed[1] != 0) return false;
   if (agreed[0] == 0) return true;
-  const std::vector<ParticleRecord> held = owned_records();
+  const std::vector<ParticleRecord> held = owned_records(true);
   halo_->exchange(held);
   ++exchanges_;
   load_local();
@@ -296,22 +357,37 @@ bool DecomposedSystem::begin_step(bool stop) {
 
 void DecomposedSystem::check_reach(const ParticleView& p) {
   if (!std::isfinite(half_skin_) || !violation_.empty()) return;
-  for (std::size_t k = 0; k < halo_->local().size(); ++k) {
-    if (halo_->ghost()[k] != 0) continue;
-    const auto kk = static_cast<Index>(k);
-    const double d = p.domain.minimum_image(p.x.col(kk) - x_at_exchange_.col(kk)).norm();
-    if (d <= half_skin_) continue;
+  const double near2 = unwrapped_below2(p.domain), limit2 = half_skin_ * half_skin_;
+  for (const Index k : owned_) {
+    const Vec3 moved = displacement(p.domain, p.x.col(k) - placed_.col(k), near2);
+    if (moved.squaredNorm() <= limit2) continue;
+    const double d = moved.norm();
     violation_ = fmt::format(
-        "particle {} moved {:.6g} m since the particles were last exchanged, more than half the "
+        "particle {} moved {:.6g} m from where the last exchange of particles placed it, more than "
+        "half the "
         "skin ({:.6g} m), within one step: its rank's ghosts may miss a partner, so the step is "
         "refused (expected a smaller dt or a larger skin)",
-        halo_->local()[k].id, d, half_skin_);
+        halo_->local()[static_cast<std::size_t>(k)].id, d, half_skin_);
     return;
   }
 }
 
+std::array<double, 2> DecomposedSystem::local_energy() const {
+  const System& sys = *scene_.system;
+  double k = 0.0;
+  for (const Index i : owned_) k += 0.5 * sys.masses()[i] * sys.velocities().col(i).squaredNorm();
+  double u = 0.0, abs_u = 0.0;
+  for (const auto& entry : sys.force_objects()) {
+    if (const auto ui = entry.force->potential_energy(sys.view())) {
+      u += *ui;
+      abs_u += std::abs(*ui);
+    }
+  }
+  return {k + u, k + abs_u};
+}
+
 std::vector<ParticleRecord> DecomposedSystem::gathered(int root) const {
-  const std::vector<ParticleRecord> mine = owned_records();
+  const std::vector<ParticleRecord> mine = owned_records(false);
   const int count = static_cast<int>(mine.size());
   const bool at_root = halo_->rank() == root;
   std::vector<int> counts(at_root ? static_cast<std::size_t>(halo_->ranks()) : 0, 0);
@@ -349,17 +425,24 @@ void DecomposedSystem::gather(int root, Matrix3X& x, Matrix3X& v,
   unpack(all, x, v, nullptr, images);
 }
 
-int MpiRankDriver::end_step(Scene& whole, bool gather, bool failed) {
-  // One reduction: rank 0's wish to gather, and the lowest failing rank as
-  // ranks - rank (the largest), 0 for none.
+int MpiRankDriver::end_step(Scene& whole, bool gather, bool failed, std::array<double, 2>* energy) {
+  // One reduction: rank 0's wishes to gather and to check the energy, and
+  // the lowest failing rank as ranks - rank (the largest), 0 for none.
   const int ranks = d_.halo().ranks(), rank = d_.halo().rank();
   if (!d_.violation().empty()) {
     std::cerr << fmt::format("pdyn (MPI rank {}): {}\n", rank, d_.violation());
     failed = true;
   }
-  int flags[2] = {gather ? 1 : 0, failed ? ranks - rank : 0}, agreed[2] = {0, 0};
-  MPI_Allreduce(flags, agreed, 2, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  int flags[3] = {gather ? 1 : 0, failed ? ranks - rank : 0, energy != nullptr ? 1 : 0};
+  int agreed[3] = {0, 0, 0};
+  MPI_Allreduce(flags, agreed, 3, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
   if (agreed[0] != 0 && agreed[1] == 0) d_.gather_into(whole);
+  if (agreed[2] != 0 && agreed[1] == 0) {
+    const std::array<double, 2> mine = d_.local_energy();
+    std::array<double, 2> sum{};
+    MPI_Reduce(mine.data(), sum.data(), 2, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+    if (energy != nullptr) *energy = sum;
+  }
   return agreed[1] != 0 ? ranks - agreed[1] : -1;
 }
 
@@ -385,7 +468,7 @@ int follow_run(DecomposedSystem& decomposed, std::int64_t k0, int threads, std::
                          step_fault_message(stepper.fault(), scene, k, "is on this rank"));
       status = 4;
     }
-    driver.end_step(scene, false, !ok);
+    driver.end_step(scene, false, !ok, nullptr);
   }
   return status;
 }

@@ -19,9 +19,34 @@ std::vector<int> offsets_of(const std::vector<int>& count) {
   return offset;
 }
 
-Vec3 position(const ParticleRecord& r) { return {r.x[0], r.x[1], r.x[2]}; }
+Vec3 place(const ParticleRecord& r) { return {r.place[0], r.place[1], r.place[2]}; }
 
 bool by_id(const ParticleRecord& a, const ParticleRecord& b) { return a.id < b.id; }
+
+// Sorts `v`, made of consecutive runs of run[r] elements each, by `less`:
+// merges the runs pairwise when each is sorted already (as every rank sends
+// its particles, in increasing id), O(n log runs); sorts it otherwise.
+template <class T, class Less>
+void merge_runs(std::vector<T>& v, const std::vector<int>& run, Less less) {
+  std::vector<std::size_t> bound{0};
+  for (const int n : run) bound.push_back(bound.back() + static_cast<std::size_t>(n));
+  const auto at = [&](std::size_t k) { return v.begin() + static_cast<std::ptrdiff_t>(k); };
+  for (std::size_t r = 0; r + 1 < bound.size(); ++r) {
+    if (!std::is_sorted(at(bound[r]), at(bound[r + 1]), less)) {
+      std::sort(v.begin(), v.end(), less);
+      return;
+    }
+  }
+  while (bound.size() > 2) {
+    std::vector<std::size_t> merged{0};
+    for (std::size_t r = 0; r + 1 < bound.size(); r += 2) {
+      const std::size_t end = std::min(r + 2, bound.size() - 1);
+      std::inplace_merge(at(bound[r]), at(bound[r + 1]), at(bound[end]), less);
+      merged.push_back(bound[end]);
+    }
+    bound = std::move(merged);
+  }
+}
 
 }  // namespace
 
@@ -46,8 +71,9 @@ Halo::~Halo() {
 }
 
 std::vector<ParticleRecord> Halo::alltoall(const std::vector<ParticleRecord>& out,
-                                           const std::vector<int>& count) const {
-  std::vector<int> in_count(static_cast<std::size_t>(ranks_), 0);
+                                           const std::vector<int>& count,
+                                           std::vector<int>& in_count) const {
+  in_count.assign(static_cast<std::size_t>(ranks_), 0);
   MPI_Alltoall(count.data(), 1, MPI_INT, in_count.data(), 1, MPI_INT, comm_);
   const std::vector<int> out_offset = offsets_of(count), in_offset = offsets_of(in_count);
   std::vector<ParticleRecord> in(static_cast<std::size_t>(in_offset.back() + in_count.back()));
@@ -63,15 +89,16 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
   std::vector<int> count(p, 0);
   std::vector<int> dest(held.size());
   for (std::size_t i = 0; i < held.size(); ++i) {
-    dest[i] = decomposition_.owner(position(held[i]));
+    dest[i] = decomposition_.owner(place(held[i]));
     ++count[static_cast<std::size_t>(dest[i])];
   }
   std::vector<int> next = offsets_of(count);
   std::vector<ParticleRecord> out(held.size());
   for (std::size_t i = 0; i < held.size(); ++i)
     out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest[i])]++)] = held[i];
-  std::vector<ParticleRecord> owned = alltoall(out, count);
-  std::sort(owned.begin(), owned.end(), by_id);
+  std::vector<int> in_count;
+  std::vector<ParticleRecord> owned = alltoall(out, count, in_count);
+  merge_runs(owned, in_count, by_id);
 
   // 2. Ghosts: a copy of each owned particle to every rank within reach, in
   // increasing id per destination (owned is sorted).
@@ -79,7 +106,7 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
   std::vector<int> ranks;
   for (std::size_t i = 0; i < owned.size(); ++i) {
     ranks.clear();
-    decomposition_.ghost_ranks(position(owned[i]), rank_, ranks);
+    decomposition_.ghost_ranks(place(owned[i]), rank_, ranks);
     for (const int r : ranks) to[static_cast<std::size_t>(r)].push_back(i);
   }
   out.clear();
@@ -87,7 +114,7 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
     count[r] = static_cast<int>(to[r].size());
     for (const std::size_t i : to[r]) out.push_back(owned[i]);
   }
-  const std::vector<ParticleRecord> ghosts = alltoall(out, count);
+  const std::vector<ParticleRecord> ghosts = alltoall(out, count, in_count);
 
   // 3. The local order: owned and ghosts merged by id. Where each owned
   // particle and each arriving ghost lands gives forward()'s maps.
@@ -100,7 +127,8 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
     order.emplace_back(owned[i].id, -1 - static_cast<std::int64_t>(i));
   for (std::size_t g = 0; g < ghosts.size(); ++g)
     order.emplace_back(ghosts[g].id, static_cast<std::int64_t>(g));
-  std::sort(order.begin(), order.end());
+  in_count.insert(in_count.begin(), static_cast<int>(owned.size()));
+  merge_runs(order, in_count, std::less<>());
   std::vector<Index> owned_local(owned.size());
   recv_local_.assign(ghosts.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) {

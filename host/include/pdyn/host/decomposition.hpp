@@ -24,6 +24,7 @@
 #include <array>
 #include <pdyn/types.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pdyn/host/export.hpp"
@@ -66,7 +67,10 @@ class PDYN_HOST_API Decomposition {
   /// whose subdomain lies within reach of `x` (nearest image along periodic
   /// axes): the ranks that need a ghost copy of the particle.
   void ghost_ranks(const Vec3& x, int owner, std::vector<int>& out) const;
-  /// Subdomain of `rank`: its lower and upper corners, m.
+  /// Subdomain of `rank`: its lower and upper corners, m. Along an open axis
+  /// the first and last cells reach to -inf and +inf: a particle that left
+  /// the region is owned by the edge cell, and ghost_ranks() measures to it
+  /// there.
   std::array<Vec3, 2> bounds(int rank) const;
 
  private:
@@ -74,6 +78,8 @@ class PDYN_HOST_API Decomposition {
   double plane(int axis, int k) const noexcept;
   // Cell along `axis` holding coordinate c.
   int cell(int axis, double c) const noexcept;
+  // Cell k's slab along `axis`, m: the planes, unbounded at an open axis's ends.
+  std::pair<double, double> slab(int axis, int k) const noexcept;
   // Distance (m) along `axis` from coordinate c to cell k's slab, nearest image.
   double gap(int axis, double c, int k) const noexcept;
 

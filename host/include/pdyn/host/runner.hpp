@@ -1,6 +1,7 @@
 // The simulation runner: steps a loaded scene and writes its output.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <iosfwd>
@@ -34,8 +35,14 @@ class PDYN_HOST_API RankDriver {
   /// After each step (collective): `gather` rank 0's wish to read the
   /// state, `failed` whether this rank's step failed. When gathering, every
   /// particle's state, the time and a solver's kept accelerations are put
-  /// into `whole`. Returns the lowest rank whose step failed, or -1.
-  virtual int end_step(Scene& whole, bool gather, bool failed) = 0;
+  /// into `whole`. `energy`: non-null on rank 0 when the energy check is
+  /// due; it then receives the total energy and its magnitude (J: K + sum
+  /// U_i and K + sum |U_i|, EnergyWatch in runner.cpp) summed over the
+  /// ranks, each rank's kinetic energy of its owned particles and potential
+  /// energies of its particles, so that a pair across two subdomains counts
+  /// on both (a safeguard's figure, never an output). Returns the lowest
+  /// rank whose step failed, or -1.
+  virtual int end_step(Scene& whole, bool gather, bool failed, std::array<double, 2>* energy) = 0;
   /// Ends the run on every rank (collective): called once, when run_scene
   /// stops stepping for whatever reason.
   virtual void finish() = 0;

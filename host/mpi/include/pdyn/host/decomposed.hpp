@@ -77,6 +77,11 @@ class PDYN_HOST_API DecomposedSystem {
   /// What made the last steps' forces unsafe (check_reach), or "".
   const std::string& violation() const noexcept { return violation_; }
 
+  /// This rank's share of the energy check's sums (RankDriver::end_step),
+  /// J: its owned particles' kinetic energy plus its forces' potential
+  /// energies on its particles, and the same with |U_i|.
+  std::array<double, 2> local_energy() const;
+
   /// The scene stepped on this rank.
   Scene& scene() noexcept { return scene_; }
   const Halo& halo() const noexcept { return *halo_; }
@@ -87,10 +92,18 @@ class PDYN_HOST_API DecomposedSystem {
 
  private:
   void load_local();
+  // Whether the coming step could take an owned particle of this rank more
+  // than skin / 2 from where it was at the last exchange.
+  bool exchange_due() const;
   // The accelerations the solver keeps for its next step
   // (pdyn/force_reuse.hpp), or nullptr.
   const Matrix3X* kept_accelerations() const;
-  std::vector<ParticleRecord> owned_records() const;
+  // The owned particles' records; with `place_ahead`, placed where velocity
+  // Verlet's drift will take them (ParticleRecord::place) when it is known.
+  std::vector<ParticleRecord> owned_records(bool place_ahead) const;
+  // Whether the solver's next drift is known: velocity Verlet with its kept
+  // accelerations.
+  bool verlet_drift() const;
   std::vector<ParticleRecord> gathered(int root) const;
 
   MPI_Comm comm_;
@@ -98,10 +111,11 @@ class PDYN_HOST_API DecomposedSystem {
   std::unique_ptr<Halo> halo_;
   std::shared_ptr<Force> halo_force_;
   double half_skin_ = 0.0;
-  Matrix3X x_at_exchange_;  // the owned particles' positions at the last exchange (local order)
+  Matrix3X placed_;           // where the last exchange placed the particles (local order)
+  std::vector<Index> owned_;  // the owned particles' local indices, ascending
   bool radii_ = false, types_ = false;
-  mutable bool kept_ = false;
-  std::string violation_;  // the last owned_records() found kept accelerations
+  mutable bool kept_ = false;  // the last owned_records() found kept accelerations
+  std::string violation_;
   Index total_ = 0;
   std::int64_t exchanges_ = 0;
 };
@@ -113,7 +127,7 @@ class PDYN_HOST_API MpiRankDriver final : public RankDriver {
   explicit MpiRankDriver(DecomposedSystem& decomposed) : d_(decomposed) {}
   Scene& local() override { return d_.scene(); }
   bool begin_step() override { return d_.begin_step(false); }
-  int end_step(Scene& whole, bool gather, bool failed) override;
+  int end_step(Scene& whole, bool gather, bool failed, std::array<double, 2>* energy) override;
   void finish() override { d_.begin_step(true); }
 
  private:

@@ -38,6 +38,12 @@ struct ParticleRecord {
   std::int64_t id = 0;        ///< global index: the particle's index in the plain run
   std::array<double, 3> x{};  ///< position, m
   std::array<double, 3> v{};  ///< velocity, m/s
+  /// Where exchange() places the particle (m, in the box along periodic
+  /// axes): its position at the coming force evaluation where a solver's
+  /// drift tells it in advance (velocity Verlet's x + h v + h^2 a / 2), else
+  /// x. Owners and ghosts are chosen by it, and the particles' moves are
+  /// counted from it until the next exchange.
+  std::array<double, 3> place{};
   /// The acceleration (m/s^2) a solver that reuses its end-of-step forces
   /// keeps for the next step (pdyn/force_reuse.hpp), carried across an
   /// exchange so that the step after it reuses what the plain run reuses.
@@ -87,9 +93,11 @@ class PDYN_HOST_API Halo {
 
  private:
   // Sends `out` (grouped by destination rank, `count[r]` records for rank r)
-  // and returns what arrives, grouped by source rank.
+  // and returns what arrives, grouped by source rank (in_count[r] records
+  // from rank r).
   std::vector<ParticleRecord> alltoall(const std::vector<ParticleRecord>& out,
-                                       const std::vector<int>& count) const;
+                                       const std::vector<int>& count,
+                                       std::vector<int>& in_count) const;
 
   MPI_Comm comm_;
   MPI_Datatype record_type_ = MPI_DATATYPE_NULL;
