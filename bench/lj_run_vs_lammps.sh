@@ -13,8 +13,9 @@
 # exit included), and their median ratio is printed too.
 #
 #   bash bench/lj_run_vs_lammps.sh [BUILD_DIR]      (default: build)
-#   MPI=1 bash bench/lj_run_vs_lammps.sh            (also pdyn on 2 MPI ranks, 1 thread each:
-#                                                    issue 43; docs/parallel.md)
+#   MPI=1 bash bench/lj_run_vs_lammps.sh            (also pdyn on 2 MPI ranks, 1 thread each,
+#                                                    and on 1 rank under mpirun: issue 43;
+#                                                    docs/parallel.md)
 #
 # Needs Debian's lammps (lmp) and, for 2 ranks, mpirun; never a build
 # dependency. Writes out/lj_run/. Run it on a quiet machine.
@@ -57,7 +58,7 @@ lammps_loop() {  # ranks -> the log's Loop time, s
 }
 pdyn_loop() {  # threads [ranks] -> the steps' time pdyn run reports, s; checks one evaluation per step
   local text t0 t1 launch=()
-  [[ ${2:-1} -gt 1 ]] && launch=(env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np "$2")
+  [[ -n ${2:-} ]] && launch=(env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun --oversubscribe -np "$2")
   t0=$(date +%s.%N)
   text=$(cd "$out" && "${launch[@]}" "../../$pdyn" run melt.yaml --threads "$1")
   t1=$(date +%s.%N)
@@ -67,7 +68,7 @@ pdyn_loop() {  # threads [ranks] -> the steps' time pdyn run reports, s; checks 
   sed -n 's/^pdyn: 100 steps of .* (the steps \([0-9.e+-]*\) s).*/\1/p' <<<"$text"
 }
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-declare -a r1 r2 r3 s3 w1 w2
+declare -a r1 r2 r3 s3 o1 w1 w2
 printf '| round | LAMMPS 1 rank, s | pdyn 1 thread, s | ratio | LAMMPS 2 ranks, s | pdyn 2 threads, s | ratio |\n|---|---|---|---|---|---|---|\n'
 for ((k = 1; k <= rounds; ++k)); do
   wall_ratio() { awk -v p="$(cat "$out/pdyn.wall")" -v l="$(cat "$out/lammps.wall")" \
@@ -83,13 +84,15 @@ for ((k = 1; k <= rounds; ++k)); do
     m2=$(pdyn_loop 1 2)
     c=$(awk -v p="$m2" -v l="$l2" 'BEGIN{printf "%.3f", p / l}')
     s=$(awk -v p="$p1" -v m="$m2" 'BEGIN{printf "%.3f", p / m}')
-    r3+=("$c"); s3+=("$s")
-    printf '|   | pdyn 2 MPI ranks, 1 thread each: %s s | / LAMMPS 2 ranks %s | faster than pdyn 1 thread %sx | | | |\n' "$m2" "$c" "$s"
+    m1=$(pdyn_loop 1 1)
+    o=$(awk -v p="$p1" -v m="$m1" 'BEGIN{printf "%.3f", m / p}')
+    r3+=("$c"); s3+=("$s"); o1+=("$o")
+    printf '|   | pdyn 2 MPI ranks, 1 thread each: %s s | / LAMMPS 2 ranks %s | faster than pdyn 1 thread %sx | mpirun -np 1: %s s | / pdyn 1 thread %s | |\n' "$m2" "$c" "$s" "$m1" "$o"
   fi
 done
 median() { printf '%s\n' "$@" | sort -g | awk '{v[NR]=$1} END{print (NR % 2) ? v[(NR+1)/2] : (v[NR/2] + v[NR/2+1]) / 2}'; }
 echo "median pdyn / LAMMPS: 1 thread / 1 rank $(median "${r1[@]}") (target <= 1.0), 2 threads / 2 ranks $(median "${r2[@]}") (target <= 1.0)"
 echo "median whole-process wall time, pdyn run / lmp: 1 thread / 1 rank $(median "${w1[@]}"), 2 threads / 2 ranks $(median "${w2[@]}")"
 [[ ${MPI:-0} == 1 ]] &&
-  echo "median pdyn 2 MPI ranks: / LAMMPS 2 ranks $(median "${r3[@]}") (target <= 1.0), faster than 1 rank $(median "${s3[@]}")x (target >= 1.6)"
+  echo "median pdyn 2 MPI ranks: / LAMMPS 2 ranks $(median "${r3[@]}") (target <= 1.0), faster than 1 rank $(median "${s3[@]}")x (target >= 1.6); 1 rank under mpirun / plain $(median "${o1[@]}") (target <= 1.03)"
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"

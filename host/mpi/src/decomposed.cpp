@@ -13,6 +13,7 @@
 #include <string_view>
 #include <utility>
 
+#include "pdyn/contact.hpp"
 #include "pdyn/force_reuse.hpp"
 #include "pdyn/host/assembly.hpp"
 #include "pdyn/host/stepper.hpp"
@@ -103,8 +104,9 @@ Vec3 displacement(const Domain& box, const Vec3& raw, double near2) {
 }
 
 constexpr std::string_view kRuns =
-    "runs decomposed: pair forces without a group, gravity, drag, field; the solvers verlet, "
-    "symplectic_euler, euler, midpoint, rk4";
+    "runs decomposed: pair forces without a group, gravity, drag, field; the colliders box, "
+    "plane, sphere (any SurfaceCollider); the solvers verlet, symplectic_euler, euler, midpoint, "
+    "rk4";
 
 // The ghost reach (the largest cutoff + skin of the scene's pair forces, m)
 // and the smallest skin (m), once the scene is known to run decomposed;
@@ -121,7 +123,12 @@ std::pair<double, double> reach_and_skin(Scene& scene, int ranks) {
   if (scene.solver->adaptive() || !solvers.contains(scene.solver_name)) {
     refuse(scene.solver_label, "a solver not yet decomposed");
   }
-  if (!sys.collider_objects().empty()) refuse(sys.collider_objects().front().label, "a collider");
+  // A SurfaceCollider (box, plane, sphere) treats each particle alone, by
+  // the obstacle's geometry: it runs on a rank's particles unchanged.
+  for (const auto& entry : sys.collider_objects()) {
+    if (dynamic_cast<const SurfaceCollider*>(entry.collider.get()) == nullptr)
+      refuse(entry.label, "a collider that is not a SurfaceCollider");
+  }
   if (!sys.constraint_objects().empty())
     refuse(sys.constraint_objects().front().label, "a constraint");
   if (scene.special_bonds) refuse("special_bonds", "special bonds");

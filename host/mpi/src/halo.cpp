@@ -70,35 +70,48 @@ Halo::~Halo() {
   if (!finalized && record_type_ != MPI_DATATYPE_NULL) MPI_Type_free(&record_type_);
 }
 
-std::vector<ParticleRecord> Halo::alltoall(const std::vector<ParticleRecord>& out,
-                                           const std::vector<int>& count,
-                                           std::vector<int>& in_count) const {
+void Halo::alltoall(const std::vector<ParticleRecord>& out, const std::vector<int>& count,
+                    std::vector<int>& in_count, std::vector<ParticleRecord>& in) const {
   in_count.assign(static_cast<std::size_t>(ranks_), 0);
   MPI_Alltoall(count.data(), 1, MPI_INT, in_count.data(), 1, MPI_INT, comm_);
   const std::vector<int> out_offset = offsets_of(count), in_offset = offsets_of(in_count);
-  std::vector<ParticleRecord> in(static_cast<std::size_t>(in_offset.back() + in_count.back()));
+  in.resize(static_cast<std::size_t>(in_offset.back() + in_count.back()));
   MPI_Alltoallv(out.data(), count.data(), out_offset.data(), record_type_, in.data(),
                 in_count.data(), in_offset.data(), record_type_, comm_);
-  return in;
 }
 
 void Halo::exchange(const std::vector<ParticleRecord>& held) {
   const auto p = static_cast<std::size_t>(ranks_);
-  // 1. Migration: each particle to its owner. Grouped by destination with a
-  // stable counting sort, so a rank's records arrive in the order they were held.
+  // 1. Migration: each particle that left this rank's subdomain to its new
+  // owner, grouped by destination with a stable counting sort; the others
+  // stay, in the order held (between two exchanges few particles move on).
+  // The buffers are kept: a melt's rank exchanges megabytes of records
+  // every few steps, and fresh pages cost more than the copies.
   std::vector<int> count(p, 0);
-  std::vector<int> dest(held.size());
+  std::vector<ParticleRecord>& owned = owned_scratch_;
+  std::vector<ParticleRecord>& out = out_scratch_;
+  std::vector<ParticleRecord>& in = in_scratch_;
+  owned.clear();
+  std::vector<std::pair<int, std::size_t>> movers;  // (destination, index in held)
   for (std::size_t i = 0; i < held.size(); ++i) {
-    dest[i] = decomposition_.owner(place(held[i]));
-    ++count[static_cast<std::size_t>(dest[i])];
+    const int dest = decomposition_.owner(place(held[i]));
+    if (dest == rank_) {
+      owned.push_back(held[i]);
+    } else {
+      movers.emplace_back(dest, i);
+      ++count[static_cast<std::size_t>(dest)];
+    }
   }
   std::vector<int> next = offsets_of(count);
-  std::vector<ParticleRecord> out(held.size());
-  for (std::size_t i = 0; i < held.size(); ++i)
-    out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest[i])]++)] = held[i];
+  out.resize(movers.size());
+  for (const auto& [dest, i] : movers)
+    out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest)]++)] = held[i];
   std::vector<int> in_count;
-  std::vector<ParticleRecord> owned = alltoall(out, count, in_count);
-  merge_runs(owned, in_count, by_id);
+  alltoall(out, count, in_count, in);
+  std::vector<int> runs{static_cast<int>(owned.size())};
+  runs.insert(runs.end(), in_count.begin(), in_count.end());
+  owned.insert(owned.end(), in.begin(), in.end());
+  merge_runs(owned, runs, by_id);
 
   // 2. Ghosts: a copy of each owned particle to every rank within reach, in
   // increasing id per destination (owned is sorted).
@@ -114,15 +127,16 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
     count[r] = static_cast<int>(to[r].size());
     for (const std::size_t i : to[r]) out.push_back(owned[i]);
   }
-  const std::vector<ParticleRecord> ghosts = alltoall(out, count, in_count);
+  std::vector<ParticleRecord>& ghosts = in;
+  alltoall(out, count, in_count, ghosts);
 
   // 3. The local order: owned and ghosts merged by id. Where each owned
   // particle and each arriving ghost lands gives forward()'s maps.
   local_.clear();
   local_.reserve(owned.size() + ghosts.size());
   ghost_.assign(owned.size() + ghosts.size(), 0);
-  std::vector<std::pair<std::int64_t, std::int64_t>> order;  // (id, source): source < 0 owned
-  order.reserve(owned.size() + ghosts.size());
+  auto& order = order_scratch_;  // (id, source): source < 0 owned
+  order.clear();
   for (std::size_t i = 0; i < owned.size(); ++i)
     order.emplace_back(owned[i].id, -1 - static_cast<std::int64_t>(i));
   for (std::size_t g = 0; g < ghosts.size(); ++g)

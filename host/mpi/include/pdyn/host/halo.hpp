@@ -25,6 +25,7 @@
 #include <array>
 #include <cstdint>
 #include <pdyn/types.hpp>
+#include <utility>
 #include <vector>
 
 #include "pdyn/host/decomposition.hpp"
@@ -93,11 +94,10 @@ class PDYN_HOST_API Halo {
 
  private:
   // Sends `out` (grouped by destination rank, `count[r]` records for rank r)
-  // and returns what arrives, grouped by source rank (in_count[r] records
-  // from rank r).
-  std::vector<ParticleRecord> alltoall(const std::vector<ParticleRecord>& out,
-                                       const std::vector<int>& count,
-                                       std::vector<int>& in_count) const;
+  // and puts what arrives into `in`, grouped by source rank (in_count[r]
+  // records from rank r).
+  void alltoall(const std::vector<ParticleRecord>& out, const std::vector<int>& count,
+                std::vector<int>& in_count, std::vector<ParticleRecord>& in) const;
 
   MPI_Comm comm_;
   MPI_Datatype record_type_ = MPI_DATATYPE_NULL;
@@ -112,6 +112,9 @@ class PDYN_HOST_API Halo {
   std::vector<Index> send_local_, recv_local_;
   std::vector<int> send_count_, send_offset_, recv_count_, recv_offset_;
   mutable std::vector<double> send_buffer_, recv_buffer_;
+  // exchange()'s buffers, kept for their memory between calls.
+  std::vector<ParticleRecord> owned_scratch_, out_scratch_, in_scratch_;
+  std::vector<std::pair<std::int64_t, std::int64_t>> order_scratch_;
 };
 
 }  // namespace pdyn
