@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -265,6 +266,38 @@ TEST(Decomposed, AStepThatOutrunsTheGhostsIsRefusedNotComputed) {
   driver.finish();
 }
 
+TEST(Decomposed, TheEnergyCheckSumsEachRanksShare) {
+  // The energy check under ranks (RankDriver::end_step): each rank's owned
+  // particles' kinetic energy and its forces' potential energy, summed on
+  // rank 0. Under gravity alone no term spans two subdomains, so the sum
+  // is the plain system's K + U and K + |U| to the rounding of its order.
+  Scene scene = load_scene_text(
+      fmt::format(
+          "simulation: {{ dt: 0.005, steps: 1, solver: {{ type: verlet }},\n"
+          "  box: {{ min: [0, 0, 0], max: [{0}, {0}, {0}], periodic: [true, true, true] }} }}\n"
+          "particles:\n"
+          "  - cloud: {{ n: {1}, box: {{ min: [0, 0, 0], max: [1, 1, 1] }}, mass: 2 }}\n"
+          "forces:\n  - {{ type: gravity }}\n",
+          kBox, kSide * kSide * kSide),
+      "falling.yaml", plugins());
+  jitter(*scene.system);
+  const System& sys = *scene.system;
+  const double k = sys.kinetic_energy();
+  const double u = *sys.force_objects().front().force->potential_energy(sys.view());
+  DecomposedSystem decomposed(MPI_COMM_WORLD, scene, grid_for(scene));
+  MpiRankDriver driver(decomposed);
+  ASSERT_TRUE(driver.begin_step());
+  std::array<double, 2> sum{-1.0, -1.0};
+  EXPECT_EQ(driver.end_step(scene, false, false, world_rank() == 0 ? &sum : nullptr), -1);
+  if (world_rank() == 0) {
+    EXPECT_NEAR(sum[0], k + u, 1e-12 * (k + std::abs(u)));
+    EXPECT_NEAR(sum[1], k + std::abs(u), 1e-12 * (k + std::abs(u)));
+  } else {
+    EXPECT_EQ(sum[0], -1.0) << "only rank 0 receives the sum";
+  }
+  driver.finish();
+}
+
 TEST(Decomposed, WhatCannotRunDecomposedYetIsRefusedByName) {
   Scene scene = load_scene_text(
       "simulation: { dt: 0.01, steps: 1, solver: { type: verlet } }\n"
@@ -280,8 +313,8 @@ TEST(Decomposed, WhatCannotRunDecomposedYetIsRefusedByName) {
         fmt::format(
             "spring (chain.yaml:6:5): cannot run on {} yet (a force that declares no "
             "decomposed loop; runs decomposed: pair forces without a group, gravity, drag, "
-            "field; the solvers verlet, symplectic_euler, euler, midpoint, rk4; or run one "
-            "process)",
+            "field; the colliders box, plane, sphere (any SurfaceCollider); the solvers "
+            "verlet, symplectic_euler, euler, midpoint, rk4; or run one process)",
             world_size() == 1 ? std::string("1 rank") : fmt::format("{} ranks", world_size())));
   }
 }
