@@ -10,6 +10,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <ostream>
@@ -246,14 +247,15 @@ int cmd_run(const RunArgs& a, const Common& c, std::ostream& out, std::ostream& 
     const std::uint64_t evaluations_before = scene.system->force_evaluations();
     const auto start = std::chrono::steady_clock::now();
     std::optional<Scene> whole;
-    if (mpi != nullptr && root) {
-      whole.emplace(load(a, c, registry));
+    const std::function<Scene()> load_whole = [&] {
+      Scene w = load(a, c, registry);
       // Its warnings were told for the first copy.
-      if (checkpoint) restore_resumed(a, *checkpoint, *whole, quiet_sink);
-    }
-    const RunResult r = mpi == nullptr
-                            ? run_scene(scene, options)
-                            : mpi->run(scene, whole ? &*whole : nullptr, options, a.grid, err);
+      if (checkpoint) restore_resumed(a, *checkpoint, w, quiet_sink);
+      return w;
+    };
+    const RunResult r =
+        mpi == nullptr ? run_scene(scene, options)
+                       : mpi->run(scene, root ? &load_whole : nullptr, whole, options, a.grid, err);
     if (!root) return r.exit_code;
     // Printed even with --quiet: the run's result is probably wrong.
     if (!r.energy_warning.empty()) err << "pdyn: warning: " << r.energy_warning << "\n";

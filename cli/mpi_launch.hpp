@@ -5,8 +5,10 @@
 // under several ranks.
 #pragma once
 
+#include <functional>
 #include <iosfwd>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "pdyn/host/runner.hpp"
@@ -32,13 +34,16 @@ class MpiRun {
   virtual ~MpiRun() = default;
   virtual int rank() const = 0;
   /// Runs the scene decomposed: `local` is loaded (and a checkpoint
-  /// restored) on every rank; `whole`, the same scene loaded again, on rank
-  /// 0 only (nullptr elsewhere), where run_scene runs with `options` and
-  /// writes the output. `grid`: pdyn run --grid, or "". Returns rank 0's
-  /// result; on the other ranks exit_code is the rank's status. Throws
-  /// DecompositionError (on every rank alike) when the scene cannot run
-  /// decomposed.
-  virtual RunResult run(Scene& local, Scene* whole, RunOptions options, const std::string& grid,
+  /// restored) on every rank; on rank 0 only (nullptr elsewhere),
+  /// `load_whole` loads the same scene again into `whole`, once `local` has
+  /// given up the particles that are not its own (so that the two whole
+  /// copies are never held at once), and run_scene runs on it with
+  /// `options` and writes the output. `grid`: pdyn run --grid, or "".
+  /// Returns rank 0's result; on the other ranks exit_code is the rank's
+  /// status. Throws DecompositionError (on every rank alike) when the scene
+  /// cannot run decomposed.
+  virtual RunResult run(Scene& local, const std::function<Scene()>* load_whole,
+                        std::optional<Scene>& whole, RunOptions options, const std::string& grid,
                         std::ostream& err) = 0;
   /// Force evaluations on this rank's share so far.
   virtual std::uint64_t evaluations() const = 0;

@@ -2,6 +2,7 @@
 // MPI_Init, the scene decomposed (pdyn/host/decomposed.hpp), rank 0 running
 // run_scene on its copy of the whole scene while the others follow.
 #include <fmt/format.h>
+#include <malloc.h>
 #include <mpi.h>
 
 #include <ostream>
@@ -26,19 +27,22 @@ class OpenMpiRun final : public MpiRun {
 
   int rank() const override { return rank_; }
 
-  RunResult run(Scene& local, Scene* whole, RunOptions options, const std::string& grid,
-                std::ostream& err) override {
+  RunResult run(Scene& local, const std::function<Scene()>* load_whole, std::optional<Scene>& whole,
+                RunOptions options, const std::string& grid, std::ostream& err) override {
     int ranks = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
     std::optional<RankGrid> g;
     if (!grid.empty()) g = parse_rank_grid(grid, ranks);
     // Within this call: it refers to `local`, which the caller owns.
     DecomposedSystem decomposed(MPI_COMM_WORLD, local, g);
+    malloc_trim(0);
     const std::uint64_t evaluations_before = local.system->force_evaluations();
     running_ = true;
     const std::int64_t k0 = options.resume ? options.resume->step : 0;
     RunResult result;
-    if (whole != nullptr) {
+    if (load_whole != nullptr) {
+      whole.emplace((*load_whole)());
+      malloc_trim(0);
       MpiRankDriver driver(decomposed);
       options.ranks = &driver;
       result = run_scene(*whole, options);

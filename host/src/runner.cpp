@@ -218,6 +218,14 @@ class EnergyWatch {
   }
 
   bool active() const { return active_; }
+  // Under MPI ranks: the start's energy and magnitude summed over the ranks
+  // (RankDriver::end_step), as every later check is, in place of this
+  // rank's share that the constructor measured.
+  void start_from(const std::array<double, 2>& summed) {
+    e0_ = summed[0];
+    scale_ = std::max(std::abs(e0_), summed[1]);
+    active_ = active_ && std::isfinite(e0_);
+  }
   bool due(std::int64_t k, bool last) const {
     return active_ && !tripped_ && (last || k % kEvery == 0);
   }
@@ -538,6 +546,13 @@ double run_steps(Loop& loop, std::int64_t k0, bool adaptive) {
   // write), then set up their shares' forces together.
   if (loop.ranks != nullptr && !loop.ranks->begin_step()) return 0.0;
   if (!adaptive) set_up_forces(loop.ranks != nullptr ? loop.ranks->local() : loop.scene);
+  if (loop.ranks != nullptr) {
+    // The energy check's start, summed over the ranks as its checks are.
+    std::array<double, 2> sum{};
+    const bool check = loop.energy != nullptr && loop.energy->active();
+    loop.ranks->end_step(loop.scene, false, false, check ? &sum : nullptr);
+    if (check) loop.energy->start_from(sum);
+  }
   const auto start = std::chrono::steady_clock::now();
   if (adaptive) {
     run_adaptive(loop, k0);
@@ -578,7 +593,10 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   Stepper stepper(*stepped.system, *stepped.solver, stepped.solver_label,
                   stepped.neighbor_schedule);
   Loop loop{scene, out, progress, signals, result, stepper};
-  EnergyWatch energy(scene);
+  // Under MPI ranks it decides whether it applies on this rank's share (the
+  // same objects): evaluated on rank 0's whole scene it would build that
+  // scene's neighbor lists, the whole run's memory, for nothing else.
+  EnergyWatch energy(stepped);
   loop.energy = &energy;
   loop.strict = options.strict;
   loop.ranks = options.ranks;

@@ -779,7 +779,12 @@ void NeighborList::fill_half_rows(Index n) {
   // keep their size between builds: shrunk to the pairs and grown back to
   // their capacity, they would be zeroed again at every build (19 MB on the
   // 32,000-atom LJ melt).
-  std::vector<std::size_t> used(static_cast<std::size_t>(threads), 0);
+  // (The calling thread's, so that a warm build allocates nothing; the
+  // reference, not the name, reaches the OpenMP threads: named there, a
+  // thread_local is the worker's own.)
+  thread_local std::vector<std::size_t> counts;
+  std::vector<std::size_t>& used = counts;
+  used.assign(static_cast<std::size_t>(threads), 0);
   const auto gather = [&](int t, int nt) {
     std::vector<Index>& buf = chunks_[static_cast<std::size_t>(t)];
     if (buf.size() < buf.capacity()) buf.resize(buf.capacity());

@@ -10,6 +10,7 @@ namespace pdyn {
 
 PairReference::~PairReference() = default;
 PairLoop::~PairLoop() = default;
+PairRange::~PairRange() = default;
 
 void check_cutoff_fits(const Domain& domain, double cutoff, double skin) {
   const double reach = cutoff + skin;

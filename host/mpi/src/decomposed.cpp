@@ -109,8 +109,9 @@ constexpr std::string_view kRuns =
     "rk4";
 
 // The ghost reach (the largest cutoff + skin of the scene's pair forces, m)
-// and the smallest skin (m), once the scene is known to run decomposed;
-// throws DecompositionError naming the first object that cannot.
+// and the skin it leaves beyond the largest cutoff (m; infinite without a
+// pair force), once the scene is known to run decomposed; throws
+// DecompositionError naming the first object that cannot.
 std::pair<double, double> reach_and_skin(Scene& scene, int ranks) {
   System& sys = *scene.system;
   auto refuse = [&](const std::string& label, std::string_view why) {
@@ -132,22 +133,32 @@ std::pair<double, double> reach_and_skin(Scene& scene, int ranks) {
   if (!sys.constraint_objects().empty())
     refuse(sys.constraint_objects().front().label, "a constraint");
   if (scene.special_bonds) refuse("special_bonds", "special bonds");
-  // A pair force's list, which knows its reach, exists after its first
-  // evaluation.
+  // A pair force tells its range (PairRange); one built against an SDK
+  // without that tells it through its list, which exists after a first
+  // evaluation: of the whole scene, on every rank (memory a PairRange
+  // spares).
   for (const auto& entry : sys.force_objects()) {
-    const auto* pair = dynamic_cast<const PairReference*>(entry.force.get());
-    if (pair != nullptr && pair->pair_neighbors() == nullptr) {
+    const Force* f = entry.force.get();
+    const auto* pair = dynamic_cast<const PairReference*>(f);
+    if (pair != nullptr && dynamic_cast<const PairRange*>(f) == nullptr &&
+        pair->pair_neighbors() == nullptr) {
       sys.compute_accelerations();
       break;
     }
   }
-  double reach = 0.0, skin = std::numeric_limits<double>::infinity();
+  // The ghosts reach as far as the farthest list, cutoff + skin; particles
+  // may move half of what that leaves beyond the largest cutoff, as a
+  // shared list's rebuild rule allows (pdyn/neighbors.hpp).
+  double reach = 0.0, cutoff = 0.0;
   for (const auto& entry : sys.force_objects()) {
     if (const auto* pair = dynamic_cast<const PairReference*>(entry.force.get())) {
+      const auto* range = dynamic_cast<const PairRange*>(entry.force.get());
       const NeighborList* list = pair->pair_neighbors();
-      if (list == nullptr) refuse(entry.label, "a pair force without a neighbor list");
-      reach = std::max(reach, list->reach());
-      skin = std::min(skin, list->skin());
+      if (range == nullptr && list == nullptr)
+        refuse(entry.label, "a pair force without a neighbor list");
+      const double c = range != nullptr ? pair->pair_cutoff() : list->cutoff();
+      reach = std::max(reach, range != nullptr ? c + range->pair_skin() : list->reach());
+      cutoff = std::max(cutoff, c);
       continue;
     }
     const auto use = std::find_if(scene.uses.begin(), scene.uses.end(),
@@ -156,7 +167,7 @@ std::pair<double, double> reach_and_skin(Scene& scene, int ranks) {
       refuse(entry.label, "a force that declares no decomposed loop");
     }
   }
-  return {reach, skin};
+  return {reach, cutoff > 0.0 ? reach - cutoff : std::numeric_limits<double>::infinity()};
 }
 
 }  // namespace
@@ -464,6 +475,7 @@ int follow_run(DecomposedSystem& decomposed, std::int64_t k0, int threads, std::
   // its first step), then set up the forces together.
   if (!driver.begin_step()) return 0;
   set_up_forces(scene);
+  driver.end_step(scene, false, false, nullptr);  // the energy check's start (run_steps)
   int status = 0;
   for (std::int64_t k = k0 + 1; driver.begin_step(); ++k) {
     // The step's end time as run_fixed computes it; after the scene's last

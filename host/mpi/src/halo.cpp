@@ -80,17 +80,14 @@ void Halo::alltoall(const std::vector<ParticleRecord>& out, const std::vector<in
                 in_count.data(), in_offset.data(), record_type_, comm_);
 }
 
-void Halo::exchange(const std::vector<ParticleRecord>& held) {
-  const auto p = static_cast<std::size_t>(ranks_);
-  // 1. Migration: each particle that left this rank's subdomain to its new
-  // owner, grouped by destination with a stable counting sort; the others
-  // stay, in the order held (between two exchanges few particles move on).
-  // The buffers are kept: a melt's rank exchanges megabytes of records
-  // every few steps, and fresh pages cost more than the copies.
-  std::vector<int> count(p, 0);
+void Halo::migrate(const std::vector<ParticleRecord>& held) {
+  // Each particle that left this rank's subdomain goes to its new owner,
+  // grouped by destination with a stable counting sort; the others stay,
+  // in the order held (between two exchanges few particles move on). The
+  // buffers are kept: a melt's rank exchanges megabytes of records every
+  // few steps, and fresh pages cost more than the copies.
+  std::vector<int> count(static_cast<std::size_t>(ranks_), 0);
   std::vector<ParticleRecord>& owned = owned_scratch_;
-  std::vector<ParticleRecord>& out = out_scratch_;
-  std::vector<ParticleRecord>& in = in_scratch_;
   owned.clear();
   std::vector<std::pair<int, std::size_t>> movers;  // (destination, index in held)
   for (std::size_t i = 0; i < held.size(); ++i) {
@@ -103,34 +100,47 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
     }
   }
   std::vector<int> next = offsets_of(count);
-  out.resize(movers.size());
+  out_scratch_.resize(movers.size());
   for (const auto& [dest, i] : movers)
-    out[static_cast<std::size_t>(next[static_cast<std::size_t>(dest)]++)] = held[i];
+    out_scratch_[static_cast<std::size_t>(next[static_cast<std::size_t>(dest)]++)] = held[i];
   std::vector<int> in_count;
-  alltoall(out, count, in_count, in);
+  alltoall(out_scratch_, count, in_count, in_scratch_);
   std::vector<int> runs{static_cast<int>(owned.size())};
   runs.insert(runs.end(), in_count.begin(), in_count.end());
-  owned.insert(owned.end(), in.begin(), in.end());
+  owned.insert(owned.end(), in_scratch_.begin(), in_scratch_.end());
   merge_runs(owned, runs, by_id);
+}
 
-  // 2. Ghosts: a copy of each owned particle to every rank within reach, in
-  // increasing id per destination (owned is sorted).
-  std::vector<std::vector<std::size_t>> to(p);
+std::vector<int> Halo::send_ghosts(std::vector<std::vector<std::size_t>>& to) {
+  // A copy of each owned particle to every rank within reach, in increasing
+  // id per destination (owned_scratch_ is sorted).
+  const std::vector<ParticleRecord>& owned = owned_scratch_;
+  to.assign(static_cast<std::size_t>(ranks_), {});
   std::vector<int> ranks;
   for (std::size_t i = 0; i < owned.size(); ++i) {
     ranks.clear();
     decomposition_.ghost_ranks(place(owned[i]), rank_, ranks);
     for (const int r : ranks) to[static_cast<std::size_t>(r)].push_back(i);
   }
-  out.clear();
-  for (std::size_t r = 0; r < p; ++r) {
+  std::vector<int> count(to.size(), 0);
+  out_scratch_.clear();
+  for (std::size_t r = 0; r < to.size(); ++r) {
     count[r] = static_cast<int>(to[r].size());
-    for (const std::size_t i : to[r]) out.push_back(owned[i]);
+    for (const std::size_t i : to[r]) out_scratch_.push_back(owned[i]);
   }
-  std::vector<ParticleRecord>& ghosts = in;
-  alltoall(out, count, in_count, ghosts);
+  std::vector<int> in_count;
+  alltoall(out_scratch_, count, in_count, in_scratch_);
+  return in_count;
+}
 
-  // 3. The local order: owned and ghosts merged by id. Where each owned
+void Halo::exchange(const std::vector<ParticleRecord>& held) {
+  migrate(held);
+  std::vector<std::vector<std::size_t>> to;
+  std::vector<int> runs = send_ghosts(to);
+  const std::vector<ParticleRecord>& owned = owned_scratch_;
+  const std::vector<ParticleRecord>& ghosts = in_scratch_;
+
+  // The local order: owned and ghosts merged by id. Where each owned
   // particle and each arriving ghost lands gives forward()'s maps.
   local_.clear();
   local_.reserve(owned.size() + ghosts.size());
@@ -141,8 +151,8 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
     order.emplace_back(owned[i].id, -1 - static_cast<std::int64_t>(i));
   for (std::size_t g = 0; g < ghosts.size(); ++g)
     order.emplace_back(ghosts[g].id, static_cast<std::int64_t>(g));
-  in_count.insert(in_count.begin(), static_cast<int>(owned.size()));
-  merge_runs(order, in_count, std::less<>());
+  runs.insert(runs.begin(), static_cast<int>(owned.size()));
+  merge_runs(order, runs, std::less<>());
   std::vector<Index> owned_local(owned.size());
   recv_local_.assign(ghosts.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) {
@@ -165,13 +175,13 @@ void Halo::exchange(const std::vector<ParticleRecord>& held) {
 
   // forward()'s plan: the same groups, in doubles.
   send_local_.clear();
-  send_count_.assign(p, 0);
-  for (std::size_t r = 0; r < p; ++r) {
+  send_count_.assign(to.size(), 0);
+  for (std::size_t r = 0; r < to.size(); ++r) {
     send_count_[r] = 6 * static_cast<int>(to[r].size());
     for (const std::size_t i : to[r]) send_local_.push_back(owned_local[i]);
   }
   send_offset_ = offsets_of(send_count_);
-  recv_count_.assign(p, 0);
+  recv_count_.assign(to.size(), 0);
   MPI_Alltoall(send_count_.data(), 1, MPI_INT, recv_count_.data(), 1, MPI_INT, comm_);
   recv_offset_ = offsets_of(recv_count_);
 }

@@ -182,6 +182,19 @@ class PDYN_API PairLoop {
   virtual bool selects_beyond_cutoff() const = 0;
 };
 
+/// Since 0.10.0, beside PairReference: how far a pair force's neighbor list
+/// reaches, known before any evaluation. A host that cuts the space among
+/// MPI ranks chooses each rank's ghost copies by it (pdyn/host/decomposed.hpp).
+/// Found with dynamic_cast, so a force built against an earlier SDK keeps
+/// its vtable; the host then learns the range from a first evaluation.
+class PDYN_API PairRange {
+ public:
+  virtual ~PairRange();
+  /// The skin of the force's neighbor list, m: it lists the pairs closer
+  /// than pair_cutoff() + pair_skin().
+  virtual double pair_skin() const = 0;
+};
+
 /// A force from a central pair law within a cutoff (see the top of this
 /// file). `members`: N flags (a selection) or empty for every particle; only
 /// pairs of two members interact.
@@ -189,6 +202,7 @@ template <class Law>
 class PairForce : public Force,
                   public PairReference,
                   public PairLoop,
+                  public PairRange,
                   public PeriodicInvariant,
                   public VirialSource,
                   public SpecialBondsTarget {
@@ -291,6 +305,9 @@ class PairForce : public Force,
   // ---- PairLoop ----
   bool central_law() const override { return kCentral; }
   bool selects_beyond_cutoff() const override { return kSelect; }
+
+  // ---- PairRange ----
+  double pair_skin() const override { return shared_.skin(); }
 
   // ---- PairReference ----
   double pair_cutoff() const override { return std::sqrt(cutoff2_); }

@@ -7,15 +7,16 @@
 // from their owners at every force evaluation before any force reads them.
 // The solver steps the local System as it would the whole one: the owned
 // particles' forces, and so their steps, are the plain run's bit for bit
-// (pdyn/host/halo.hpp). Before each step, when some owned particle has
-// moved more than half the neighbor lists' skin since the last exchange
-// (on any rank), the particles are exchanged again: migrated to their new
-// owners and the ghosts chosen anew.
+// (pdyn/host/halo.hpp). Before each step that would take some owned
+// particle (on any rank) more than half the neighbor lists' skin from where
+// the last exchange placed it, the particles are exchanged again: migrated
+// to their new owners and the ghosts chosen anew.
 //
 // What runs decomposed so far: pair forces (PairForce<Law>, any plugin, no
-// selection), gravity, drag and field, and the fixed-step solvers that read
-// no global sum (verlet, symplectic_euler, euler, midpoint, rk4). Anything
-// else is refused, naming the object and what would make it run.
+// selection), gravity, drag and field, the colliders built on
+// SurfaceCollider (box, plane, sphere), and the fixed-step solvers that
+// read no global sum (verlet, symplectic_euler, euler, midpoint, rk4).
+// Anything else is refused, naming the object and what would make it run.
 #pragma once
 
 #include <mpi.h>
@@ -53,8 +54,8 @@ class PDYN_HOST_API DecomposedSystem {
 
   /// Call before each step (collective): the ranks agree whether to stop
   /// (some rank's `stop`; it then returns false and does nothing else) and
-  /// exchange the particles again when one has moved more than skin / 2
-  /// since the last exchange.
+  /// exchange the particles again when the step would take one more than
+  /// skin / 2 from where the last exchange placed it.
   bool begin_step(bool stop = false);
 
   /// Every particle's position, velocity and image counts, by global id, on
@@ -70,9 +71,9 @@ class PDYN_HOST_API DecomposedSystem {
   void gather_into(Scene& whole) const;
 
   /// Called by the halo object at every force evaluation, after the
-  /// forward: records a violation() when an owned particle has moved more
-  /// than half the skin since the last exchange, where the ghosts chosen
-  /// then may no longer hold all of its partners.
+  /// forward: records a violation() when an owned particle is more than
+  /// half the skin from where the last exchange placed it, where the ghosts
+  /// chosen then may no longer hold all of its partners.
   void check_reach(const ParticleView& p);
   /// What made the last steps' forces unsafe (check_reach), or "".
   const std::string& violation() const noexcept { return violation_; }

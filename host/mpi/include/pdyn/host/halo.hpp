@@ -11,9 +11,9 @@
 // there. A ghost's own force is partial and never used; the owned
 // particles' forces are the plain run's, bit for bit.
 //
-// exchange() makes the sets, at the start and whenever the neighbor lists
-// are rebuilt (a particle then may have left its subdomain by up to skin /
-// 2); forward() refreshes the ghosts' positions and velocities from their
+// exchange() makes the sets, at the start and whenever a particle would
+// otherwise move more than skin / 2 from its place (ParticleRecord::place),
+// where the sets were chosen; forward() refreshes the ghosts' positions and velocities from their
 // owners before every force evaluation in between, LAMMPS's forward
 // communication (Plimpton 1995). Both are MPI_Alltoallv over the
 // communicator, each rank sending only to the ranks its particles are
@@ -93,6 +93,11 @@ class PDYN_HOST_API Halo {
   Index ghosts_sent() const noexcept { return static_cast<Index>(send_local_.size()); }
 
  private:
+  // exchange()'s steps: the migration into owned_scratch_ (sorted by id),
+  // then the ghost copies sent (to[r]: the owned indices sent to rank r) and
+  // received into in_scratch_, returning how many came from each rank.
+  void migrate(const std::vector<ParticleRecord>& held);
+  std::vector<int> send_ghosts(std::vector<std::vector<std::size_t>>& to);
   // Sends `out` (grouped by destination rank, `count[r]` records for rank r)
   // and puts what arrives into `in`, grouped by source rank (in_count[r]
   // records from rank r).
