@@ -2,7 +2,6 @@
 // MPI_Init, the scene decomposed (pdyn/host/decomposed.hpp), rank 0 running
 // run_scene on its copy of the whole scene while the others follow.
 #include <fmt/format.h>
-#include <malloc.h>
 #include <mpi.h>
 
 #include <ostream>
@@ -35,14 +34,12 @@ class OpenMpiRun final : public MpiRun {
     if (!grid.empty()) g = parse_rank_grid(grid, ranks);
     // Within this call: it refers to `local`, which the caller owns.
     DecomposedSystem decomposed(MPI_COMM_WORLD, local, g);
-    malloc_trim(0);
     const std::uint64_t evaluations_before = local.system->force_evaluations();
     running_ = true;
     const std::int64_t k0 = options.resume ? options.resume->step : 0;
     RunResult result;
     if (load_whole != nullptr) {
       whole.emplace((*load_whole)());
-      malloc_trim(0);
       MpiRankDriver driver(decomposed);
       options.ranks = &driver;
       result = run_scene(*whole, options);
