@@ -106,7 +106,8 @@ int Decomposition::cell(int axis, double c) const noexcept {
 }
 
 double Decomposition::gap(int axis, double c, int k) const noexcept {
-  const auto [a, b] = slab(axis, k);
+  const std::pair<double, double> ends = slab(axis, k);
+  const double a = ends.first, b = ends.second;
   auto outside = [&](double y) { return y < a ? a - y : (y > b ? y - b : 0.0); };
   double d = outside(c);
   if (periodic_[axis]) {

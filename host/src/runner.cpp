@@ -593,9 +593,8 @@ RunResult run_scene(Scene& scene, const RunOptions& options) {
   Stepper stepper(*stepped.system, *stepped.solver, stepped.solver_label,
                   stepped.neighbor_schedule);
   Loop loop{scene, out, progress, signals, result, stepper};
-  // Under MPI ranks it decides whether it applies on this rank's share (the
-  // same objects): evaluated on rank 0's whole scene it would build that
-  // scene's neighbor lists, the whole run's memory, for nothing else.
+  // On this rank's share under MPI ranks: rank 0's whole scene would build
+  // whole neighbor lists (the plain run's memory) for nothing else.
   EnergyWatch energy(stepped);
   loop.energy = &energy;
   loop.strict = options.strict;

@@ -75,7 +75,7 @@ void Halo::alltoall(const std::vector<ParticleRecord>& out, const std::vector<in
   in_count.assign(static_cast<std::size_t>(ranks_), 0);
   MPI_Alltoall(count.data(), 1, MPI_INT, in_count.data(), 1, MPI_INT, comm_);
   const std::vector<int> out_offset = offsets_of(count), in_offset = offsets_of(in_count);
-  in.resize(static_cast<std::size_t>(in_offset.back() + in_count.back()));
+  in.resize(static_cast<std::size_t>(in_offset.back()) + static_cast<std::size_t>(in_count.back()));
   MPI_Alltoallv(out.data(), count.data(), out_offset.data(), record_type_, in.data(),
                 in_count.data(), in_offset.data(), record_type_, comm_);
 }
