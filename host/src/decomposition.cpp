@@ -130,10 +130,11 @@ void Decomposition::ghost_ranks(const Vec3& x, int owner, std::vector<int>& out)
   const double r2 = reach_ * reach_ * (1.0 + 1e-12);
   // Most particles lie deeper than reach inside the owner's subdomain along
   // every cut axis: no other subdomain is nearer than its nearest face.
-  bool inside = owner == this->owner(x);
+  const std::array<int, 3> c{cell(0, x[0]), cell(1, x[1]), cell(2, x[2])};
+  bool inside = owner == c[0] + grid_.n[0] * (c[1] + grid_.n[1] * c[2]);
   for (int a = 0; a < 3 && inside; ++a) {
     if (grid_.n[a] == 1) continue;
-    const auto [lo, hi] = slab(a, cell(a, x[a]));
+    const auto [lo, hi] = slab(a, c[static_cast<std::size_t>(a)]);
     const double depth = std::min(x[a] - lo, hi - x[a]);
     inside = depth * depth > r2;
   }

@@ -211,9 +211,9 @@ class EnergyWatch {
         if (!u || std::abs(*u - *u0) > 1e-12 * std::max(1.0, std::abs(*u0))) return;
       }
     }
-    double magnitude = 0.0;
-    e0_ = energy(magnitude);
-    scale_ = std::max(std::abs(e0_), magnitude);
+    const std::array<double, 2> e0 = energy_and_magnitude(sys_, sys_.kinetic_energy());
+    e0_ = e0[0];
+    scale_ = std::max(std::abs(e0_), e0[1]);
     active_ = std::isfinite(e0_);
   }
 
@@ -235,9 +235,9 @@ class EnergyWatch {
   // (RankDriver::end_step), else the system's own.
   bool grew(std::int64_t k, const Scene& scene, std::string& message,
             const std::array<double, 2>* summed = nullptr) {
-    double magnitude = 0.0;
-    const double e = summed != nullptr ? (*summed)[0] : energy(magnitude);
-    if (summed != nullptr) magnitude = (*summed)[1];
+    const std::array<double, 2> now =
+        summed != nullptr ? *summed : energy_and_magnitude(sys_, sys_.kinetic_energy());
+    const double e = now[0], magnitude = now[1];
     if (!(scale_ > 0.0)) {  // no scale yet: the first nonzero magnitude is it
       scale_ = magnitude;
       return false;
@@ -259,19 +259,6 @@ class EnergyWatch {
   }
 
  private:
-  double energy(double& magnitude) const {
-    const double k = sys_.kinetic_energy();
-    double u = 0.0, abs_u = 0.0;
-    for (const auto& f : sys_.force_objects()) {
-      if (const auto ui = f.force->potential_energy(sys_.view())) {
-        u += *ui;
-        abs_u += std::abs(*ui);
-      }
-    }
-    magnitude = k + abs_u;
-    return k + u;
-  }
-
   const System& sys_;
   bool active_ = false, tripped_ = false;
   double e0_ = 0.0, scale_ = 0.0;
@@ -563,6 +550,17 @@ double run_steps(Loop& loop, std::int64_t k0, bool adaptive) {
 }
 
 RankDriver::~RankDriver() = default;
+
+std::array<double, 2> energy_and_magnitude(const System& sys, double kinetic) {
+  double u = 0.0, abs_u = 0.0;
+  for (const auto& f : sys.force_objects()) {
+    if (const auto ui = f.force->potential_energy(sys.view())) {
+      u += *ui;
+      abs_u += std::abs(*ui);
+    }
+  }
+  return {kinetic + u, kinetic + abs_u};
+}
 
 RunResult run_scene(Scene& scene, const RunOptions& options) {
   System& sys = *scene.system;

@@ -778,10 +778,9 @@ void NeighborList::fill_half_rows(Index n) {
   // Thread t's pairs, the first used[t] entries of its buffer. The buffers
   // keep their size between builds: shrunk to the pairs and grown back to
   // their capacity, they would be zeroed again at every build (19 MB on the
-  // 32,000-atom LJ melt).
-  // (The calling thread's, so that a warm build allocates nothing; the
-  // reference, not the name, reaches the OpenMP threads: named there, a
-  // thread_local is the worker's own.)
+  // 32,000-atom LJ melt). The counts are the calling thread's, so that a
+  // warm build allocates nothing; the OpenMP threads reach them through the
+  // reference (named there, a thread_local would be each worker's own).
   thread_local std::vector<std::size_t> counts;
   std::vector<std::size_t>& used = counts;
   used.assign(static_cast<std::size_t>(threads), 0);

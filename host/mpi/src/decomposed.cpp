@@ -298,18 +298,16 @@ std::vector<ParticleRecord> DecomposedSystem::owned_records(bool place_ahead) co
   const System& sys = *scene_.system;
   const Matrix3X* kept = kept_accelerations();
   kept_ = kept != nullptr;
-  const bool drift = place_ahead && verlet_drift();
+  const Matrix3X* drift = place_ahead ? drift_accelerations() : nullptr;
   const double h = scene_.dt;
   std::vector<ParticleRecord> out;
-  out.reserve(static_cast<std::size_t>(halo_->owned()));
-  for (std::size_t k = 0; k < halo_->local().size(); ++k) {
-    if (halo_->ghost()[k] != 0) continue;
-    const auto kk = static_cast<Index>(k);
-    ParticleRecord rec = halo_->local()[k];
-    copy_state(sys, kk, kept, rec);
-    if (drift) {
-      const Vec3 next = sys.domain().wrap(sys.positions().col(kk) + h * sys.velocities().col(kk) +
-                                          0.5 * h * h * kept->col(kk));
+  out.reserve(owned_.size());
+  for (const Index k : owned_) {
+    ParticleRecord rec = halo_->local()[static_cast<std::size_t>(k)];
+    copy_state(sys, k, kept, rec);
+    if (drift != nullptr) {
+      const Vec3 next = sys.domain().wrap(sys.positions().col(k) + h * sys.velocities().col(k) +
+                                          0.5 * h * h * drift->col(k));
       for (int a = 0; a < 3; ++a) rec.place[static_cast<std::size_t>(a)] = next[a];
     }
     out.push_back(rec);
@@ -317,9 +315,11 @@ std::vector<ParticleRecord> DecomposedSystem::owned_records(bool place_ahead) co
   return out;
 }
 
-bool DecomposedSystem::verlet_drift() const {
+const Matrix3X* DecomposedSystem::drift_accelerations() const {
   const Matrix3X* kept = kept_accelerations();
-  return kept != nullptr && kept->cols() == scene_.system->size() && scene_.solver_name == "verlet";
+  const bool verlet =
+      kept != nullptr && kept->cols() == scene_.system->size() && scene_.solver_name == "verlet";
+  return verlet ? kept : nullptr;
 }
 
 bool DecomposedSystem::exchange_due() const {
@@ -335,8 +335,8 @@ bool DecomposedSystem::exchange_due() const {
   // evaluation's: the exchange then comes when the farthest moved plus the
   // fastest's stride passes skin / 2 (check_reach catches a step that
   // outruns it). Squared lengths throughout: one square root per step.
-  const bool exact = verlet_drift();
-  const Matrix3X* kept = exact ? kept_accelerations() : nullptr;
+  const Matrix3X* kept = drift_accelerations();
+  const bool exact = kept != nullptr;
   const double h = scene_.dt, limit = exact ? half_skin_ * (1.0 - 1e-9) : half_skin_;
   const Matrix3X& f = sys.forces();
   const bool have_f = f.cols() == sys.size();
@@ -382,9 +382,8 @@ void DecomposedSystem::check_reach(const ParticleView& p) {
     const double d = moved.norm();
     violation_ = fmt::format(
         "particle {} moved {:.6g} m from where the last exchange of particles placed it, more than "
-        "half the "
-        "skin ({:.6g} m), within one step: its rank's ghosts may miss a partner, so the step is "
-        "refused (expected a smaller dt or a larger skin)",
+        "half the skin ({:.6g} m), within one step: its rank's ghosts may miss a partner, so the "
+        "step is refused (expected a smaller dt or a larger skin)",
         halo_->local()[static_cast<std::size_t>(k)].id, d, half_skin_);
     return;
   }
@@ -394,14 +393,7 @@ std::array<double, 2> DecomposedSystem::local_energy() const {
   const System& sys = *scene_.system;
   double k = 0.0;
   for (const Index i : owned_) k += 0.5 * sys.masses()[i] * sys.velocities().col(i).squaredNorm();
-  double u = 0.0, abs_u = 0.0;
-  for (const auto& entry : sys.force_objects()) {
-    if (const auto ui = entry.force->potential_energy(sys.view())) {
-      u += *ui;
-      abs_u += std::abs(*ui);
-    }
-  }
-  return {k + u, k + abs_u};
+  return energy_and_magnitude(sys, k);
 }
 
 std::vector<ParticleRecord> DecomposedSystem::gathered(int root) const {

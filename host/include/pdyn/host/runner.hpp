@@ -48,6 +48,11 @@ class PDYN_HOST_API RankDriver {
   virtual void finish() = 0;
 };
 
+/// What the energy check compares (EnergyWatch in runner.cpp), J: the total
+/// energy `kinetic` + sum U_i and its magnitude `kinetic` + sum |U_i|, over
+/// the potential energies the force objects of `sys` report.
+PDYN_HOST_API std::array<double, 2> energy_and_magnitude(const System& sys, double kinetic);
+
 struct PDYN_HOST_API RunOptions {
   bool progress = false;        ///< draw a progress bar on `log`
   std::ostream* log = nullptr;  ///< where the progress bar goes

@@ -102,9 +102,9 @@ class PDYN_HOST_API DecomposedSystem {
   // The owned particles' records; with `place_ahead`, placed where velocity
   // Verlet's drift will take them (ParticleRecord::place) when it is known.
   std::vector<ParticleRecord> owned_records(bool place_ahead) const;
-  // Whether the solver's next drift is known: velocity Verlet with its kept
-  // accelerations.
-  bool verlet_drift() const;
+  // The accelerations of velocity Verlet's next drift (its kept ones), when
+  // the solver is verlet and keeps them; else nullptr.
+  const Matrix3X* drift_accelerations() const;
   std::vector<ParticleRecord> gathered(int root) const;
 
   MPI_Comm comm_;
